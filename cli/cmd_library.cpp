@@ -1,0 +1,326 @@
+// `drape library ...`: manage the SQLite fabric library from scripts and shells.
+#include <stdexcept> // before command.hpp, which uses std::runtime_error
+
+#include "command.hpp"
+
+#ifdef HAVE_DRAPE_LIBRARY
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/fabric_io.hpp"
+#include "engine/cloth/units.hpp"
+#include "engine/library/fabric_library.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+namespace {
+
+using namespace drape;
+using namespace drape::library;
+using nlohmann::json;
+
+json null_or(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
+
+json record_json(const FabricRecord& r, bool with_preset)
+{
+    json j = {{"name", r.name},
+              {"composition", r.composition},
+              {"format", r.format},
+              {"areal_density_kg_m2", r.areal_density_kg_m2},
+              {"drape_coefficient", null_or(r.drape_coefficient)},
+              {"fit_quality", null_or(r.fit_quality)},
+              {"created", r.created},
+              {"modified", r.modified},
+              {"revision", r.revision}};
+    if (with_preset) j["preset"] = r.preset_json;
+    return j;
+}
+
+std::string fmt_opt(const std::optional<double>& v, const char* f, double scale = 1.0)
+{
+    if (!v) return "-";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, *v * scale);
+    return buf;
+}
+
+/// D on the command line: a fraction (0.65) or a percentage (65%).
+double parse_fraction(const std::string& flag, const std::string& text)
+{
+    std::string t = text;
+    double scale = 1.0;
+    if (!t.empty() && t.back() == '%') {
+        t.pop_back();
+        scale = 0.01;
+    }
+    std::size_t pos = 0;
+    double v = 0;
+    try {
+        v = std::stod(t, &pos);
+    } catch (const std::exception&) {
+        pos = 0;
+    }
+    if (pos == 0 || pos != t.size()) throw cli::UsageError(flag + ": '" + text + "' is not a number or percentage");
+    v *= scale;
+    if (v < 0 || v > 1) throw cli::UsageError(flag + ": '" + text + "' is outside 0..1 (0..100 %)");
+    return v;
+}
+
+OnConflict parse_conflict(const std::string& s)
+{
+    if (s == "fail") return OnConflict::Fail;
+    if (s == "skip") return OnConflict::Skip;
+    if (s == "replace") return OnConflict::Replace;
+    if (s == "rename") return OnConflict::Rename;
+    throw cli::UsageError("--on-conflict: '" + s + "' must be fail, skip, replace or rename");
+}
+
+json parse_json_file(const std::string& path)
+{
+    const std::string text = cloth::read_file(path);
+    try {
+        return json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw FileError(path + ": not valid JSON (" + e.what() + ")");
+    }
+}
+
+void write_output(const json& j, const std::optional<std::string>& out)
+{
+    if (out && *out != "-") cloth::write_file_atomic(*out, j.dump(2) + "\n");
+    else std::cout << j.dump(2) << "\n";
+}
+
+const std::set<std::string> kCommon = {"--library"};
+std::set<std::string> with_common(std::set<std::string> s)
+{
+    s.insert(kCommon.begin(), kCommon.end());
+    return s;
+}
+
+int run_library(const std::vector<std::string>& argv)
+{
+    if (argv.empty()) throw cli::UsageError("library needs a sub-command: list, show, add, update, rename, remove, export, import");
+    const std::string sub = argv.front();
+    const std::vector<std::string> rest(argv.begin() + 1, argv.end());
+    auto open = [](const cli::Args& a, FabricLibrary::Mode m) {
+        return FabricLibrary(a.get_or("--library", default_library_path()), m);
+    };
+
+    if (sub == "list") {
+        cli::Args a(rest,
+                    with_common({"--name", "--composition", "--search", "--weight-min", "--weight-max", "--d-min", "--d-max",
+                                 "--fit-min", "--fit-max", "--since", "--until", "--sort", "--limit"}),
+                    {"--json", "--desc"});
+        if (!a.positionals().empty()) throw cli::UsageError("library list takes no positional arguments");
+        Filter f;
+        f.name = a.get_or("--name", "");
+        f.composition = a.get_or("--composition", "");
+        f.text = a.get_or("--search", "");
+        // Weights on the command line in g/m^2, the unit on fabric labels.
+        if (a.get("--weight-min")) f.weight_min = a.get_double("--weight-min", 0) * 1e-3;
+        if (a.get("--weight-max")) f.weight_max = a.get_double("--weight-max", 0) * 1e-3;
+        if (auto s = a.get("--d-min")) f.drape_min = parse_fraction("--d-min", *s);
+        if (auto s = a.get("--d-max")) f.drape_max = parse_fraction("--d-max", *s);
+        if (a.get("--fit-min")) f.fit_min = a.get_double("--fit-min", 0);
+        if (a.get("--fit-max")) f.fit_max = a.get_double("--fit-max", 0);
+        f.modified_from = a.get_or("--since", "");
+        f.modified_to = a.get_or("--until", "");
+        const std::string sort = a.get_or("--sort", "name");
+        if (sort == "name") f.sort = SortKey::Name;
+        else if (sort == "weight") f.sort = SortKey::Weight;
+        else if (sort == "d" || sort == "D") f.sort = SortKey::DrapeCoefficient;
+        else if (sort == "modified" || sort == "date") f.sort = SortKey::Modified;
+        else if (sort == "fit") f.sort = SortKey::FitQuality;
+        else throw cli::UsageError("--sort: '" + sort + "' must be name, weight, d, modified or fit");
+        f.descending = a.has("--desc");
+        f.limit = a.get_int("--limit", 0, 0, 1000000);
+        const FabricLibrary lib = open(a, FabricLibrary::Mode::ReadOnly);
+        const auto rows = lib.list(f);
+        if (a.has("--json")) {
+            json j = {{"library", lib.path()}, {"count", rows.size()}, {"fabrics", json::array()}};
+            for (const auto& r : rows) j["fabrics"].push_back(record_json(r, false));
+            std::cout << j.dump(2) << "\n";
+            return 0;
+        }
+        std::printf("%-34s %-22s %8s %7s %10s  %s\n", "name", "composition", "g/m^2", "D [%]", "fit", "modified");
+        for (const auto& r : rows)
+            std::printf("%-34s %-22s %8.1f %7s %10s  %s\n", r.name.c_str(), r.composition.substr(0, 22).c_str(),
+                        r.areal_density_kg_m2 * 1e3, fmt_opt(r.drape_coefficient, "%.1f", 100).c_str(),
+                        fmt_opt(r.fit_quality, "%.3g").c_str(), r.modified.c_str());
+        std::printf("%zu fabric(s) in %s\n", rows.size(), lib.path().c_str());
+        return 0;
+    }
+    if (sub == "show") {
+        cli::Args a(rest, with_common({}), {"--json"});
+        if (a.positionals().size() != 1) throw cli::UsageError("library show needs one NAME");
+        const FabricLibrary lib = open(a, FabricLibrary::Mode::ReadOnly);
+        const FabricRecord r = lib.get(a.positionals().front());
+        if (a.has("--json")) {
+            std::cout << record_json(r, true).dump(2) << "\n";
+            return 0;
+        }
+        std::printf("name:         %s\ncomposition:  %s\nformat:       %s\nweight:       %.1f g/m^2\n", r.name.c_str(),
+                    r.composition.c_str(), r.format.c_str(), r.areal_density_kg_m2 * 1e3);
+        std::printf("D:            %s %%\nfit quality:  %s\ncreated:      %s\nmodified:     %s (revision %d)\n",
+                    fmt_opt(r.drape_coefficient, "%.1f", 100).c_str(), fmt_opt(r.fit_quality, "%.4g").c_str(),
+                    r.created.c_str(), r.modified.c_str(), r.revision);
+        if (const auto* p = std::get_if<cloth::FabricParams>(&r.preset.fabric)) {
+            std::printf("parameters:\n");
+            for (const auto& s : cloth::param_table())
+                std::printf("  %-24s %-14.6g %s\n", std::string(s.key).c_str(), (*p)[s.id],
+                            std::string(s.unit).c_str());
+        } else {
+            std::printf("seed-19 constants:\n%s\n", cloth::seed_to_json(std::get<cloth::SeedParams>(r.preset.fabric)).dump(2).c_str());
+        }
+        for (const char* k : {"source", "notes", "provenance"})
+            if (r.preset_json.contains(k)) std::printf("%s: %s\n", k, r.preset_json[k].dump().c_str());
+        return 0;
+    }
+    if (sub == "add" || sub == "update") {
+        cli::Args a(rest, with_common({"--name"}), {"--json", "--replace"});
+        const bool update = sub == "update";
+        if (update ? a.positionals().size() != 2 : a.positionals().size() != 1)
+            throw cli::UsageError(update ? "library update needs NAME FILE" : "library add needs one preset FILE (or seed-table1)");
+        const std::string file = a.positionals().back();
+        const cloth::FabricPreset p = cloth::load_fabric(file);
+        FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
+        std::string name = update ? a.positionals().front() : a.get_or("--name", "");
+        if (update) {
+            lib.update(name, p);
+        } else {
+            if (name.empty()) name = preset_name(p);
+            if (name.empty() || name == "unnamed") throw ParameterError(file + ": the preset has no name; pass --name");
+            if (a.has("--replace") && lib.find(name)) lib.update(name, p);
+            else lib.add(p, name);
+        }
+        const FabricRecord r = lib.get(name);
+        if (a.has("--json")) std::cout << record_json(r, false).dump(2) << "\n";
+        else std::printf("%s '%s' (revision %d) in %s\n", update ? "updated" : "stored", r.name.c_str(), r.revision, lib.path().c_str());
+        return 0;
+    }
+    if (sub == "rename") {
+        cli::Args a(rest, with_common({}), {"--json"});
+        if (a.positionals().size() != 2) throw cli::UsageError("library rename needs OLD NEW");
+        FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
+        lib.rename(a.positionals()[0], a.positionals()[1]);
+        if (a.has("--json")) std::cout << json{{"renamed", a.positionals()[0]}, {"to", a.positionals()[1]}}.dump(2) << "\n";
+        else std::printf("renamed '%s' to '%s'\n", a.positionals()[0].c_str(), a.positionals()[1].c_str());
+        return 0;
+    }
+    if (sub == "remove") {
+        cli::Args a(rest, with_common({}), {"--json"});
+        if (a.positionals().empty()) throw cli::UsageError("library remove needs NAME [NAME ...]");
+        FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
+        for (const auto& n : a.positionals()) lib.remove(n);
+        if (a.has("--json")) std::cout << json{{"removed", a.positionals()}, {"count", lib.count()}}.dump(2) << "\n";
+        else std::printf("removed %zu fabric(s); %d left\n", a.positionals().size(), lib.count());
+        return 0;
+    }
+    if (sub == "export") {
+        cli::Args a(rest, with_common({"--out", "--format"}), {"--json", "--all"});
+        const FabricLibrary lib = open(a, FabricLibrary::Mode::ReadOnly);
+        json doc;
+        std::string what;
+        if (a.has("--all")) {
+            if (!a.positionals().empty()) throw cli::UsageError("library export --all takes no NAME");
+            doc = lib.export_all();
+            what = std::to_string(doc["fabrics"].size()) + " fabric(s)";
+        } else {
+            if (a.positionals().size() != 1) throw cli::UsageError("library export needs NAME or --all");
+            const std::string f = a.get_or("--format", "drapekit");
+            PresetFormat pf;
+            if (f == "drapekit" || f == "drapekit-fabric") pf = PresetFormat::Drapekit;
+            else if (f == "seed19" || f == "seed-19") pf = PresetFormat::Seed19;
+            else throw cli::UsageError("--format: '" + f + "' must be drapekit or seed19");
+            doc = lib.export_preset(a.positionals().front(), pf);
+            what = "'" + a.positionals().front() + "'";
+        }
+        const auto out = a.get("--out");
+        write_output(doc, out);
+        if (out && *out != "-") {
+            if (a.has("--json")) std::cout << json{{"exported", what}, {"out", *out}}.dump(2) << "\n";
+            else std::printf("exported %s to %s\n", what.c_str(), out->c_str());
+        }
+        return 0;
+    }
+    if (sub == "import") {
+        cli::Args a(rest, with_common({"--on-conflict", "--name"}), {"--json"});
+        if (a.positionals().size() != 1) throw cli::UsageError("library import needs one FILE");
+        const std::string file = a.positionals().front();
+        const OnConflict oc = parse_conflict(a.get_or("--on-conflict", "fail"));
+        json j;
+        std::error_code ec;
+        if (std::filesystem::is_directory(file, ec)) {
+            // A folder of preset files (e.g. data/library): all of them, in one transaction.
+            std::vector<std::filesystem::path> files;
+            for (const auto& e : std::filesystem::directory_iterator(file))
+                if (e.path().extension() == ".json") files.push_back(e.path());
+            std::sort(files.begin(), files.end());
+            if (files.empty()) throw FileError(file + ": no *.json preset files in this folder");
+            j = json::array();
+            for (const auto& f : files) {
+                json one = parse_json_file(f.string());
+                cloth::fabric_from_json(one, f.string()); // names the file if it is bad
+                j.push_back(std::move(one));
+            }
+        } else {
+            j = parse_json_file(file);
+        }
+        FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
+        ImportReport rep;
+        if (j.is_array() || (j.is_object() && j.value("format", std::string()) == "drapekit-fabric-library")) {
+            if (a.get("--name")) throw cli::UsageError("--name applies to a single preset, not a library export");
+            rep = lib.import_all(j, file, oc);
+        } else {
+            const auto before = lib.count();
+            const auto id = lib.import_preset(j, file, a.get_or("--name", ""), oc);
+            (void)id;
+            rep.names.push_back(a.get_or("--name", preset_name(cloth::fabric_from_json(j, file))));
+            if (lib.count() > before) {
+                rep.added = 1;
+            } else {
+                rep.replaced = oc == OnConflict::Replace ? 1 : 0;
+                rep.skipped = oc == OnConflict::Skip ? 1 : 0;
+            }
+        }
+        if (a.has("--json")) {
+            std::cout << json{{"added", rep.added}, {"replaced", rep.replaced}, {"skipped", rep.skipped},
+                              {"renamed", rep.renamed}, {"names", rep.names}, {"count", lib.count()}}
+                             .dump(2)
+                      << "\n";
+        } else {
+            std::printf("imported from %s: %d added, %d replaced, %d skipped, %d renamed; %d fabric(s) in %s\n", file.c_str(),
+                        rep.added, rep.replaced, rep.skipped, rep.renamed, lib.count(), lib.path().c_str());
+        }
+        return 0;
+    }
+    throw cli::UsageError("library: unknown sub-command '" + sub + "'");
+}
+
+DRAPE_COMMAND({"library", "manage the fabric library (SQLite): list, show, add, remove, export, import",
+               "usage: drape library SUBCOMMAND [--library PATH] ...\n"
+               "  The library file: --library PATH, else $DRAPE_LIBRARY, else\n"
+               "  $XDG_DATA_HOME/drapekit/library.sqlite (~/.local/share/drapekit/library.sqlite).\n"
+               "  Every sub-command takes --json for machine-readable output.\n"
+               "\n"
+               "  list   [--search TEXT] [--name S] [--composition S] [--weight-min G] [--weight-max G] (g/m^2)\n"
+               "         [--d-min D] [--d-max D] (0.65 or 65%) [--fit-min Q] [--fit-max Q]\n"
+               "         [--since DATE] [--until DATE] (modified, ISO 8601) [--sort name|weight|d|modified|fit] [--desc] [--limit N]\n"
+               "  show   NAME                       parameters, composition, D, fit, dates\n"
+               "  add    FILE [--name NAME] [--replace]   a preset JSON (drapekit-fabric or seed-19) or seed-table1\n"
+               "  update NAME FILE                  replace the stored preset, keep the name\n"
+               "  rename OLD NEW\n"
+               "  remove NAME [NAME ...]\n"
+               "  export NAME [--format drapekit|seed19] [--out FILE]   one preset (stdout without --out)\n"
+               "  export --all [--out FILE]         the whole library as one JSON document\n"
+               "  import FILE|FOLDER [--name NAME] [--on-conflict fail|skip|replace|rename]\n"
+               "                                    a preset, a whole-library export or a folder of presets\n"
+               "                                    (e.g. data/library, the starter library); all or nothing",
+               run_library});
+
+} // namespace
+#endif

@@ -1,0 +1,61 @@
+#pragma once
+// Sub-command registry of the `drape` tool. Each cli/cmd_*.cpp registers one
+// command with a static DRAPE_COMMAND(...) object; cli/CMakeLists.txt compiles
+// every cmd_*.cpp straight into the executable, so the registrations are kept.
+#include <functional>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace drape::cli {
+
+/// Parsed command line of one sub-command: --flag value pairs, bare --switches
+/// and positionals. Unknown flags are an error (UsageError).
+class Args {
+public:
+    /// `value_flags` take a value ("--out DIR" or "--out=DIR"), `switches` do not.
+    Args(const std::vector<std::string>& argv, const std::set<std::string>& value_flags,
+         const std::set<std::string>& switches);
+    bool has(const std::string& flag) const;
+    std::optional<std::string> get(const std::string& flag) const;
+    std::string get_or(const std::string& flag, const std::string& fallback) const;
+    /// Integer / double values with a clear error naming the flag and value.
+    int get_int(const std::string& flag, int fallback, int min, int max) const;
+    double get_double(const std::string& flag, double fallback) const;
+    /// Length with unit suffix (mm, cm, m; bare = m) in metres.
+    double get_length(const std::string& flag, double fallback) const;
+    const std::vector<std::string>& positionals() const { return m_pos; }
+
+private:
+    std::map<std::string, std::string> m_values;
+    std::set<std::string> m_switches;
+    std::vector<std::string> m_pos;
+};
+
+/// Thrown for a bad command line; main prints it with the usage and exits 2.
+struct UsageError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+struct Command {
+    std::string name;
+    std::string summary;
+    std::string usage;  ///< full usage text printed by `drape help NAME`
+    std::function<int(const std::vector<std::string>&)> run; ///< returns the exit code
+};
+
+std::map<std::string, Command>& registry();
+
+struct Registrar {
+    explicit Registrar(Command c) { registry().emplace(c.name, std::move(c)); }
+};
+
+} // namespace drape::cli
+
+#define DRAPE_CLI_CONCAT2(a, b) a##b
+#define DRAPE_CLI_CONCAT(a, b) DRAPE_CLI_CONCAT2(a, b)
+/// Usage: DRAPE_COMMAND({"name", "summary", usage_text, run_function});
+#define DRAPE_COMMAND(...) static ::drape::cli::Registrar DRAPE_CLI_CONCAT(drape_cmd_, __LINE__)(__VA_ARGS__)

@@ -1,0 +1,11 @@
+# drape_set_warnings(target): the project's warning set, errors when DRAPE_WERROR.
+function(drape_set_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow)
+  if(DRAPE_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+  if(DRAPE_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
+endfunction()

@@ -1,0 +1,225 @@
+#include "drape.hpp"
+
+#include "error.hpp"
+#include "units.hpp"
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace drape::cloth {
+
+void DrapeSetup::validate() const
+{
+    auto positive = [](const char* name, double v) {
+        if (!std::isfinite(v) || !(v > 0))
+            throw ParameterError(std::string(name) + " = " + format_double(v) + " m must be a positive length");
+    };
+    positive("sample diameter", sample_diameter);
+    positive("disc diameter", disc_diameter);
+    positive("pedestal height", pedestal_height);
+    if (sample_diameter <= disc_diameter)
+        throw ParameterError("sample diameter " + format_double(sample_diameter) + " m must be larger than the disc diameter " +
+                             format_double(disc_diameter) + " m");
+    if (sample_diameter > 5.0) throw ParameterError("sample diameter " + format_double(sample_diameter) + " m is larger than 5 m");
+    if (!(edge_radius >= 0) || edge_radius >= disc_diameter / 2)
+        throw ParameterError("pedestal edge radius " + format_double(edge_radius) + " m must be in [0, disc radius)");
+    if (grid < 5 || grid > 1000) throw ParameterError("grid = " + std::to_string(grid) + " must be in [5, 1000]");
+    if (!(perturbation >= 0) || perturbation > 0.05)
+        throw ParameterError("perturbation = " + format_double(perturbation) + " m must be in [0, 0.05]");
+    for (double d : slice_depths)
+        if (!(d > 0) || !std::isfinite(d)) throw ParameterError("slice depth " + format_double(d) + " m must be positive");
+}
+
+namespace {
+
+double seed_sample_diameter(const SeedParams& s) { return s.w * 0.01; }
+
+/// Lifts the overhanging part of the flat sheet by a seeded mix of harmonics
+/// (DrapeSetup::perturbation documents the form).
+void perturb(Positions& X, const DrapeSetup& setup)
+{
+    if (setup.perturbation <= 0) return;
+    std::mt19937_64 rng(setup.seed);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    double a[17], ph[17];
+    for (int k = 2; k <= 16; ++k) {
+        a[k] = U(rng);
+        ph[k] = 2 * std::numbers::pi * U(rng);
+    }
+    const double R1 = setup.sample_diameter / 2, R2 = setup.disc_diameter / 2;
+    Eigen::VectorXd lift(X.rows());
+    double mx = 0;
+    for (int i = 0; i < X.rows(); ++i) {
+        const double r = std::hypot(X(i, 0), X(i, 1));
+        const double th = std::atan2(X(i, 1), X(i, 0));
+        const double t = std::max(0.0, r - R2) / (R1 - R2);
+        double s = 0;
+        for (int k = 2; k <= 16; ++k) s += a[k] * std::cos(k * th + ph[k]);
+        lift(i) = s * t * t;
+        mx = std::max(mx, std::abs(lift(i)));
+    }
+    if (mx > 0)
+        for (int i = 0; i < X.rows(); ++i) X(i, 2) += setup.perturbation * lift(i) / mx;
+}
+
+/// Interpolates positions of a coarse grid disc onto a finer one through their
+/// shared material coordinates (barycentric in the containing or nearest coarse
+/// triangle, extrapolating linearly at the hem).
+Positions interpolate_positions(const ClothMesh& coarse, const Positions& xc, const ClothMesh& fine)
+{
+    const double cell = std::max(coarse.grid.hu, coarse.grid.hv);
+    const Eigen::Vector2d lo = coarse.uv.colwise().minCoeff().transpose() - Eigen::Vector2d::Constant(cell);
+    const Eigen::Vector2d hi = coarse.uv.colwise().maxCoeff().transpose() + Eigen::Vector2d::Constant(cell);
+    const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
+    std::vector<std::vector<int>> buckets(static_cast<std::size_t>(nx * ny));
+    auto bucket_of = [&](double x, double y, int& bx, int& by) {
+        bx = std::clamp(static_cast<int>((x - lo.x()) / cell), 0, nx - 1);
+        by = std::clamp(static_cast<int>((y - lo.y()) / cell), 0, ny - 1);
+    };
+    for (int t = 0; t < coarse.F.rows(); ++t) {
+        Eigen::Vector2d bmin = Eigen::Vector2d::Constant(1e300), bmax = -bmin;
+        for (int c = 0; c < 3; ++c) {
+            bmin = bmin.cwiseMin(coarse.uv.row(coarse.F(t, c)).transpose());
+            bmax = bmax.cwiseMax(coarse.uv.row(coarse.F(t, c)).transpose());
+        }
+        int x0, y0, x1, y1;
+        bucket_of(bmin.x(), bmin.y(), x0, y0);
+        bucket_of(bmax.x(), bmax.y(), x1, y1);
+        for (int by = y0; by <= y1; ++by)
+            for (int bx = x0; bx <= x1; ++bx) buckets[static_cast<std::size_t>(bx + nx * by)].push_back(t);
+    }
+    Positions out(fine.vertex_count(), 3);
+    for (int i = 0; i < fine.vertex_count(); ++i) {
+        const Eigen::Vector2d p = fine.uv.row(i).transpose();
+        int bx, by;
+        bucket_of(p.x(), p.y(), bx, by);
+        double best = -1e300;
+        Eigen::Vector3d bestb(1, 0, 0);
+        int bestt = -1;
+        for (int r = 0; r <= 3 && (bestt < 0 || best < -1e-9); ++r) {
+            for (int yy = by - r; yy <= by + r; ++yy)
+                for (int xx = bx - r; xx <= bx + r; ++xx) {
+                    if (xx < 0 || yy < 0 || xx >= nx || yy >= ny) continue;
+                    if (std::max(std::abs(xx - bx), std::abs(yy - by)) != r) continue;
+                    for (int t : buckets[static_cast<std::size_t>(xx + nx * yy)]) {
+                        const Eigen::Vector2d a = coarse.uv.row(coarse.F(t, 0)), b = coarse.uv.row(coarse.F(t, 1)), c = coarse.uv.row(coarse.F(t, 2));
+                        Eigen::Matrix2d T;
+                        T << b - a, c - a;
+                        const double det = T.determinant();
+                        if (std::abs(det) < 1e-300) continue;
+                        const Eigen::Vector2d l = T.inverse() * (p - a);
+                        const Eigen::Vector3d bc(1 - l.x() - l.y(), l.x(), l.y());
+                        if (bc.minCoeff() > best) {
+                            best = bc.minCoeff();
+                            bestb = bc;
+                            bestt = t;
+                        }
+                    }
+                }
+        }
+        if (bestt < 0) {
+            out.row(i) = fine.X.row(i);
+            continue;
+        }
+        out.row(i) = bestb(0) * xc.row(coarse.F(bestt, 0)) + bestb(1) * xc.row(coarse.F(bestt, 1)) + bestb(2) * xc.row(coarse.F(bestt, 2));
+    }
+    return out;
+}
+
+} // namespace
+
+std::unique_ptr<ClothSystem> make_drape_system(const FabricSpec& fabric, const DrapeSetup& setup, const ModelOptions& mopt)
+{
+    setup.validate();
+    ClothMesh mesh;
+    ClothModel model;
+    if (const auto* p = std::get_if<FabricParams>(&fabric)) {
+        mesh = make_disc(setup.sample_diameter, setup.grid, 0.0);
+        model = make_model(mesh, *p, mopt);
+    } else {
+        const auto& s = std::get<SeedParams>(fabric);
+        s.validate("seed parameters");
+        if (std::abs(seed_sample_diameter(s) - setup.sample_diameter) > 1e-6)
+            throw ParameterError("the seed-19 preset describes a " + format_double(seed_sample_diameter(s) * 1000) +
+                                 " mm sheet (w = " + format_double(s.w) + " cm) but the sample diameter is " +
+                                 format_double(setup.sample_diameter * 1000) + " mm");
+        if (s.u != s.v || s.w != s.h)
+            throw ParameterError("the drapemeter needs a round sheet: seed w = h and u = v (got w = " + format_double(s.w) +
+                                 ", h = " + format_double(s.h) + ", u = " + std::to_string(s.u) + ", v = " + std::to_string(s.v) + ")");
+        mesh = make_disc(setup.sample_diameter, s.u + 1, 0.0);
+        ModelOptions o = mopt;
+        if (o.bending == BendingModel::Quadratic) o.bending = BendingModel::Flexion;
+        model = make_seed_model(mesh, s, o);
+    }
+    auto sys = std::make_unique<ClothSystem>(std::move(mesh), std::move(model));
+    // Start flat, just above the pedestal top (offset by half the thickness).
+    sys->x.col(2).setConstant(sys->model().contact_offset + 1e-6);
+    perturb(sys->x, setup);
+    const double R2 = setup.disc_diameter / 2;
+    sys->add_collider(std::make_shared<PedestalCollider>(Eigen::Vector3d::Zero(), R2, setup.pedestal_height,
+                                                         std::min(setup.edge_radius, 0.5 * R2)));
+    if (setup.floor)
+        sys->add_collider(std::make_shared<PlaneCollider>(Eigen::Vector3d(0, 0, -setup.pedestal_height), Eigen::Vector3d::UnitZ()));
+    return sys;
+}
+
+DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const MetricOptions& mopt)
+{
+    DrapeResult r;
+    r.x = s.x;
+    r.outline = shadow_outline(s.x, s.mesh().F);
+    r.metrics = drape_metrics(r.outline, setup.sample_diameter / 2, setup.disc_diameter / 2, mopt);
+    r.hem = hem_profile(s.x, s.mesh().boundary);
+    for (double d : setup.slice_depths) r.slices.push_back({d, slice_profile(s.x, s.mesh().F, -d, 360)});
+    return r;
+}
+
+DrapeResult simulate_drape(const FabricSpec& fabric, const DrapeSetup& setup, const RestOptions& ropt, const ModelOptions& mopt)
+{
+    auto sys = make_drape_system(fabric, setup, mopt);
+    const bool continuation = ropt.integrator == Integrator::Static && std::holds_alternative<FabricParams>(fabric) && setup.grid > 40;
+    SolverStatus pre;
+    if (continuation) {
+        DrapeSetup coarse = setup;
+        coarse.grid = std::max(25, (setup.grid + 1) / 2);
+        RestOptions co = ropt;
+        co.residual = std::max(ropt.residual, 1e-4); // the fine solve polishes
+        const DrapeResult rc = simulate_drape(fabric, coarse, co, mopt);
+        if (rc.status.outcome != SolverStatus::Outcome::Diverged && rc.status.outcome != SolverStatus::Outcome::Cancelled) {
+            const ClothMesh cm = make_disc(coarse.sample_diameter, coarse.grid, 0.0);
+            sys->x = interpolate_positions(cm, rc.x, sys->mesh());
+        }
+        pre = rc.status;
+    }
+    DrapeResult r;
+    r.status = run_to_rest(*sys, ropt);
+    if (continuation) {
+        r.status.steps += pre.steps;
+        r.status.newton_iterations += pre.newton_iterations;
+        r.status.force_evaluations += pre.force_evaluations;
+        r.status.wall_seconds += pre.wall_seconds;
+    }
+    DrapeResult m = measure_drape(*sys, setup);
+    m.status = r.status;
+    return m;
+}
+
+DrapeResult simulate_drape_from(const FabricSpec& fabric, const DrapeSetup& setup, const Positions& start, const RestOptions& ropt,
+                                const ModelOptions& mopt)
+{
+    auto sys = make_drape_system(fabric, setup, mopt);
+    if (start.rows() != sys->vertex_count())
+        throw ParameterError("warm start has " + std::to_string(start.rows()) + " vertices, the drape mesh " +
+                             std::to_string(sys->vertex_count()));
+    sys->x = start;
+    DrapeResult r;
+    const SolverStatus st = run_to_rest(*sys, ropt);
+    r = measure_drape(*sys, setup);
+    r.status = st;
+    return r;
+}
+
+} // namespace drape::cloth

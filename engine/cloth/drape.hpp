@@ -1,0 +1,68 @@
+#pragma once
+// The drapemeter experiment: a round specimen centred on a pedestal, draped to
+// rest, measured with the shared metric code.
+#include "metrics.hpp"
+#include "params.hpp"
+#include "seed_format.hpp"
+#include "solver.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <variant>
+
+namespace drape::cloth {
+
+struct DrapeSetup {
+    double sample_diameter = 0.30;  ///< [m]
+    double disc_diameter = 0.15;    ///< [m]
+    double pedestal_height = 0.12;  ///< [m]
+    double edge_radius = 0.5e-3;    ///< [m] rounding of the pedestal's top edge
+    int grid = 60;                  ///< nodes across the specimen diameter
+    std::uint64_t seed = 1;         ///< perturbation seed (buckling is a bifurcation)
+    /// Amplitude of the symmetry-breaking perturbation [m]: the flat sheet's
+    /// height gets sum_k a_k cos(k theta + phi_k) (r/R1)^2 for k = 2..16 with
+    /// random a_k in [0,1] normalised so the largest lift is this amplitude, and
+    /// random phases, all from `seed`. Small enough not to change a converged D
+    /// beyond the spread of real repeats, large enough to pick a fold pattern.
+    double perturbation = 1.0e-3;
+    bool floor = true;
+    std::vector<double> slice_depths = {0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05}; ///< [m] below the pedestal top
+    void validate() const;          ///< ParameterError on negative sizes, sample <= disc, grid < 5
+};
+
+using FabricSpec = std::variant<FabricParams, SeedParams>;
+
+/// Builds the drape scene: disc mesh (or the seed's grid for SeedParams), model,
+/// pedestal and floor colliders, perturbed flat start.
+std::unique_ptr<ClothSystem> make_drape_system(const FabricSpec& fabric, const DrapeSetup& setup, const ModelOptions& mopt = {});
+
+struct Slice {
+    double depth_m;
+    RadialProfile profile; ///< NaN where the ray misses; complete() when closed
+};
+
+struct DrapeResult {
+    SolverStatus status;
+    Positions x;            ///< rest positions [m]
+    DrapeMetrics metrics;   ///< shadow metrics
+    Polygon2 outline;       ///< shadow outline [m]
+    HemProfile hem;
+    std::vector<Slice> slices;
+};
+
+/// Measures a draped system (shadow, hem, slices) through the shared metric code.
+DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const MetricOptions& mopt = {});
+
+/// Simulates a drape to rest and measures it. For the static solver with a
+/// grid finer than 40 this solves a coarse grid first and interpolates
+/// (continuation), which is how the cold start stays fast.
+DrapeResult simulate_drape(const FabricSpec& fabric, const DrapeSetup& setup, const RestOptions& ropt = {},
+                           const ModelOptions& mopt = {});
+
+/// Warm start: re-solve from a previous rest state (same mesh), e.g. after a
+/// small parameter change during a fit.
+DrapeResult simulate_drape_from(const FabricSpec& fabric, const DrapeSetup& setup, const Positions& start,
+                                const RestOptions& ropt = {}, const ModelOptions& mopt = {});
+
+} // namespace drape::cloth

@@ -1,0 +1,90 @@
+#pragma once
+// Per-element constants of the mass-spring model for one mesh, made from
+// continuum parameters (the one documented mapping) or from the seed's grid
+// constants.
+#include "mesh.hpp"
+#include "params.hpp"
+#include "seed_format.hpp"
+
+#include <string>
+#include <vector>
+
+namespace drape::cloth {
+
+enum class SpringKind : unsigned char { StretchU, StretchV, Shear, FlexionU, FlexionV, Edge };
+
+/// Linear spring with a dashpot along it (Provot 1995). Energy 1/2 k (|xi-xj| - rest)^2.
+struct Spring {
+    int i, j;
+    double rest; ///< [m]
+    double k;    ///< [N/m]
+    double d;    ///< [N*s/m]
+    SpringKind kind;
+};
+
+/// Quadratic bending stencil (after Bergou, Wardetzky, Harmon, Zorin, Grinspun
+/// 2006, "A quadratic bending model for inextensible surfaces"): energy
+/// 1/2 k |sum_i w_i x_i|^2 over 3 nodes along a grid line or the 4 nodes of a
+/// triangle hinge. The weights sum to zero and annihilate every affine map of the
+/// flat rest shape, so the energy is zero when flat, rotation invariant, its
+/// Hessian is constant, and it resists bending linearly from the flat state.
+/// They are scaled so that sum_i w_i x_i is the curvature vector [1/m] for a
+/// cylindrical bend across the stencil.
+struct BendStencil {
+    int n = 3;        ///< 3 (grid line) or 4 (hinge)
+    int v[4] = {-1, -1, -1, -1};
+    double w[4] = {0, 0, 0, 0}; ///< [1/m^2]
+    double k; ///< [N*m^3]: energy in J with weights in 1/m^2 and positions in m
+    double d; ///< [N*m^3*s] damping of the same stencil
+};
+
+enum class BendingModel { Quadratic, Flexion, Both };
+
+struct ModelOptions {
+    BendingModel bending = BendingModel::Quadratic;
+    /// Contact penalty: a vertex resting on a collider under its own weight sinks
+    /// by this much [m]; sets the penalty stiffness m g / depth per vertex.
+    double contact_depth = 2e-6;
+};
+
+struct ClothModel {
+    std::vector<Spring> springs;
+    std::vector<BendStencil> bends;
+    Eigen::VectorXd mass;             ///< [kg] per vertex
+    std::vector<char> pinned;         ///< per vertex
+    Eigen::Vector3d gravity{0, 0, -9.81}; ///< [m/s^2]
+    double air_damping = 0;           ///< [1/s]
+    double contact_offset = 0;        ///< [m] half the thickness
+    double friction = 0;              ///< Coulomb coefficient
+    Eigen::VectorXd contact_stiffness;///< [N/m] per vertex
+    std::string description;
+
+    int vertex_count() const { return static_cast<int>(mass.size()); }
+    double total_mass() const { return mass.sum(); }
+};
+
+/// The mapping from continuum parameters to element constants (SI throughout).
+/// On a grid with spacings hu, hv:
+///   stretch u spring  k = (E_u - G hu^2/hv^2) hv/hu  (the shear diagonals already carry G hu^2/hv^2 of E_u;
+///                     floored at E_u hv/hu / 2 so a large G never makes it soft)
+///   shear diagonals   k = G (hu^2 + hv^2) / (2 hu hv)   (energy 1/2 G gamma^2 per unit area)
+///   bending u stencil weights (1, -2, 1)/hu^2, k = B_u hu hv  (energy 1/2 B_u kappa^2 per unit area)
+///   dampers use the same formulas with the damping coefficients.
+///   mass              m_i = rho_A * (lumped vertex area)
+/// Hem nodes snapped onto the cut circle keep springs with their true rest
+/// lengths; bending stencils through them use the divided-difference weights
+/// of their true spacings along the grid line.
+/// General triangle meshes get one spring per edge, k = E A_adj / |e|^2 with
+/// A_adj the area of the edge's triangles and E the mean of warp and weft (exact
+/// for an equilateral lattice, whose shear stiffness is then 3E/8), and one
+/// 4-node bending stencil per interior edge, k = B(phi) (A1 + A2)/3 with
+/// B(phi) = B_u cos^2 phi + B_v sin^2 phi, phi the angle of the across-edge
+/// direction to the warp.
+ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelOptions& opt = {});
+
+/// The seed's model on its own grid: structural, shear and flexion springs with
+/// the given constants, particle mass 1/ClothOverMass (see seed_format.hpp).
+/// `mesh` must be a grid mesh.
+ClothModel make_seed_model(const ClothMesh& mesh, const SeedParams& s, const ModelOptions& opt = {});
+
+} // namespace drape::cloth

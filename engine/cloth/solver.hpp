@@ -1,0 +1,72 @@
+#pragma once
+// Time integrators and the static (rest-state) solver.
+#include "system.hpp"
+
+#include <atomic>
+#include <functional>
+#include <string>
+
+namespace drape::cloth {
+
+enum class Integrator { ExplicitEuler, SemiImplicitEuler, Midpoint, RK4, ImplicitEuler, Static };
+
+/// "euler" (explicit), "symplectic" (semi-implicit), "midpoint", "rk4", "implicit", "static".
+Integrator parse_integrator(const std::string& name);
+std::string to_string(Integrator i);
+
+struct SolverStatus {
+    enum class Outcome { Running, Converged, NotConverged, Diverged, Cancelled };
+    Outcome outcome = Outcome::Running;
+    long steps = 0;              ///< time steps (dynamic) or outer iterations (static)
+    long newton_iterations = 0;  ///< linear solves
+    long force_evaluations = 0;
+    double max_speed = 0;        ///< [m/s]
+    double residual = 0;         ///< relative force residual |f_net| / |weight|
+    double wall_seconds = 0;
+    double sim_time = 0;         ///< [s] simulated time (dynamic)
+    std::string message;
+    bool converged() const { return outcome == Outcome::Converged; }
+};
+std::string to_string(SolverStatus::Outcome o);
+
+struct RestOptions {
+    Integrator integrator = Integrator::Static;
+    double dt = 0;                ///< time step [s]; 0 = choose (explicit: stability estimate)
+    double max_speed = 1e-3;      ///< rest when every vertex is slower [m/s] (dynamic integrators)
+    double residual = 1e-6;       ///< and the relative force residual is below this
+    double max_sim_time = 60;     ///< give up after this much simulated time [s]
+    long max_steps = 5'000'000;
+    long max_newton = 1000;        ///< static solver
+    int threads = 0;              ///< 0 = hardware concurrency
+    /// Called now and then with the status so far; return false to cancel.
+    std::function<bool(const SolverStatus&)> progress;
+    const std::atomic<bool>* cancel = nullptr;
+};
+
+/// Advances the system by one step of `dt` with an explicit or implicit integrator.
+/// Returns false when the state became non-finite. `scratch` avoids reallocation.
+class Stepper {
+public:
+    Stepper(ClothSystem& s, Integrator integ);
+    ~Stepper();
+    bool step(double dt);
+    /// Largest stable explicit step estimate [s] (highest spring/contact frequency).
+    double explicit_dt_limit() const;
+    Integrator integrator() const { return m_integ; }
+    long linear_solves() const;
+
+private:
+    struct Impl;
+    ClothSystem& m_s;
+    Integrator m_integ;
+    Impl* m_impl;
+};
+
+/// Runs until rest (or failure): dynamic integration with a rest test, or the
+/// static solver. Never throws on numerical trouble; the status says what happened.
+SolverStatus run_to_rest(ClothSystem& s, const RestOptions& opt);
+
+/// Relative force residual of the current state: |f_net| / |weight| over free vertices.
+double relative_residual(const ClothSystem& s);
+
+} // namespace drape::cloth

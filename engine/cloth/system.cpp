@@ -1,0 +1,292 @@
+#include "system.hpp"
+
+#include "error.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace drape::cloth {
+
+using Vec3 = Eigen::Vector3d;
+
+ClothSystem::ClothSystem(ClothMesh mesh, ClothModel model) : m_mesh(std::move(mesh)), m_model(std::move(model))
+{
+    const int n = m_mesh.vertex_count();
+    if (m_model.vertex_count() != n)
+        throw ParameterError("ClothSystem: model has " + std::to_string(m_model.vertex_count()) + " vertices, mesh " + std::to_string(n));
+    x = m_mesh.X;
+    v = Positions::Zero(n, 3);
+}
+
+void ClothSystem::set_pinned(int vertex, bool p)
+{
+    if (vertex < 0 || vertex >= vertex_count())
+        throw ParameterError("set_pinned: vertex " + std::to_string(vertex) + " is outside [0, " + std::to_string(vertex_count() - 1) + "]");
+    m_model.pinned[static_cast<std::size_t>(vertex)] = p ? 1 : 0;
+    if (p) v.row(vertex).setZero();
+}
+
+void ClothSystem::set_mass(int vertex, double mass)
+{
+    if (vertex < 0 || vertex >= vertex_count())
+        throw ParameterError("set_mass: vertex " + std::to_string(vertex) + " is outside [0, " + std::to_string(vertex_count() - 1) + "]");
+    if (!(mass > 0) || !std::isfinite(mass)) throw ParameterError("set_mass: mass " + std::to_string(mass) + " kg must be positive");
+    const double ratio = mass / m_model.mass(vertex);
+    m_model.mass(vertex) = mass;
+    m_model.contact_stiffness(vertex) *= ratio;
+}
+
+namespace {
+/// Penetration of the offset surface: phi = distance - offset; < 0 in contact.
+template <class F>
+void for_each_contact(const ClothSystem& s, const Positions& X, F&& f)
+{
+    const auto& m = s.model();
+    const double off = m.contact_offset;
+    for (const auto& c : s.colliders())
+        for (int i = 0; i < X.rows(); ++i) {
+            if (m.pinned[static_cast<std::size_t>(i)]) continue;
+            ContactSample cs;
+            if (!c->query(X.row(i).transpose(), off, cs)) continue;
+            const double phi = cs.distance - off;
+            if (phi < 0) f(i, phi, cs.normal, *c);
+        }
+}
+} // namespace
+
+double ClothSystem::potential_energy(const Positions& X) const
+{
+    double e = 0;
+    for (const auto& sp : m_model.springs) {
+        const double l = (X.row(sp.i) - X.row(sp.j)).norm();
+        e += 0.5 * sp.k * (l - sp.rest) * (l - sp.rest);
+    }
+    for (const auto& b : m_model.bends) {
+        Vec3 s = Vec3::Zero();
+        for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
+        e += 0.5 * b.k * s.squaredNorm();
+    }
+    for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
+    for_each_contact(*this, X, [&](int i, double phi, const Vec3&, const Collider&) { e += 0.5 * m_model.contact_stiffness(i) * phi * phi; });
+    return e;
+}
+
+double ClothSystem::kinetic_energy(const Positions& V) const
+{
+    double e = 0;
+    for (int i = 0; i < V.rows(); ++i) e += 0.5 * m_model.mass(i) * V.row(i).squaredNorm();
+    return e;
+}
+
+Positions ClothSystem::gravity_forces() const
+{
+    Positions g(vertex_count(), 3);
+    for (int i = 0; i < vertex_count(); ++i)
+        g.row(i) = m_model.pinned[static_cast<std::size_t>(i)] ? Eigen::RowVector3d::Zero()
+                                                                : Eigen::RowVector3d(m_model.mass(i) * m_model.gravity.transpose());
+    return g;
+}
+
+void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
+{
+    f.setZero(X.rows(), 3);
+    for (const auto& sp : m_model.springs) {
+        const Vec3 u = X.row(sp.i) - X.row(sp.j);
+        const double l = u.norm();
+        if (l <= 1e-300) continue;
+        const Vec3 fi = -sp.k * (l - sp.rest) / l * u;
+        f.row(sp.i) += fi.transpose();
+        f.row(sp.j) -= fi.transpose();
+    }
+    for (const auto& b : m_model.bends) {
+        Vec3 s = Vec3::Zero();
+        for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
+        for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (b.k * b.w[a] * s).transpose();
+    }
+    for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();
+    for_each_contact(*this, X, [&](int i, double phi, const Vec3& n, const Collider&) { f.row(i) -= (m_model.contact_stiffness(i) * phi * n).transpose(); });
+}
+
+void ClothSystem::add_damping_forces(const Positions& X, const Positions& V, Positions& f) const
+{
+    for (const auto& sp : m_model.springs) {
+        if (sp.d == 0) continue;
+        Vec3 u = X.row(sp.i) - X.row(sp.j);
+        const double l = u.norm();
+        if (l <= 1e-300) continue;
+        u /= l;
+        const double rate = (V.row(sp.i) - V.row(sp.j)).dot(u.transpose());
+        const Vec3 fi = -sp.d * rate * u;
+        f.row(sp.i) += fi.transpose();
+        f.row(sp.j) -= fi.transpose();
+    }
+    for (const auto& b : m_model.bends) {
+        if (b.d == 0) continue;
+        Vec3 s = Vec3::Zero();
+        for (int a = 0; a < b.n; ++a) s += b.w[a] * V.row(b.v[a]).transpose();
+        for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (b.d * b.w[a] * s).transpose();
+    }
+    if (m_model.air_damping > 0)
+        for (int i = 0; i < X.rows(); ++i) f.row(i) -= m_model.air_damping * m_model.mass(i) * V.row(i);
+}
+
+void ClothSystem::add_friction_forces(const Positions& X, const Positions& V, Positions& f, double v_eps) const
+{
+    if (m_model.friction <= 0) return;
+    const double mu = m_model.friction;
+    for_each_contact(*this, X, [&](int i, double phi, const Vec3& n, const Collider&) {
+        const double N = m_model.contact_stiffness(i) * (-phi);
+        const Vec3 vi = V.row(i).transpose();
+        const Vec3 vt = vi - vi.dot(n) * n;
+        const double s = std::sqrt(vt.squaredNorm() + v_eps * v_eps);
+        f.row(i) -= (mu * N / s * vt).transpose();
+    });
+}
+
+void ClothSystem::total_forces(const Positions& X, const Positions& V, Positions& f) const
+{
+    ++force_evaluations;
+    conservative_forces(X, f);
+    add_damping_forces(X, V, f);
+    add_friction_forces(X, V, f);
+    for (int i = 0; i < X.rows(); ++i)
+        if (m_model.pinned[static_cast<std::size_t>(i)]) f.row(i).setZero();
+}
+
+// ---- Hessian ----------------------------------------------------------------
+
+HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
+{
+    const int n = s.vertex_count();
+    const auto& m = s.model();
+    m_nbr.assign(static_cast<std::size_t>(n), {});
+    auto link = [&](int a, int b) {
+        if (a > b) std::swap(a, b);
+        m_nbr[static_cast<std::size_t>(b)].push_back(a);
+    };
+    for (int i = 0; i < n; ++i) link(i, i);
+    for (const auto& sp : m.springs) link(sp.i, sp.j);
+    for (const auto& b : m.bends)
+        for (int p = 0; p < b.n; ++p)
+            for (int q = p + 1; q < b.n; ++q) link(b.v[p], b.v[q]);
+    std::vector<int> colptr(static_cast<std::size_t>(3 * n + 1), 0);
+    long nnz = 0;
+    for (int j = 0; j < n; ++j) {
+        auto& nb = m_nbr[static_cast<std::size_t>(j)];
+        std::sort(nb.begin(), nb.end());
+        nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+        // Column 3j+b holds 3 rows per off-diagonal neighbour and b+1 rows of the diagonal block (last).
+        for (int b = 0; b < 3; ++b) {
+            colptr[static_cast<std::size_t>(3 * j + b)] = static_cast<int>(nnz);
+            nnz += 3 * static_cast<long>(nb.size() - 1) + b + 1;
+        }
+    }
+    colptr[static_cast<std::size_t>(3 * n)] = static_cast<int>(nnz);
+    m_H.resize(3 * n, 3 * n);
+    m_H.resizeNonZeros(nnz);
+    std::copy(colptr.begin(), colptr.end(), m_H.outerIndexPtr());
+    int* rows = m_H.innerIndexPtr();
+    for (int j = 0; j < n; ++j) {
+        const auto& nb = m_nbr[static_cast<std::size_t>(j)];
+        for (int b = 0; b < 3; ++b) {
+            int k = colptr[static_cast<std::size_t>(3 * j + b)];
+            for (int i : nb) {
+                const int nrows = i == j ? b + 1 : 3;
+                for (int a = 0; a < nrows; ++a) rows[k++] = 3 * i + a;
+            }
+        }
+    }
+    m_H.valuePtr()[0] = 0; // pattern is final; values are written by assemble()
+    m_spring_blocks.reserve(m.springs.size());
+    for (const auto& sp : m.springs) m_spring_blocks.push_back(block(std::min(sp.i, sp.j), std::max(sp.i, sp.j)));
+    m_diag_blocks.reserve(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) m_diag_blocks.push_back(block(i, i));
+    for (const auto& b : m.bends) {
+        std::array<Block, 6> bl{};
+        int t = 0;
+        for (int p = 0; p < 4; ++p)
+            for (int q = p + 1; q < 4; ++q, ++t)
+                if (q < b.n) bl[static_cast<std::size_t>(t)] = block(std::min(b.v[p], b.v[q]), std::max(b.v[p], b.v[q]));
+        m_bend_blocks.push_back(bl);
+    }
+}
+
+HessianAssembler::Block HessianAssembler::block(int i, int j) const
+{
+    const auto& nb = m_nbr[static_cast<std::size_t>(j)];
+    const int pos = static_cast<int>(std::lower_bound(nb.begin(), nb.end(), i) - nb.begin());
+    Block bl{};
+    for (int b = 0; b < 3; ++b) bl.col[b] = m_H.outerIndexPtr()[3 * j + b] + 3 * pos;
+    return bl;
+}
+
+void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project)
+{
+    const auto& m = m_s.model();
+    double* val = m_H.valuePtr();
+    std::fill(val, val + m_H.nonZeros(), 0.0);
+    // Adds the symmetric 3x3 matrix K (scaled by sign) to block (i, j); for a
+    // diagonal block only the upper triangle is stored.
+    auto add_diag = [&](const Block& bl, const Eigen::Matrix3d& K) {
+        for (int b = 0; b < 3; ++b)
+            for (int a = 0; a <= b; ++a) val[bl.col[b] + a] += K(a, b);
+    };
+    auto add_off = [&](const Block& bl, const Eigen::Matrix3d& K) {
+        for (int b = 0; b < 3; ++b)
+            for (int a = 0; a < 3; ++a) val[bl.col[b] + a] += K(a, b);
+    };
+    const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+    for (std::size_t s = 0; s < m.springs.size(); ++s) {
+        const auto& sp = m.springs[s];
+        Vec3 u = X.row(sp.i) - X.row(sp.j);
+        const double l = u.norm();
+        if (l <= 1e-300) continue;
+        u /= l;
+        const Eigen::Matrix3d nn = u * u.transpose();
+        double t = 1.0 - sp.rest / l;
+        if (project && t < 0) t = 0;
+        Eigen::Matrix3d K = sp.k * (nn + t * (I - nn));
+        if (damping_scale != 0) K += damping_scale * sp.d * nn;
+        add_diag(m_diag_blocks[static_cast<std::size_t>(sp.i)], K);
+        add_diag(m_diag_blocks[static_cast<std::size_t>(sp.j)], K);
+        add_off(m_spring_blocks[s], -K);
+    }
+    for (std::size_t s = 0; s < m.bends.size(); ++s) {
+        const auto& b = m.bends[s];
+        const double c = b.k + damping_scale * b.d;
+        for (int p = 0; p < b.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(b.v[p])], c * b.w[p] * b.w[p] * I);
+        int t = 0;
+        for (int p = 0; p < 4; ++p)
+            for (int q = p + 1; q < 4; ++q, ++t)
+                if (q < b.n) add_off(m_bend_blocks[s][static_cast<std::size_t>(t)], c * b.w[p] * b.w[q] * I);
+    }
+    const int n = m_s.vertex_count();
+    for (int i = 0; i < n; ++i) {
+        double d = extra_diag.size() ? extra_diag(i) : 0.0;
+        if (damping_scale != 0) d += damping_scale * m.air_damping * m.mass(i);
+        if (d != 0) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], d * I);
+    }
+    for_each_contact(m_s, X, [&](int i, double phi, const Vec3& nrm, const Collider& c) {
+        Eigen::Matrix3d K = nrm * nrm.transpose();
+        // Exact: the normal turns as the point moves (curved collider surfaces);
+        // with phi < 0 this term is negative, so the projected form drops it.
+        if (!project) K += phi * c.distance_hessian(X.row(i).transpose());
+        add_diag(m_diag_blocks[static_cast<std::size_t>(i)], m.contact_stiffness(i) * K);
+    });
+    // Pinned vertices: identity rows and columns (their update is zero).
+    bool any_pinned = false;
+    for (char p : m.pinned) any_pinned |= p != 0;
+    if (any_pinned) {
+        const int* outer = m_H.outerIndexPtr();
+        const int* inner = m_H.innerIndexPtr();
+        for (int col = 0; col < 3 * n; ++col) {
+            const bool pc = m.pinned[static_cast<std::size_t>(col / 3)] != 0;
+            for (int k = outer[col]; k < outer[col + 1]; ++k) {
+                const int row = inner[k];
+                if (pc || m.pinned[static_cast<std::size_t>(row / 3)]) val[k] = row == col ? 1.0 : 0.0;
+            }
+        }
+    }
+}
+
+} // namespace drape::cloth

@@ -1,0 +1,97 @@
+#pragma once
+// A cloth in a scene: mesh, model constants, colliders and the state (x, v).
+// Forces, energies and their derivatives live here; integrators and the static
+// solver (solver.hpp) drive it.
+#include "colliders.hpp"
+#include "mesh.hpp"
+#include "model.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+namespace drape::cloth {
+
+class ClothSystem {
+public:
+    ClothSystem(ClothMesh mesh, ClothModel model);
+
+    const ClothMesh& mesh() const { return m_mesh; }
+    const ClothModel& model() const { return m_model; }
+    ClothModel& model() { return m_model; }
+    int vertex_count() const { return m_mesh.vertex_count(); }
+
+    Positions x;      ///< current positions [m]
+    Positions v;      ///< current velocities [m/s]
+    double time = 0;  ///< [s]
+
+    void add_collider(std::shared_ptr<const Collider> c) { m_colliders.push_back(std::move(c)); }
+    const std::vector<std::shared_ptr<const Collider>>& colliders() const { return m_colliders; }
+    void clear_colliders() { m_colliders.clear(); }
+
+    /// Pinned vertices keep their position and get zero velocity.
+    void set_pinned(int vertex, bool pinned);
+    bool pinned(int vertex) const { return m_model.pinned[static_cast<std::size_t>(vertex)] != 0; }
+    /// Per-vertex mass override [kg] (> 0). Contact stiffness follows the mass.
+    void set_mass(int vertex, double mass);
+
+    /// Potential energy: springs, bending, gravity, contact penalty [J].
+    double potential_energy(const Positions& X) const;
+    double kinetic_energy(const Positions& V) const;
+
+    /// Conservative force -dE/dx at X [N] (pinned rows included; callers mask them).
+    void conservative_forces(const Positions& X, Positions& f) const;
+    /// Total force for dynamics: conservative + dashpots + air damping + friction.
+    /// Counts one force evaluation.
+    void total_forces(const Positions& X, const Positions& V, Positions& f) const;
+
+    /// Accumulates the damping forces (dashpots and air) at (X, V) into f.
+    void add_damping_forces(const Positions& X, const Positions& V, Positions& f) const;
+
+    mutable long force_evaluations = 0;
+
+    /// Gravity force per vertex [N] (zero on pinned vertices).
+    Positions gravity_forces() const;
+    /// Adds Coulomb friction of the contacts at X for velocity V (regularised
+    /// below `v_eps` [m/s] so the force is continuous at rest).
+    void add_friction_forces(const Positions& X, const Positions& V, Positions& f, double v_eps = 1e-4) const;
+
+private:
+    friend class HessianAssembler;
+    ClothMesh m_mesh;
+    ClothModel m_model;
+    std::vector<std::shared_ptr<const Collider>> m_colliders;
+};
+
+/// Sparse symmetric Hessian of the potential energy with a fixed sparsity
+/// pattern (springs, stencils and per-vertex blocks), assembled in place: the
+/// pattern and the value slot of every element block are computed once, so an
+/// iteration only writes numbers (no triplet rebuild). Only the upper triangle
+/// is stored (the form CHOLMOD takes). Spring blocks can be projected to
+/// positive semi-definite (a compressed spring drops its negative transverse
+/// term); contact uses the Gauss-Newton n n^T term.
+class HessianAssembler {
+public:
+    explicit HessianAssembler(const ClothSystem& s);
+    /// H = d2E/dx2 (projected if `project`) + diag(extra_diag_i I) + damping_scale * D(X),
+    /// with D the dashpot and air damping matrix. Pinned rows and columns become identity.
+    void assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project = true);
+    const Eigen::SparseMatrix<double>& matrix() const { return m_H; }
+
+private:
+    struct Block {
+        int col[3]; ///< value index of entry (0, b) of the block in column b; entry (a, b) is col[b] + a
+    };
+    Block block(int i, int j) const; ///< i <= j
+    const ClothSystem& m_s;
+    Eigen::SparseMatrix<double> m_H; // 3n x 3n, upper triangle
+    std::vector<std::vector<int>> m_nbr; // per column vertex j: sorted row vertices i <= j
+    std::vector<Block> m_spring_blocks;  // per spring: off-diagonal block (min, max)
+    std::vector<Block> m_diag_blocks;    // per vertex
+    std::vector<std::array<Block, 6>> m_bend_blocks; // per stencil: pairs (p<q) in order 01,02,03,12,13,23
+};
+
+} // namespace drape::cloth

@@ -1,0 +1,736 @@
+#include "fabric_library.hpp"
+
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/units.hpp"
+
+#include <sqlite3.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <functional>
+#include <regex>
+
+namespace drape::library {
+
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kLibraryFormat = "drapekit-fabric-library";
+
+/// Thin RAII statement. Every error becomes a FileError naming the library file.
+class Stmt {
+public:
+    Stmt(sqlite3* db, const std::string& path, const std::string& sql) : m_db(db), m_path(path)
+    {
+        if (sqlite3_prepare_v2(db, sql.c_str(), static_cast<int>(sql.size()), &m_s, nullptr) != SQLITE_OK)
+            fail("prepare");
+    }
+    ~Stmt() { sqlite3_finalize(m_s); }
+    Stmt(const Stmt&) = delete;
+    Stmt& operator=(const Stmt&) = delete;
+
+    Stmt& bind(int i, const std::string& v)
+    {
+        check(sqlite3_bind_text(m_s, i, v.c_str(), static_cast<int>(v.size()), SQLITE_TRANSIENT), "bind");
+        return *this;
+    }
+    Stmt& bind(int i, double v)
+    {
+        check(sqlite3_bind_double(m_s, i, v), "bind");
+        return *this;
+    }
+    Stmt& bind(int i, std::int64_t v)
+    {
+        check(sqlite3_bind_int64(m_s, i, v), "bind");
+        return *this;
+    }
+    Stmt& bind(int i, const std::optional<double>& v)
+    {
+        if (v) return bind(i, *v);
+        check(sqlite3_bind_null(m_s, i), "bind");
+        return *this;
+    }
+    /// True while there is a row.
+    bool step()
+    {
+        const int rc = sqlite3_step(m_s);
+        if (rc == SQLITE_ROW) return true;
+        if (rc == SQLITE_DONE) return false;
+        fail("step");
+    }
+    void run()
+    {
+        while (step()) {
+        }
+    }
+    std::string text(int c) const
+    {
+        const auto* t = sqlite3_column_text(m_s, c);
+        return t ? std::string(reinterpret_cast<const char*>(t), static_cast<std::size_t>(sqlite3_column_bytes(m_s, c)))
+                 : std::string();
+    }
+    double real(int c) const { return sqlite3_column_double(m_s, c); }
+    std::int64_t integer(int c) const { return sqlite3_column_int64(m_s, c); }
+    std::optional<double> opt_real(int c) const
+    {
+        if (sqlite3_column_type(m_s, c) == SQLITE_NULL) return std::nullopt;
+        return real(c);
+    }
+
+private:
+    void check(int rc, const char* what)
+    {
+        if (rc != SQLITE_OK) fail(what);
+    }
+    [[noreturn]] void fail(const char* what)
+    {
+        const int code = sqlite3_extended_errcode(m_db);
+        std::string msg = m_path + ": database error (" + what + "): " + sqlite3_errmsg(m_db);
+        if ((code & 0xff) == SQLITE_FULL) msg += "; the write was rolled back and the library is unchanged";
+        throw FileError(msg);
+    }
+    sqlite3* m_db;
+    const std::string& m_path;
+    sqlite3_stmt* m_s = nullptr;
+};
+
+void exec(sqlite3* db, const std::string& path, const std::string& sql)
+{
+    char* err = nullptr;
+    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+        const std::string m = err ? err : sqlite3_errmsg(db);
+        sqlite3_free(err);
+        std::string msg = path + ": database error: " + m + " (in: " + sql.substr(0, 60) + ")";
+        if ((sqlite3_extended_errcode(db) & 0xff) == SQLITE_FULL)
+            msg += "; the write was rolled back and the library is unchanged";
+        throw FileError(msg);
+    }
+}
+
+std::int64_t pragma_int(sqlite3* db, const std::string& path, const std::string& pragma)
+{
+    Stmt s(db, path, "PRAGMA " + pragma);
+    return s.step() ? s.integer(0) : 0;
+}
+
+/// One transaction: rolled back unless commit() ran, so an exception in the
+/// middle of a write leaves the database as it was.
+class Transaction {
+public:
+    Transaction(sqlite3* db, const std::string& path, bool write) : m_db(db), m_path(path)
+    {
+        // IMMEDIATE takes the write lock up front, so two writers queue on the
+        // busy timeout instead of failing with a deadlock on lock upgrade.
+        exec(db, path, write ? "BEGIN IMMEDIATE" : "BEGIN");
+    }
+    ~Transaction()
+    {
+        if (!m_done) sqlite3_exec(m_db, "ROLLBACK", nullptr, nullptr, nullptr);
+    }
+    void commit()
+    {
+        exec(m_db, m_path, "COMMIT");
+        m_done = true;
+    }
+
+private:
+    sqlite3* m_db;
+    const std::string& m_path;
+    bool m_done = false;
+};
+
+std::string now_utc()
+{
+    const auto t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return buf;
+}
+
+void validate_date(const std::string& d, const std::string& what)
+{
+    static const std::regex re(R"(^\d{4}(-\d{2}(-\d{2}(T\d{2}(:\d{2}(:\d{2}Z?)?)?)?)?)?$)");
+    if (!std::regex_match(d, re))
+        throw ParameterError(what + ": '" + d + "' is not an ISO 8601 date such as 2026-11-22 or 2026-11-22T10:30");
+}
+
+std::string like_pattern(const std::string& s)
+{
+    std::string out = "%";
+    for (char c : s) {
+        if (c == '%' || c == '_' || c == '\\') out += '\\';
+        out += c;
+    }
+    return out + "%";
+}
+
+struct Derived {
+    std::string format, composition;
+    double weight = 0;
+    std::optional<double> drape, fit;
+};
+
+Derived derive(const cloth::FabricPreset& p)
+{
+    Derived d;
+    d.format = std::holds_alternative<cloth::SeedParams>(p.fabric) ? "seed-19" : "drapekit-fabric";
+    if (p.extra.contains("composition") && p.extra["composition"].is_string())
+        d.composition = p.extra["composition"].get<std::string>();
+    d.weight = areal_density_of(p);
+    d.drape = drape_coefficient_of(p);
+    d.fit = fit_quality_of(p);
+    return d;
+}
+
+const char* const kColumns =
+    "id, name, composition, format, areal_density, drape_coefficient, fit_quality, created, modified, revision, preset";
+
+FabricRecord read_record(const Stmt& s, const std::string& path)
+{
+    FabricRecord r;
+    r.id = s.integer(0);
+    r.name = s.text(1);
+    r.composition = s.text(2);
+    r.format = s.text(3);
+    r.areal_density_kg_m2 = s.real(4);
+    r.drape_coefficient = s.opt_real(5);
+    r.fit_quality = s.opt_real(6);
+    r.created = s.text(7);
+    r.modified = s.text(8);
+    r.revision = static_cast<int>(s.integer(9));
+    const std::string where = path + ": fabric '" + r.name + "'";
+    try {
+        r.preset_json = json::parse(s.text(10));
+    } catch (const json::parse_error& e) {
+        throw FileError(where + ": stored preset is not valid JSON (" + e.what() + ")");
+    }
+    r.preset = cloth::fabric_from_json(r.preset_json, where);
+    return r;
+}
+
+/// Migration i takes the schema from version i to i + 1. Append, never edit.
+using Migration = std::function<void(sqlite3*, const std::string&)>;
+
+const std::vector<Migration>& migrations()
+{
+    static const std::vector<Migration> m = {
+        // 0 -> 1: the first schema, presets stored verbatim.
+        [](sqlite3* db, const std::string& path) {
+            exec(db, path,
+                 "CREATE TABLE fabrics ("
+                 " id INTEGER PRIMARY KEY,"
+                 " name TEXT NOT NULL UNIQUE COLLATE NOCASE,"
+                 " preset TEXT NOT NULL,"
+                 " created TEXT NOT NULL,"
+                 " modified TEXT NOT NULL)");
+        },
+        // 1 -> 2: searchable columns derived from the preset, filled in for the
+        // rows an older Drapekit wrote.
+        [](sqlite3* db, const std::string& path) {
+            exec(db, path,
+                 "ALTER TABLE fabrics ADD COLUMN format TEXT NOT NULL DEFAULT 'drapekit-fabric';"
+                 "ALTER TABLE fabrics ADD COLUMN composition TEXT NOT NULL DEFAULT '';"
+                 "ALTER TABLE fabrics ADD COLUMN areal_density REAL NOT NULL DEFAULT 0;"
+                 "ALTER TABLE fabrics ADD COLUMN drape_coefficient REAL;"
+                 "ALTER TABLE fabrics ADD COLUMN fit_quality REAL;"
+                 "ALTER TABLE fabrics ADD COLUMN revision INTEGER NOT NULL DEFAULT 1;"
+                 "CREATE INDEX fabrics_weight ON fabrics(areal_density);"
+                 "CREATE INDEX fabrics_drape ON fabrics(drape_coefficient);"
+                 "CREATE INDEX fabrics_modified ON fabrics(modified);");
+            std::vector<std::pair<std::int64_t, Derived>> rows;
+            {
+                Stmt s(db, path, "SELECT id, name, preset FROM fabrics");
+                while (s.step()) {
+                    const std::string where = path + ": fabric '" + s.text(1) + "'";
+                    json j;
+                    try {
+                        j = json::parse(s.text(2));
+                    } catch (const json::parse_error& e) {
+                        throw FileError(where + ": stored preset is not valid JSON (" + e.what() + ")");
+                    }
+                    rows.emplace_back(s.integer(0), derive(cloth::fabric_from_json(j, where)));
+                }
+            }
+            for (const auto& [id, d] : rows) {
+                Stmt u(db, path,
+                       "UPDATE fabrics SET format = ?1, composition = ?2, areal_density = ?3, drape_coefficient = ?4,"
+                       " fit_quality = ?5 WHERE id = ?6");
+                u.bind(1, d.format).bind(2, d.composition).bind(3, d.weight).bind(4, d.drape).bind(5, d.fit).bind(6, id);
+                u.run();
+            }
+        },
+    };
+    return m;
+}
+
+} // namespace
+
+// ---------------------------------------------------------------- helpers
+
+std::string default_library_path()
+{
+    if (const char* p = std::getenv("DRAPE_LIBRARY"); p && *p) return p;
+    if (const char* x = std::getenv("XDG_DATA_HOME"); x && *x) return std::string(x) + "/drapekit/library.sqlite";
+    if (const char* h = std::getenv("HOME"); h && *h) return std::string(h) + "/.local/share/drapekit/library.sqlite";
+    return "drapekit-library.sqlite";
+}
+
+std::string preset_name(const cloth::FabricPreset& p)
+{
+    if (const auto* f = std::get_if<cloth::FabricParams>(&p.fabric)) return f->name;
+    if (p.extra.contains("name") && p.extra["name"].is_string()) return p.extra["name"].get<std::string>();
+    return {};
+}
+
+void set_preset_name(cloth::FabricPreset& p, const std::string& name)
+{
+    if (auto* f = std::get_if<cloth::FabricParams>(&p.fabric)) {
+        f->name = name;
+        if (p.extra.contains("name")) p.extra.erase("name");
+    } else {
+        p.extra["name"] = name;
+    }
+}
+
+double areal_density_of(const cloth::FabricPreset& p)
+{
+    if (const auto* f = std::get_if<cloth::FabricParams>(&p.fabric)) return (*f)[cloth::Param::AreaDensity];
+    const auto& s = std::get<cloth::SeedParams>(p.fabric);
+    // Total particle mass over the sheet's area (grid constants: u*v particles on w x h).
+    return s.particle_mass_kg() * s.u * s.v / (s.w * s.h * 1e-4);
+}
+
+namespace {
+std::optional<double> finite_number(const json& j)
+{
+    if (j.is_number() && std::isfinite(j.get<double>())) return j.get<double>();
+    return std::nullopt;
+}
+} // namespace
+
+std::optional<double> drape_coefficient_of(const cloth::FabricPreset& p)
+{
+    if (!p.extra.contains("drape_coefficient")) return std::nullopt;
+    const json& d = p.extra["drape_coefficient"];
+    if (d.is_object() && d.contains("value")) return finite_number(d["value"]);
+    return finite_number(d);
+}
+
+std::optional<double> fit_quality_of(const cloth::FabricPreset& p)
+{
+    if (p.extra.contains("fit") && p.extra["fit"].is_object()) {
+        const json& f = p.extra["fit"];
+        for (const char* k : {"quality", "rms_m", "rms"})
+            if (f.contains(k))
+                if (auto v = finite_number(f[k])) return v;
+    }
+    if (p.extra.contains("fit_quality")) return finite_number(p.extra["fit_quality"]);
+    return std::nullopt;
+}
+
+void validate_name(const std::string& name)
+{
+    if (name.empty()) throw ParameterError("fabric name: must not be empty");
+    if (name.size() > 200) throw ParameterError("fabric name '" + name.substr(0, 40) + "...': longer than 200 characters");
+    if (name.front() == ' ' || name.back() == ' ')
+        throw ParameterError("fabric name '" + name + "': leading or trailing blanks");
+    for (unsigned char c : name)
+        if (c < 0x20 || c == 0x7f) throw ParameterError("fabric name '" + name + "': contains a control character");
+}
+
+// ---------------------------------------------------------------- library
+
+FabricLibrary::FabricLibrary(const std::string& path, Mode mode) : m_path(path), m_mode(mode)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (mode == Mode::ReadOnly) {
+        if (!fs::exists(path, ec)) throw FileError(path + ": no fabric library at this path");
+    } else if (const fs::path parent = fs::path(path).parent_path(); !parent.empty()) {
+        fs::create_directories(parent, ec);
+        if (ec) throw FileError(path + ": cannot create the folder " + parent.string() + " (" + ec.message() + ")");
+    }
+    if (fs::is_directory(path, ec)) throw FileError(path + ": is a folder, not a fabric library file");
+    const int flags = mode == Mode::ReadOnly ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+    if (sqlite3_open_v2(path.c_str(), &m_db, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
+        const std::string why = m_db ? sqlite3_errmsg(m_db) : "out of memory";
+        sqlite3_close(m_db);
+        m_db = nullptr;
+        throw FileError(path + ": cannot open the fabric library (" + why + ")");
+    }
+    try {
+        sqlite3_busy_timeout(m_db, 10000);
+        // The first read tells a SQLite file from anything else (SQLITE_NOTADB).
+        const auto app = pragma_int(m_db, m_path, "application_id");
+        (void)app;
+        if (mode == Mode::ReadWrite) {
+            exec(m_db, m_path, "PRAGMA journal_mode=WAL");
+            exec(m_db, m_path, "PRAGMA synchronous=FULL");
+        } else {
+            exec(m_db, m_path, "PRAGMA query_only=1");
+        }
+        migrate();
+    } catch (const FileError& e) {
+        sqlite3_close(m_db);
+        m_db = nullptr;
+        const std::string what = e.what();
+        if (what.find("file is not a database") != std::string::npos)
+            throw FileError(path + ": not a fabric library (not a SQLite database, or a damaged one)");
+        throw;
+    } catch (...) {
+        sqlite3_close(m_db);
+        m_db = nullptr;
+        throw;
+    }
+}
+
+FabricLibrary::~FabricLibrary()
+{
+    if (m_db) sqlite3_close(m_db);
+}
+
+FabricLibrary::FabricLibrary(FabricLibrary&& o) noexcept : m_db(o.m_db), m_path(std::move(o.m_path)), m_mode(o.m_mode)
+{
+    o.m_db = nullptr;
+}
+
+FabricLibrary& FabricLibrary::operator=(FabricLibrary&& o) noexcept
+{
+    if (this != &o) {
+        if (m_db) sqlite3_close(m_db);
+        m_db = o.m_db;
+        m_path = std::move(o.m_path);
+        m_mode = o.m_mode;
+        o.m_db = nullptr;
+    }
+    return *this;
+}
+
+int FabricLibrary::schema_version() const { return static_cast<int>(pragma_int(m_db, m_path, "user_version")); }
+
+void FabricLibrary::migrate()
+{
+    const bool write = m_mode == Mode::ReadWrite;
+    Transaction tx(m_db, m_path, write);
+    const auto version = pragma_int(m_db, m_path, "user_version");
+    const auto app = pragma_int(m_db, m_path, "application_id");
+    std::int64_t tables = 0;
+    {
+        Stmt s(m_db, m_path, "SELECT count(*) FROM sqlite_master");
+        if (s.step()) tables = s.integer(0);
+    }
+    if (app != kApplicationId && (app != 0 || tables > 0))
+        throw FileError(m_path + ": not a fabric library (a SQLite database of another application)");
+    if (version > kSchemaVersion)
+        throw FileError(m_path + ": written by a newer Drapekit (schema version " + std::to_string(version) +
+                        ", this build reads up to " + std::to_string(kSchemaVersion) + ")");
+    if (version == kSchemaVersion) {
+        tx.commit();
+        return;
+    }
+    if (!write)
+        throw FileError(m_path + ": schema version " + std::to_string(version) + " needs migrating to " +
+                        std::to_string(kSchemaVersion) + "; open it read-write once");
+    for (auto v = version; v < kSchemaVersion; ++v) migrations()[static_cast<std::size_t>(v)](m_db, m_path);
+    exec(m_db, m_path, "PRAGMA application_id=" + std::to_string(kApplicationId));
+    exec(m_db, m_path, "PRAGMA user_version=" + std::to_string(kSchemaVersion));
+    tx.commit();
+}
+
+std::int64_t FabricLibrary::put(const cloth::FabricPreset& in, const std::string& name_in, OnConflict on_conflict,
+                                ImportReport* report)
+{
+    std::string name = name_in.empty() ? preset_name(in) : name_in;
+    validate_name(name);
+    cloth::FabricPreset preset = in;
+
+    std::int64_t existing = -1; // row id of a fabric with this name, -1 when none
+    {
+        Stmt s(m_db, m_path, "SELECT id FROM fabrics WHERE name = ?1");
+        s.bind(1, name);
+        if (s.step()) existing = s.integer(0);
+    }
+    if (existing >= 0) {
+        switch (on_conflict) {
+        case OnConflict::Fail:
+            throw ParameterError(m_path + ": a fabric named '" + name + "' already exists");
+        case OnConflict::Skip:
+            if (report) {
+                ++report->skipped;
+                report->names.push_back(name);
+            }
+            return existing;
+        case OnConflict::Rename: {
+            const std::string base = name;
+            for (int k = 2;; ++k) {
+                name = base + " (" + std::to_string(k) + ")";
+                Stmt s(m_db, m_path, "SELECT 1 FROM fabrics WHERE name = ?1");
+                s.bind(1, name);
+                if (!s.step()) break;
+            }
+            existing = -1;
+            if (report) ++report->renamed;
+            break;
+        }
+        case OnConflict::Replace:
+            break;
+        }
+    }
+    set_preset_name(preset, name);
+    const json j = cloth::fabric_to_json(preset);
+    // What is stored must read back: the same check a later read applies.
+    const cloth::FabricPreset check = cloth::fabric_from_json(j, m_path + ": fabric '" + name + "'");
+    const Derived d = derive(check);
+    const std::string now = now_utc();
+    std::int64_t id = 0;
+    if (existing >= 0) {
+        Stmt u(m_db, m_path,
+               "UPDATE fabrics SET preset = ?1, format = ?2, composition = ?3, areal_density = ?4, drape_coefficient = ?5,"
+               " fit_quality = ?6, modified = ?7, revision = revision + 1 WHERE id = ?8");
+        u.bind(1, j.dump()).bind(2, d.format).bind(3, d.composition).bind(4, d.weight).bind(5, d.drape).bind(6, d.fit);
+        u.bind(7, now).bind(8, existing);
+        u.run();
+        id = existing;
+        if (report) ++report->replaced;
+    } else {
+        Stmt s(m_db, m_path,
+               "INSERT INTO fabrics (name, preset, format, composition, areal_density, drape_coefficient, fit_quality,"
+               " created, modified, revision) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?8, 1)");
+        s.bind(1, name).bind(2, j.dump()).bind(3, d.format).bind(4, d.composition).bind(5, d.weight).bind(6, d.drape);
+        s.bind(7, d.fit).bind(8, now);
+        s.run();
+        id = sqlite3_last_insert_rowid(m_db);
+        if (report) ++report->added;
+    }
+    if (report) report->names.push_back(name);
+    return id;
+}
+
+std::int64_t FabricLibrary::add(const cloth::FabricPreset& preset, const std::string& name)
+{
+    Transaction tx(m_db, m_path, true);
+    const auto id = put(preset, name, OnConflict::Fail, nullptr);
+    tx.commit();
+    return id;
+}
+
+void FabricLibrary::update(const std::string& name, const cloth::FabricPreset& preset)
+{
+    Transaction tx(m_db, m_path, true);
+    {
+        Stmt s(m_db, m_path, "SELECT name FROM fabrics WHERE name = ?1");
+        s.bind(1, name);
+        if (!s.step()) throw ParameterError(m_path + ": no fabric named '" + name + "'");
+    }
+    put(preset, name, OnConflict::Replace, nullptr);
+    tx.commit();
+}
+
+void FabricLibrary::rename(const std::string& from, const std::string& to)
+{
+    validate_name(to);
+    Transaction tx(m_db, m_path, true);
+    FabricRecord r;
+    {
+        Stmt s(m_db, m_path, std::string("SELECT ") + kColumns + " FROM fabrics WHERE name = ?1");
+        s.bind(1, from);
+        if (!s.step()) throw ParameterError(m_path + ": no fabric named '" + from + "'");
+        r = read_record(s, m_path);
+    }
+    {
+        Stmt s(m_db, m_path, "SELECT id FROM fabrics WHERE name = ?1");
+        s.bind(1, to);
+        if (s.step() && s.integer(0) != r.id) throw ParameterError(m_path + ": a fabric named '" + to + "' already exists");
+    }
+    set_preset_name(r.preset, to);
+    Stmt u(m_db, m_path, "UPDATE fabrics SET name = ?1, preset = ?2, modified = ?3, revision = revision + 1 WHERE id = ?4");
+    u.bind(1, to).bind(2, cloth::fabric_to_json(r.preset).dump()).bind(3, now_utc()).bind(4, r.id);
+    u.run();
+    tx.commit();
+}
+
+void FabricLibrary::remove(const std::string& name)
+{
+    Transaction tx(m_db, m_path, true);
+    Stmt s(m_db, m_path, "DELETE FROM fabrics WHERE name = ?1");
+    s.bind(1, name);
+    s.run();
+    if (sqlite3_changes(m_db) == 0) throw ParameterError(m_path + ": no fabric named '" + name + "'");
+    tx.commit();
+}
+
+std::optional<FabricRecord> FabricLibrary::find(const std::string& name) const
+{
+    Stmt s(m_db, m_path, std::string("SELECT ") + kColumns + " FROM fabrics WHERE name = ?1");
+    s.bind(1, name);
+    if (!s.step()) return std::nullopt;
+    return read_record(s, m_path);
+}
+
+FabricRecord FabricLibrary::get(const std::string& name) const
+{
+    auto r = find(name);
+    if (!r) throw ParameterError(m_path + ": no fabric named '" + name + "'");
+    return std::move(*r);
+}
+
+int FabricLibrary::count() const
+{
+    Stmt s(m_db, m_path, "SELECT count(*) FROM fabrics");
+    return s.step() ? static_cast<int>(s.integer(0)) : 0;
+}
+
+std::vector<FabricRecord> FabricLibrary::list(const Filter& f) const
+{
+    std::string sql = std::string("SELECT ") + kColumns + " FROM fabrics WHERE 1";
+    std::vector<std::function<void(Stmt&, int)>> binds;
+    auto add_text = [&](const std::string& clause, const std::string& value) {
+        sql += " AND " + clause;
+        binds.push_back([value](Stmt& s, int i) { s.bind(i, value); });
+    };
+    auto add_real = [&](const std::string& clause, double value, const char* what) {
+        if (!std::isfinite(value)) throw ParameterError(std::string("filter ") + what + ": not a finite number");
+        sql += " AND " + clause;
+        binds.push_back([value](Stmt& s, int i) { s.bind(i, value); });
+    };
+    if (!f.text.empty()) {
+        const std::string p = like_pattern(f.text);
+        sql += " AND (name LIKE ? ESCAPE '\\' OR composition LIKE ? ESCAPE '\\' OR"
+               " ifnull(json_extract(preset, '$.source'), '') LIKE ? ESCAPE '\\' OR"
+               " ifnull(json_extract(preset, '$.notes'), '') LIKE ? ESCAPE '\\')";
+        for (int k = 0; k < 4; ++k) binds.push_back([p](Stmt& s, int i) { s.bind(i, p); });
+    }
+    if (!f.name.empty()) add_text("name LIKE ? ESCAPE '\\'", like_pattern(f.name));
+    if (!f.composition.empty()) add_text("composition LIKE ? ESCAPE '\\'", like_pattern(f.composition));
+    if (f.weight_min) add_real("areal_density >= ?", *f.weight_min, "weight");
+    if (f.weight_max) add_real("areal_density <= ?", *f.weight_max, "weight");
+    if (f.drape_min) add_real("drape_coefficient >= ?", *f.drape_min, "D");
+    if (f.drape_max) add_real("drape_coefficient <= ?", *f.drape_max, "D");
+    if (f.fit_min) add_real("fit_quality >= ?", *f.fit_min, "fit quality");
+    if (f.fit_max) add_real("fit_quality <= ?", *f.fit_max, "fit quality");
+    // Prefix comparison makes a bare date inclusive of its whole day.
+    if (!f.modified_from.empty()) {
+        validate_date(f.modified_from, "filter modified from");
+        sql += " AND substr(modified, 1, length(?)) >= ?";
+        binds.push_back([v = f.modified_from](Stmt& s, int i) { s.bind(i, v); });
+        binds.push_back([v = f.modified_from](Stmt& s, int i) { s.bind(i, v); });
+    }
+    if (!f.modified_to.empty()) {
+        validate_date(f.modified_to, "filter modified to");
+        sql += " AND substr(modified, 1, length(?)) <= ?";
+        binds.push_back([v = f.modified_to](Stmt& s, int i) { s.bind(i, v); });
+        binds.push_back([v = f.modified_to](Stmt& s, int i) { s.bind(i, v); });
+    }
+    const char* key = "name COLLATE NOCASE";
+    switch (f.sort) {
+    case SortKey::Name: break;
+    case SortKey::Weight: key = "areal_density"; break;
+    case SortKey::DrapeCoefficient: key = "drape_coefficient"; break;
+    case SortKey::Modified: key = "modified"; break;
+    case SortKey::FitQuality: key = "fit_quality"; break;
+    }
+    sql += std::string(" ORDER BY ") + key + (f.descending ? " DESC" : " ASC") + " NULLS LAST, name COLLATE NOCASE";
+    if (f.limit > 0) sql += " LIMIT " + std::to_string(f.limit);
+
+    Stmt s(m_db, m_path, sql);
+    for (std::size_t i = 0; i < binds.size(); ++i) binds[i](s, static_cast<int>(i + 1));
+    std::vector<FabricRecord> out;
+    while (s.step()) out.push_back(read_record(s, m_path));
+    return out;
+}
+
+json FabricLibrary::export_preset(const std::string& name, PresetFormat format) const
+{
+    const FabricRecord r = get(name);
+    if (format == PresetFormat::Drapekit) return r.preset_json;
+    if (const auto* s = std::get_if<cloth::SeedParams>(&r.preset.fabric)) {
+        json j = cloth::seed_to_json(*s);
+        j["name"] = r.name;
+        return j;
+    }
+    throw ParameterError(m_path + ": fabric '" + name +
+                         "' holds continuum parameters; the seed's 19 grid constants describe one particular grid and "
+                         "have no bending counterpart, so it is exported as drapekit-fabric only");
+}
+
+std::int64_t FabricLibrary::import_preset(const json& j, const std::string& where, const std::string& name,
+                                          OnConflict on_conflict)
+{
+    const cloth::FabricPreset p = cloth::fabric_from_json(j, where);
+    Transaction tx(m_db, m_path, true);
+    const auto id = put(p, name, on_conflict, nullptr);
+    tx.commit();
+    return id;
+}
+
+json FabricLibrary::export_all() const
+{
+    // One read transaction: a writer committing meanwhile is either wholly in or wholly out.
+    Transaction tx(m_db, m_path, false);
+    json doc;
+    doc["format"] = kLibraryFormat;
+    doc["version"] = 1;
+    doc["exported"] = now_utc();
+    doc["fabrics"] = json::array();
+    Stmt s(m_db, m_path, std::string("SELECT ") + kColumns + " FROM fabrics ORDER BY name COLLATE NOCASE");
+    while (s.step()) {
+        const FabricRecord r = read_record(s, m_path);
+        doc["fabrics"].push_back({{"name", r.name},
+                                  {"created", r.created},
+                                  {"modified", r.modified},
+                                  {"revision", r.revision},
+                                  {"preset", r.preset_json}});
+    }
+    tx.commit();
+    return doc;
+}
+
+ImportReport FabricLibrary::import_all(const json& doc, const std::string& where, OnConflict on_conflict)
+{
+    const json* list = nullptr;
+    if (doc.is_array()) {
+        list = &doc;
+    } else if (doc.is_object() && doc.value("format", std::string()) == kLibraryFormat) {
+        if (doc.contains("version") && doc["version"] != 1)
+            throw ParameterError(where + ": field 'version' = " + doc["version"].dump() + " is not supported (reads 1)");
+        if (!doc.contains("fabrics") || !doc["fabrics"].is_array())
+            throw ParameterError(where + ": missing array field 'fabrics'");
+        list = &doc["fabrics"];
+    } else {
+        throw ParameterError(where + ": field 'format' must be \"" + std::string(kLibraryFormat) +
+                             "\" (or the document a JSON array of presets)");
+    }
+    // Parse everything before touching the database, so a bad entry names
+    // itself and nothing is written.
+    std::vector<std::pair<cloth::FabricPreset, std::string>> items;
+    for (std::size_t i = 0; i < list->size(); ++i) {
+        const json& e = (*list)[i];
+        const std::string w = where + ": fabrics[" + std::to_string(i) + "]";
+        if (!e.is_object()) throw ParameterError(w + ": not a JSON object");
+        const bool wrapped = e.contains("preset");
+        std::string name;
+        if (wrapped && e.contains("name")) {
+            if (!e["name"].is_string()) throw ParameterError(w + ": field 'name' is not a string");
+            name = e["name"].get<std::string>();
+        }
+        items.emplace_back(cloth::fabric_from_json(wrapped ? e["preset"] : e, w), name);
+    }
+    ImportReport report;
+    Transaction tx(m_db, m_path, true);
+    for (const auto& [p, name] : items) put(p, name, on_conflict, &report);
+    tx.commit();
+    return report;
+}
+
+void FabricLibrary::limit_pages_for_testing(std::int64_t pages)
+{
+    pragma_int(m_db, m_path, "max_page_count=" + std::to_string(pages));
+}
+
+} // namespace drape::library

@@ -1,0 +1,153 @@
+#pragma once
+// The fabric library: fitted and hand-made fabric presets in one SQLite file,
+// managed like a garment CAD manages its materials.
+//
+// Durability: the database runs in WAL mode with synchronous=FULL and every
+// write is one transaction (BEGIN IMMEDIATE ... COMMIT), so a crash, a kill or
+// a full disk in the middle of a write leaves the library as it was before
+// that write; a committed write survives a power cut. Readers (the CAD and the
+// CLI at the same time) see a consistent snapshot while a writer works; writers
+// queue behind each other with a busy timeout.
+//
+// Schema: PRAGMA user_version holds the schema version and application_id
+// marks the file as a Drapekit library. Opening a read-write library with an
+// older schema migrates it in one transaction; a newer schema is refused.
+// The preset JSON (engine/cloth/fabric_io.hpp) is stored verbatim; the
+// searchable columns (composition, weight, D, fit quality) are derived from it
+// on every write.
+#include "engine/cloth/fabric_io.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+struct sqlite3;
+
+namespace drape::library {
+
+/// One stored fabric.
+struct FabricRecord {
+    std::int64_t id = 0;
+    std::string name;                      ///< unique (case-insensitive)
+    std::string composition;               ///< e.g. "100 % cotton"; from preset "composition"
+    std::string format;                    ///< "drapekit-fabric" or "seed-19"
+    double areal_density_kg_m2 = 0;        ///< weight [kg/m^2]
+    std::optional<double> drape_coefficient; ///< D [-] (0..1) from preset "drape_coefficient"
+    std::optional<double> fit_quality;     ///< from preset "fit" (see fit_quality_of)
+    std::string created, modified;         ///< ISO 8601 UTC, e.g. "2026-11-22T01:02:03Z"
+    int revision = 1;                      ///< 1 on add, +1 on every update or rename
+    cloth::FabricPreset preset;
+    nlohmann::json preset_json;            ///< the stored preset file contents
+};
+
+enum class SortKey { Name, Weight, DrapeCoefficient, Modified, FitQuality };
+
+/// Search and filter. Empty / unset fields do not filter. Text matches are
+/// case-insensitive substrings. Records without D or fit quality drop out of
+/// a filter on that field.
+struct Filter {
+    std::string text;                  ///< in name, composition or the preset's "source"/"notes"
+    std::string name;                  ///< substring of the name
+    std::string composition;           ///< substring of the composition
+    std::optional<double> weight_min, weight_max;   ///< [kg/m^2]
+    std::optional<double> drape_min, drape_max;     ///< D [-]
+    std::optional<double> fit_min, fit_max;         ///< fit quality
+    std::string modified_from, modified_to;         ///< ISO 8601 dates or times, inclusive ("2026-11-01")
+    SortKey sort = SortKey::Name;
+    bool descending = false;
+    int limit = 0;                     ///< 0 = all
+};
+
+/// What to do when an imported fabric's name already exists.
+enum class OnConflict { Fail, Skip, Replace, Rename };
+
+struct ImportReport {
+    int added = 0, replaced = 0, skipped = 0, renamed = 0;
+    std::vector<std::string> names; ///< stored names, in input order
+};
+
+enum class PresetFormat { Drapekit, Seed19 };
+
+class FabricLibrary {
+public:
+    enum class Mode { ReadWrite, ReadOnly };
+    static constexpr int kSchemaVersion = 2;
+    static constexpr std::int32_t kApplicationId = 0x44524150; ///< "DRAP"
+
+    /// Opens (ReadWrite: creates, with its parent folder, or migrates) the
+    /// library at `path`. Throws FileError naming the path when the file is not
+    /// a SQLite database, is another application's database, has a newer
+    /// schema, is missing in ReadOnly mode, or cannot be opened.
+    explicit FabricLibrary(const std::string& path, Mode mode = Mode::ReadWrite);
+    ~FabricLibrary();
+    FabricLibrary(FabricLibrary&&) noexcept;
+    FabricLibrary& operator=(FabricLibrary&&) noexcept;
+    FabricLibrary(const FabricLibrary&) = delete;
+    FabricLibrary& operator=(const FabricLibrary&) = delete;
+
+    const std::string& path() const { return m_path; }
+    int schema_version() const;
+
+    /// Adds a preset under `name` (empty: the preset's own name). Throws
+    /// ParameterError when the name is taken or invalid. Returns the id.
+    std::int64_t add(const cloth::FabricPreset& preset, const std::string& name = {});
+    /// Replaces the preset stored under `name` (its name stays `name`).
+    void update(const std::string& name, const cloth::FabricPreset& preset);
+    void rename(const std::string& from, const std::string& to);
+    void remove(const std::string& name);
+
+    std::optional<FabricRecord> find(const std::string& name) const;
+    FabricRecord get(const std::string& name) const; ///< throws ParameterError when absent
+    std::vector<FabricRecord> list(const Filter& filter = {}) const;
+    int count() const;
+
+    /// A preset file's JSON ("drapekit-fabric" or, for seed presets, "seed-19").
+    nlohmann::json export_preset(const std::string& name, PresetFormat format = PresetFormat::Drapekit) const;
+    /// Parses a preset JSON in either format (`where` names its origin in errors) and adds it.
+    std::int64_t import_preset(const nlohmann::json& j, const std::string& where, const std::string& name = {},
+                               OnConflict on_conflict = OnConflict::Fail);
+
+    /// The whole library as one JSON document {"format": "drapekit-fabric-library",
+    /// "version": 1, "fabrics": [...]}, read in one snapshot.
+    nlohmann::json export_all() const;
+    /// Imports a whole-library document (or a JSON array of presets) in one
+    /// transaction: either every fabric goes in or none does.
+    ImportReport import_all(const nlohmann::json& doc, const std::string& where, OnConflict on_conflict = OnConflict::Fail);
+
+    /// Tests only: caps the database size at `pages` pages for this connection,
+    /// so a write fails with SQLITE_FULL the way a full disk makes it fail.
+    void limit_pages_for_testing(std::int64_t pages);
+
+private:
+    void migrate();
+    std::int64_t put(const cloth::FabricPreset& preset, const std::string& name, OnConflict on_conflict,
+                     ImportReport* report);
+
+    sqlite3* m_db = nullptr;
+    std::string m_path;
+    Mode m_mode = Mode::ReadWrite;
+};
+
+/// The default library path: $DRAPE_LIBRARY, else
+/// $XDG_DATA_HOME/drapekit/library.sqlite, else ~/.local/share/drapekit/library.sqlite.
+std::string default_library_path();
+
+/// The preset's display name (FabricParams::name, or "name" in a seed preset's extras).
+std::string preset_name(const cloth::FabricPreset& p);
+/// Sets the preset's name where preset_name() reads it.
+void set_preset_name(cloth::FabricPreset& p, const std::string& name);
+/// Areal density [kg/m^2] of either kind of preset.
+double areal_density_of(const cloth::FabricPreset& p);
+/// D [-] from extra "drape_coefficient" (a number, or an object with "value"); absent otherwise.
+std::optional<double> drape_coefficient_of(const cloth::FabricPreset& p);
+/// Fit quality from extra "fit": its "quality", else "rms_m", else "rms"; or extra "fit_quality".
+std::optional<double> fit_quality_of(const cloth::FabricPreset& p);
+/// Throws ParameterError unless the name is 1..200 printable characters without
+/// leading or trailing blanks.
+void validate_name(const std::string& name);
+
+} // namespace drape::library

@@ -1,0 +1,439 @@
+#include "mesh_import.hpp"
+
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/units.hpp"
+
+#include <Eigen/LU>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <unordered_map>
+
+namespace drape::importers {
+
+namespace {
+
+std::string lower(std::string s)
+{
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+double unit_metres(Unit u)
+{
+    switch (u) {
+    case Unit::Millimetre: return 1e-3;
+    case Unit::Centimetre: return 1e-2;
+    case Unit::Metre: return 1.0;
+    case Unit::File: break;
+    }
+    return 1.0;
+}
+
+template <class T>
+bool meta_get(const aiScene* s, const char* key, T& out)
+{
+    return s->mMetaData && s->mMetaData->Get(key, out);
+}
+
+/// Numeric metadata that FBX stores as int, float or double depending on the exporter.
+bool meta_number(const aiScene* s, const char* key, double& out)
+{
+    if (!s->mMetaData) return false;
+    const aiMetadataEntry* e = nullptr;
+    for (unsigned i = 0; i < s->mMetaData->mNumProperties; ++i)
+        if (std::string(s->mMetaData->mKeys[i].C_Str()) == key) e = &s->mMetaData->mValues[i];
+    if (!e || !e->mData) return false;
+    switch (e->mType) {
+    case AI_INT32: out = *static_cast<const int32_t*>(e->mData); return true;
+    case AI_UINT64: out = static_cast<double>(*static_cast<const uint64_t*>(e->mData)); return true;
+    case AI_FLOAT: out = *static_cast<const float*>(e->mData); return true;
+    case AI_DOUBLE: out = *static_cast<const double*>(e->mData); return true;
+    default: return false;
+    }
+}
+
+struct Collect {
+    const aiScene* scene;
+    std::vector<ImportedMesh>* out;
+    std::map<std::string, int>* name_uses;
+    const std::string* path;
+};
+
+Eigen::Matrix4d to_eigen(const aiMatrix4x4& m)
+{
+    Eigen::Matrix4d e;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) e(i, j) = m[static_cast<unsigned>(i)][j];
+    return e;
+}
+
+// Transforms are chained in double so that the unit scale and axis swap are
+// exact (assimp keeps matrices in float).
+void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
+{
+    const Eigen::Matrix4d world = parent * to_eigen(node->mTransformation);
+    for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+        const aiMesh* m = c.scene->mMeshes[node->mMeshes[k]];
+        std::string name = m->mName.C_Str();
+        if (name.empty()) name = node->mName.C_Str();
+        if (name.empty() || name.front() == '<') name = "mesh" + std::to_string(node->mMeshes[k]);
+        // A mesh instanced twice, or two meshes sharing a name, stay apart.
+        const int use = (*c.name_uses)[name]++;
+        if (use > 0) {
+            name += '#';
+            name += std::to_string(use + 1);
+        }
+
+        if (m->mNumVertices == 0 || m->mNumFaces == 0)
+            throw FileError(*c.path + ": mesh '" + name + "' has no faces (" + std::to_string(m->mNumVertices) +
+                            " vertices, " + std::to_string(m->mNumFaces) + " faces)");
+        ImportedMesh im;
+        im.name = name;
+        im.X.resize(m->mNumVertices, 3);
+        for (unsigned v = 0; v < m->mNumVertices; ++v) {
+            const aiVector3D& p0 = m->mVertices[v];
+            if (!std::isfinite(p0.x) || !std::isfinite(p0.y) || !std::isfinite(p0.z))
+                throw FileError(*c.path + ": mesh '" + name + "' vertex " + std::to_string(v) +
+                                " has a non-finite coordinate (" + format_double(p0.x) + ", " + format_double(p0.y) +
+                                ", " + format_double(p0.z) + ")");
+            const Eigen::Vector4d p = world * Eigen::Vector4d(p0.x, p0.y, p0.z, 1.0);
+            im.X.row(v) << p.x(), p.y(), p.z();
+        }
+        int tris = 0;
+        for (unsigned f = 0; f < m->mNumFaces; ++f) tris += m->mFaces[f].mNumIndices == 3;
+        if (tris == 0)
+            throw FileError(*c.path + ": mesh '" + name + "' has no triangles (only points or lines, " +
+                            std::to_string(m->mNumFaces) + " faces)");
+        im.F.resize(tris, 3);
+        int t = 0;
+        for (unsigned f = 0; f < m->mNumFaces; ++f) {
+            const aiFace& face = m->mFaces[f];
+            if (face.mNumIndices != 3) continue;
+            for (int j = 0; j < 3; ++j) {
+                if (face.mIndices[j] >= m->mNumVertices)
+                    throw FileError(*c.path + ": mesh '" + name + "' face " + std::to_string(f) + " has vertex index " +
+                                    std::to_string(face.mIndices[j]) + " >= " + std::to_string(m->mNumVertices));
+                im.F(t, j) = static_cast<int>(face.mIndices[j]);
+            }
+            ++t;
+        }
+        // A mirroring node transform (negative determinant) flips the winding;
+        // flip it back so closed bodies keep outward-facing triangles.
+        if (world.topLeftCorner<3, 3>().determinant() < 0) im.F.col(1).swap(im.F.col(2));
+        c.out->push_back(std::move(im));
+    }
+    for (unsigned ch = 0; ch < node->mNumChildren; ++ch) visit(node->mChildren[ch], world, c);
+}
+
+AlignedBox box_of(const cloth::Positions& X)
+{
+    AlignedBox b;
+    if (X.rows() == 0) return b;
+    b.min = X.colwise().minCoeff().transpose();
+    b.max = X.colwise().maxCoeff().transpose();
+    return b;
+}
+
+void grow(AlignedBox& b, const AlignedBox& o, bool first)
+{
+    if (first) {
+        b = o;
+        return;
+    }
+    b.min = b.min.cwiseMin(o.min);
+    b.max = b.max.cwiseMax(o.max);
+}
+
+} // namespace
+
+Unit parse_unit(const std::string& text, const std::string& what)
+{
+    const std::string t = lower(text);
+    if (t == "mm") return Unit::Millimetre;
+    if (t == "cm") return Unit::Centimetre;
+    if (t == "m") return Unit::Metre;
+    if (t == "file" || t == "auto") return Unit::File;
+    throw ParameterError(what + ": '" + text + "' is not a unit (mm, cm, m or file)");
+}
+
+UpAxis parse_up_axis(const std::string& text, const std::string& what)
+{
+    const std::string t = lower(text);
+    if (t == "y") return UpAxis::Y;
+    if (t == "z") return UpAxis::Z;
+    if (t == "file" || t == "auto") return UpAxis::File;
+    throw ParameterError(what + ": '" + text + "' is not an up axis (y, z or file)");
+}
+
+std::string to_string(Unit u)
+{
+    switch (u) {
+    case Unit::Millimetre: return "mm";
+    case Unit::Centimetre: return "cm";
+    case Unit::Metre: return "m";
+    case Unit::File: break;
+    }
+    return "file";
+}
+
+std::string to_string(UpAxis a)
+{
+    switch (a) {
+    case UpAxis::Y: return "y";
+    case UpAxis::Z: return "z";
+    case UpAxis::File: break;
+    }
+    return "file";
+}
+
+AlignedBox ImportedMesh::bounds() const { return box_of(X); }
+
+int ImportedScene::vertex_count() const
+{
+    int n = 0;
+    for (const auto& m : meshes) n += m.vertex_count();
+    return n;
+}
+
+int ImportedScene::triangle_count() const
+{
+    int n = 0;
+    for (const auto& m : meshes) n += m.triangle_count();
+    return n;
+}
+
+AlignedBox ImportedScene::bounds() const
+{
+    AlignedBox b;
+    for (std::size_t i = 0; i < meshes.size(); ++i) grow(b, meshes[i].bounds(), i == 0);
+    return b;
+}
+
+const ImportedMesh* ImportedScene::find(const std::string& name) const
+{
+    for (const auto& m : meshes)
+        if (m.name == name) return &m;
+    return nullptr;
+}
+
+namespace {
+ImportedMesh merge_list(const std::vector<const ImportedMesh*>& list, const std::string& name)
+{
+    ImportedMesh out;
+    out.name = name;
+    int nv = 0, nf = 0;
+    for (const auto* m : list) {
+        nv += m->vertex_count();
+        nf += m->triangle_count();
+    }
+    out.X.resize(nv, 3);
+    out.F.resize(nf, 3);
+    int v0 = 0, f0 = 0;
+    for (const auto* m : list) {
+        out.X.middleRows(v0, m->vertex_count()) = m->X;
+        out.F.middleRows(f0, m->triangle_count()) = m->F.array() + v0;
+        v0 += m->vertex_count();
+        f0 += m->triangle_count();
+    }
+    return out;
+}
+} // namespace
+
+ImportedMesh ImportedScene::merged() const
+{
+    std::vector<const ImportedMesh*> list;
+    for (const auto& m : meshes) list.push_back(&m);
+    return merge_list(list, std::filesystem::path(path).stem().string());
+}
+
+ImportedMesh ImportedScene::merged(const std::vector<std::string>& names) const
+{
+    std::vector<const ImportedMesh*> list;
+    for (const auto& n : names) {
+        const ImportedMesh* m = find(n);
+        if (!m) {
+            std::string avail;
+            for (const auto& mm : meshes) avail += (avail.empty() ? "" : ", ") + mm.name;
+            throw ParameterError(path + ": no mesh named '" + n + "' (meshes: " + avail + ")");
+        }
+        list.push_back(m);
+    }
+    return merge_list(list, names.size() == 1 ? names.front() : std::filesystem::path(path).stem().string());
+}
+
+int weld_vertices(cloth::Positions& X, cloth::Triangles& F)
+{
+    struct Key {
+        double x, y, z;
+        bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+    };
+    struct Hash {
+        std::size_t operator()(const Key& k) const
+        {
+            std::hash<double> h;
+            return h(k.x) ^ (h(k.y) * 0x9E3779B97F4A7C15ull) ^ (h(k.z) * 0xC2B2AE3D27D4EB4Full);
+        }
+    };
+    std::unordered_map<Key, int, Hash> seen;
+    seen.reserve(static_cast<std::size_t>(X.rows()));
+    std::vector<int> remap(static_cast<std::size_t>(X.rows()));
+    cloth::Positions Y(X.rows(), 3);
+    int n = 0;
+    for (int i = 0; i < X.rows(); ++i) {
+        // +0.0 so that -0.0 and 0.0 weld.
+        Key k{X(i, 0) + 0.0, X(i, 1) + 0.0, X(i, 2) + 0.0};
+        auto [it, inserted] = seen.emplace(k, n);
+        if (inserted) Y.row(n++) = X.row(i);
+        remap[static_cast<std::size_t>(i)] = it->second;
+    }
+    cloth::Triangles G(F.rows(), 3);
+    int m = 0;
+    for (int t = 0; t < F.rows(); ++t) {
+        const int a = remap[static_cast<std::size_t>(F(t, 0))], b = remap[static_cast<std::size_t>(F(t, 1))],
+                  c = remap[static_cast<std::size_t>(F(t, 2))];
+        if (a == b || b == c || a == c) continue;
+        G.row(m++) << a, b, c;
+    }
+    const int removed = static_cast<int>(X.rows()) - n;
+    X = Y.topRows(n);
+    F = G.topRows(m);
+    return removed;
+}
+
+ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw FileError(path + ": no such file");
+    const auto size = fs::file_size(path, ec);
+    if (ec) throw FileError(path + ": cannot read the file size (" + ec.message() + ")");
+    if (size == 0) throw FileError(path + ": the file is empty");
+    {
+        std::ifstream probe(path, std::ios::binary);
+        if (!probe) throw FileError(path + ": cannot open the file for reading");
+    }
+
+    Assimp::Importer importer;
+    // An explicit up axis describes the file's own numbers, so assimp must not
+    // rotate Collada's Z_UP into Y_UP first.
+    if (opt.up != UpAxis::File) importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
+    const unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
+    const aiScene* scene = importer.ReadFile(path, flags);
+    if (!scene) {
+        std::string why = importer.GetErrorString();
+        if (why.find("No suitable reader") != std::string::npos)
+            throw FileError(path + ": not a mesh format assimp can read (" + why + ")");
+        throw FileError(path + ": cannot import (" + (why.empty() ? std::string("unknown assimp error") : why) + ")");
+    }
+    if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
+        throw FileError(path + ": the scene is incomplete (truncated file or one without geometry)");
+    if (!scene->mRootNode || scene->mNumMeshes == 0) throw FileError(path + ": the file holds no mesh");
+
+    ImportedScene out;
+    out.path = path;
+    aiString fmt;
+    if (meta_get(scene, "SourceAsset_Format", fmt)) out.format = fmt.C_Str();
+    const std::string f = lower(out.format);
+    const bool is_fbx = f.find("fbx") != std::string::npos;
+    const bool is_collada = f.find("collada") != std::string::npos;
+    const bool is_gltf = f.find("gltf") != std::string::npos;
+
+    // --- unit ---
+    aiMatrix4x4 root = scene->mRootNode->mTransformation;
+    if (opt.unit != Unit::File) {
+        out.unit_scale = unit_metres(opt.unit);
+        out.unit_source = "option";
+        if (is_collada) {
+            // assimp always multiplies Collada's root by <unit meter="...">;
+            // an explicit unit replaces it, so take that uniform scale out again.
+            aiMatrix3x3 r(root);
+            const double det = r.Determinant();
+            if (std::abs(det) > 0) {
+                const float s = static_cast<float>(std::cbrt(std::abs(det)));
+                for (int i = 0; i < 3; ++i)
+                    for (int j = 0; j < 3; ++j) root[i][j] /= s;
+            }
+        }
+    } else if (is_fbx) {
+        double cm_per_unit = 0;
+        if (meta_number(scene, "UnitScaleFactor", cm_per_unit) && cm_per_unit > 0) {
+            out.unit_scale = cm_per_unit * 0.01;
+            out.unit_source = "file";
+        } else {
+            out.unit_scale = 0.01; // FBX's own default unit is the centimetre
+            out.unit_source = "assumed";
+        }
+    } else if (is_collada || is_gltf) {
+        out.unit_scale = 1.0; // Collada: assimp applied <unit>; glTF: metres by specification
+        out.unit_source = "file";
+    } else {
+        out.unit_scale = 1.0;
+        out.unit_source = "assumed";
+    }
+
+    // --- up axis ---
+    if (opt.up != UpAxis::File) {
+        out.up = opt.up;
+        out.up_source = "option";
+    } else if (is_fbx) {
+        double axis = 1, sign = 1;
+        const bool has_axis = meta_number(scene, "UpAxis", axis);
+        meta_number(scene, "UpAxisSign", sign);
+        if (has_axis && sign > 0 && (axis == 1 || axis == 2)) {
+            out.up = axis == 2 ? UpAxis::Z : UpAxis::Y;
+            out.up_source = "file";
+        } else {
+            out.up = UpAxis::Y;
+            out.up_source = "assumed";
+        }
+    } else if (is_collada || is_gltf) {
+        out.up = UpAxis::Y; // assimp turns Collada's <up_axis> into y up; glTF is y up
+        out.up_source = "file";
+    } else {
+        out.up = UpAxis::Y;
+        out.up_source = "assumed";
+    }
+
+    // Engine frame: metres, z up. From y up: (x, y, z) -> (x, -z, y), a proper
+    // rotation about x by +90 degrees, so handedness and winding are kept.
+    Eigen::Matrix4d to_engine = Eigen::Matrix4d::Identity();
+    const double s = out.unit_scale;
+    if (out.up == UpAxis::Y) {
+        to_engine.topLeftCorner<3, 3>() << s, 0, 0, 0, 0, -s, 0, s, 0;
+    } else {
+        to_engine.topLeftCorner<3, 3>() = s * Eigen::Matrix3d::Identity();
+    }
+
+    std::map<std::string, int> uses;
+    Collect c{scene, &out.meshes, &uses, &path};
+    const Eigen::Matrix4d base = to_engine * to_eigen(root);
+    // visit() multiplies by the node's own transform; the root's was adjusted above.
+    aiNode* rn = scene->mRootNode;
+    const aiMatrix4x4 keep = rn->mTransformation;
+    rn->mTransformation = aiMatrix4x4();
+    try {
+        visit(rn, base, c);
+    } catch (...) {
+        rn->mTransformation = keep;
+        throw;
+    }
+    rn->mTransformation = keep;
+    if (out.meshes.empty()) throw FileError(path + ": no node of the scene references a mesh");
+
+    if (opt.weld)
+        for (auto& m : out.meshes) weld_vertices(m.X, m.F);
+    for (auto& m : out.meshes)
+        if (m.F.rows() == 0) throw FileError(path + ": mesh '" + m.name + "' has only degenerate triangles");
+    return out;
+}
+
+} // namespace drape::importers

@@ -1,0 +1,280 @@
+#pragma once
+// DrapeController: the state and commands of a drape view, shared by the
+// QWidget (DrapeView) and the QML scene (Drapekit.DrapeScene). It owns the
+// worker thread that runs the engine, the Qt Quick 3D geometry objects, the
+// orbit camera, the texture and the long-job runner.
+//
+// Units: sampleDiameter and discDiameter are in millimetres (the lab's and a
+// CAD user's unit); everything else is SI (timeStep [s], restSpeed [m/s],
+// masses [kg], collider positions [m] in Drapekit's world frame: z up, origin
+// at the pedestal top centre).
+#include "widget/cloth_geometry.hpp"
+#include "widget/drape_frame.hpp"
+#include "widget/line_geometry.hpp"
+#include "widget/long_job.hpp"
+#include "widget/orbit_camera.hpp"
+
+#include "engine/cloth/fabric_io.hpp"
+
+#include <QColor>
+#include <QImage>
+#include <QObject>
+#include <QPointF>
+#include <QPolygonF>
+#include <QQuick3DTextureData>
+#include <QQuaternion>
+#include <QSet>
+#include <QThread>
+#include <QVariantList>
+#include <QVector3D>
+
+#include <memory>
+
+namespace drape::widget {
+
+class DrapeWorker;
+
+class DrapeController : public QObject {
+    Q_OBJECT
+    // ---- designable (DrapeView mirrors these) -------------------------------
+    /// Fabric preset: a preset JSON file, a built-in name ("seed-table1"), or
+    /// empty for the parameter table's defaults.
+    Q_PROPERTY(QString fabricPreset READ fabricPreset WRITE setFabricPreset NOTIFY fabricPresetChanged)
+    Q_PROPERTY(double sampleDiameter READ sampleDiameter WRITE setSampleDiameter NOTIFY sampleDiameterChanged) ///< [mm]
+    Q_PROPERTY(double discDiameter READ discDiameter WRITE setDiscDiameter NOTIFY discDiameterChanged)         ///< [mm]
+    Q_PROPERTY(int gridSize READ gridSize WRITE setGridSize NOTIFY gridSizeChanged) ///< nodes across the specimen
+    Q_PROPERTY(QString clothShape READ clothShape WRITE setClothShape NOTIFY clothShapeChanged) ///< "disc" | "square"
+    Q_PROPERTY(QString integrator READ integrator WRITE setIntegrator NOTIFY integratorChanged)
+    Q_PROPERTY(QString texture READ texture WRITE setTexture NOTIFY textureChanged) ///< BMP/PNG/JPEG path, empty = plain colour
+    Q_PROPERTY(bool running READ running WRITE setRunning NOTIFY runningChanged)
+    Q_PROPERTY(double timeStep READ timeStep WRITE setTimeStep NOTIFY timeStepChanged)       ///< [s], 0 = automatic
+    Q_PROPERTY(double restSpeed READ restSpeed WRITE setRestSpeed NOTIFY restSpeedChanged)   ///< [m/s]
+    Q_PROPERTY(double restResidual READ restResidual WRITE setRestResidual NOTIFY restResidualChanged) ///< relative force residual [-]
+    Q_PROPERTY(QString viewPreset READ viewPreset WRITE setViewPreset NOTIFY viewPresetChanged) ///< "top" | "side" | "iso" (lab stations), "close", "free"
+    Q_PROPERTY(QColor clothColor READ clothColor WRITE setClothColor NOTIFY clothColorChanged)
+    Q_PROPERTY(QColor backgroundColor READ backgroundColor WRITE setBackgroundColor NOTIFY backgroundColorChanged)
+    Q_PROPERTY(bool showColliders READ showColliders WRITE setShowColliders NOTIFY showCollidersChanged)
+    Q_PROPERTY(bool showOutlines READ showOutlines WRITE setShowOutlines NOTIFY showOutlinesChanged)
+    Q_PROPERTY(bool pickEnabled READ pickEnabled WRITE setPickEnabled NOTIFY pickEnabledChanged)
+    // ---- for the QML scene ----------------------------------------------------
+    Q_PROPERTY(drape::widget::ClothGeometry* clothGeometry READ clothGeometry CONSTANT)
+    Q_PROPERTY(drape::widget::LineGeometry* simulatedOutline READ simulatedOutline CONSTANT)
+    Q_PROPERTY(drape::widget::LineGeometry* measuredOutline READ measuredOutline CONSTANT)
+    Q_PROPERTY(QQuick3DTextureData* textureData READ textureData CONSTANT)
+    Q_PROPERTY(bool hasTexture READ hasTexture NOTIFY textureChanged)
+    Q_PROPERTY(QVariantList colliders READ colliders NOTIFY collidersChanged)
+    Q_PROPERTY(QVariantList pinnedPositions READ pinnedPositions NOTIFY pinnedChanged)
+    Q_PROPERTY(QVector3D cameraPosition READ cameraPosition NOTIFY cameraChanged)
+    Q_PROPERTY(QQuaternion cameraRotation READ cameraRotation NOTIFY cameraChanged)
+    Q_PROPERTY(double fieldOfView READ fieldOfView NOTIFY cameraChanged) ///< vertical [deg]
+    Q_PROPERTY(int vertexCount READ vertexCount NOTIFY meshChanged)
+    Q_PROPERTY(double simulatedTime READ simulatedTime NOTIFY frameApplied) ///< [s]
+    Q_PROPERTY(QString statusText READ statusText NOTIFY frameApplied)
+    Q_PROPERTY(bool jobRunning READ jobRunning NOTIFY jobRunningChanged)
+
+public:
+    explicit DrapeController(QObject* parent = nullptr);
+    ~DrapeController() override;
+
+    QString fabricPreset() const { return m_fabricPreset; }
+    void setFabricPreset(const QString& preset);
+    double sampleDiameter() const { return m_sampleDiameterMm; }
+    void setSampleDiameter(double mm);
+    double discDiameter() const { return m_discDiameterMm; }
+    void setDiscDiameter(double mm);
+    int gridSize() const { return m_gridSize; }
+    void setGridSize(int n);
+    QString clothShape() const { return m_shape; }
+    void setClothShape(const QString& shape);
+    QString integrator() const { return m_integrator; }
+    void setIntegrator(const QString& name);
+    QString texture() const { return m_texture; }
+    void setTexture(const QString& path);
+    bool running() const { return m_running; }
+    void setRunning(bool on);
+    double timeStep() const { return m_timeStep; }
+    void setTimeStep(double dt);
+    double restSpeed() const { return m_restSpeed; }
+    void setRestSpeed(double v);
+    double restResidual() const { return m_restResidual; }
+    void setRestResidual(double r);
+    QString viewPreset() const { return m_viewPreset; }
+    void setViewPreset(const QString& name);
+    QColor clothColor() const { return m_clothColor; }
+    void setClothColor(const QColor& c);
+    QColor backgroundColor() const { return m_backgroundColor; }
+    void setBackgroundColor(const QColor& c);
+    bool showColliders() const { return m_showColliders; }
+    void setShowColliders(bool on);
+    bool showOutlines() const { return m_showOutlines; }
+    void setShowOutlines(bool on);
+    bool pickEnabled() const { return m_pickEnabled; }
+    void setPickEnabled(bool on);
+
+    ClothGeometry* clothGeometry() const { return m_cloth; }
+    LineGeometry* simulatedOutline() const { return m_simOutline; }
+    LineGeometry* measuredOutline() const { return m_measOutline; }
+    QQuick3DTextureData* textureData() const { return m_textureData; }
+    bool hasTexture() const { return m_hasTexture; }
+    QVariantList colliders() const { return m_colliders; }
+    QVariantList pinnedPositions() const { return m_pinnedPositions; }
+    QVector3D cameraPosition() const { return m_camera.scenePosition(); }
+    QQuaternion cameraRotation() const { return m_camera.sceneRotation(); }
+    double fieldOfView() const { return m_camera.fovYDegrees(); }
+    int vertexCount() const;
+    double simulatedTime() const;
+    QString statusText() const;
+    bool jobRunning() const { return m_job.running(); }
+
+    const OrbitCamera& camera() const { return m_camera; }
+    OrbitCamera& camera() { return m_camera; }
+    /// Latest frame shown (may be null before the first one).
+    DrapeFramePtr currentFrame() const { return m_frame; }
+    DrapeMeshPtr currentMesh() const { return m_mesh; }
+    /// The fabric preset in use (as loaded, with edits from setFabricParameter).
+    const cloth::FabricPreset& preset() const { return m_preset; }
+
+    /// Runs `fn` on a worker thread with progress and cancel (see LongJob): the
+    /// hook for fitting a preset to a record. False when a job is running.
+    bool startJob(const QString& name, JobFunction fn);
+
+    /// Shows a measured outline (polygon in the horizontal plane [m], world frame)
+    /// over the simulated one; turns showOutlines on.
+    void showMeasuredOutline(const QPolygonF& outlineMetres);
+
+public slots:
+    void play();
+    void pause();
+    void step();
+    void reset();
+    /// Builds the cloth now from the current properties (they otherwise rebuild
+    /// on the next event-loop turn after a change).
+    void createCloth();
+    void cancelJob();
+    void clearMeasuredOutline();
+    void clearPins();
+    void clearExtraColliders();
+
+public:
+    // ---- interaction (QML-callable) -------------------------------------------
+    Q_INVOKABLE void orbit(double dxPixels, double dyPixels);
+    Q_INVOKABLE void pan(double dxPixels, double dyPixels, double viewHeight);
+    Q_INVOKABLE void zoom(double wheelDelta);
+    /// Vertex under view point (x, y) of a w x h view, or -1.
+    Q_INVOKABLE int pickVertex(double x, double y, double w, double h) const;
+    /// Pins the vertex under the point, or unpins it when pinned. Returns it (-1 = none).
+    Q_INVOKABLE int togglePinAt(double x, double y, double w, double h);
+    Q_INVOKABLE void setPinned(int vertex, bool pinned);
+    Q_INVOKABLE bool isPinned(int vertex) const { return m_pinned.contains(vertex); }
+    Q_INVOKABLE QList<int> pinnedVertices() const;
+    /// Pinned vertices as the simulation last reported them.
+    Q_INVOKABLE QList<int> simulatedPinnedVertices() const;
+    Q_INVOKABLE void setVertexMass(int vertex, double kg);
+    Q_INVOKABLE double vertexMass(int vertex) const; ///< [kg], NaN when unknown
+    /// World point [m] -> view point of a w x h view (NaN when behind the camera).
+    Q_INVOKABLE QPointF projectToView(const QVector3D& worldMetres, double w, double h) const;
+    Q_INVOKABLE void addSphereCollider(const QVector3D& centreMetres, double radiusMetres);
+    /// Writes state + results: `jsonPath` and an OBJ next to it (same base name).
+    /// Asynchronous: resultsSaved or errorOccurred follows.
+    Q_INVOKABLE void saveResults(const QString& jsonPath);
+    Q_INVOKABLE bool saveFabricPreset(const QString& path);
+    Q_INVOKABLE bool loadFabricPreset(const QString& path) { return applyFabricPreset(path); }
+    /// The parameter table with the current values: list of {key, unit, value,
+    /// lower, upper, defaultValue, doc, editable}.
+    Q_INVOKABLE QVariantList fabricParameters() const;
+    Q_INVOKABLE bool setFabricParameter(const QString& key, double value);
+    /// QML form of showMeasuredOutline: a list of points (x, y) [m].
+    Q_INVOKABLE void setMeasuredOutline(const QVariantList& points);
+    /// Uses an in-memory image as texture (e.g. the record's top photo).
+    Q_INVOKABLE bool setTextureImage(const QImage& image);
+
+signals:
+    void fabricPresetChanged(const QString& preset);
+    void sampleDiameterChanged(double mm);
+    void discDiameterChanged(double mm);
+    void gridSizeChanged(int n);
+    void clothShapeChanged(const QString& shape);
+    void integratorChanged(const QString& name);
+    void textureChanged(const QString& path);
+    void runningChanged(bool running);
+    void timeStepChanged(double dt);
+    void restSpeedChanged(double v);
+    void restResidualChanged(double r);
+    void viewPresetChanged(const QString& name);
+    void clothColorChanged(const QColor& c);
+    void backgroundColorChanged(const QColor& c);
+    void showCollidersChanged(bool on);
+    void showOutlinesChanged(bool on);
+    void pickEnabledChanged(bool on);
+    void collidersChanged();
+    void pinnedChanged();
+    void cameraChanged();
+    void meshChanged();
+    void frameApplied();
+    void fabricParametersChanged();
+    void jobRunningChanged();
+
+    /// Simulation progress: simulated time [s] and the fastest free vertex [m/s].
+    void progress(double simulatedTime, double maxSpeed);
+    /// The cloth came to rest (speed and residual below restSpeed / restResidual).
+    void restReached();
+    /// Bad input or engine trouble, as a readable message. The view stays usable.
+    void errorOccurred(const QString& message);
+    void resultsSaved(const QString& jsonPath, const QString& objPath);
+    void jobStarted(const QString& name);
+    void jobProgress(double fraction, const QString& message);
+    void jobFinished(bool ok, const QString& message);
+
+private:
+    bool applyFabricPreset(const QString& preset);
+    void uploadTexture(const QImage& image);
+    void scheduleRebuild();
+    void rebuildNow();
+    void onMesh(const DrapeMeshPtr& mesh);
+    void onFrame(const DrapeFramePtr& frame);
+    void onWorkerRunning(bool on);
+    void updatePinnedPositions();
+    void fail(const QString& message);
+    template <class F>
+    void toWorker(F&& f);
+
+    QString m_fabricPreset;
+    cloth::FabricPreset m_preset;
+    double m_sampleDiameterMm = 300;
+    double m_discDiameterMm = 150;
+    int m_gridSize = 40;
+    QString m_shape = QStringLiteral("disc");
+    // Semi-implicit Euler: cheap steps, so a small cloth drapes live; "implicit"
+    // and "static" are there for large or stiff cloths.
+    QString m_integrator = QStringLiteral("symplectic");
+    QString m_texture;
+    bool m_running = false;
+    double m_timeStep = 0;
+    double m_restSpeed = 1e-3;
+    double m_restResidual = 1e-3;
+    QString m_viewPreset = QStringLiteral("iso");
+    QColor m_clothColor{0xb0, 0x3a, 0x48};
+    QColor m_backgroundColor{0x2b, 0x2f, 0x36};
+    bool m_showColliders = true;
+    bool m_showOutlines = false;
+    bool m_pickEnabled = true;
+    bool m_hasTexture = false;
+    bool m_rebuildPending = false;
+    bool m_playAfterBuild = false;
+
+    OrbitCamera m_camera;
+    ClothGeometry* m_cloth = nullptr;
+    LineGeometry* m_simOutline = nullptr;
+    LineGeometry* m_measOutline = nullptr;
+    QQuick3DTextureData* m_textureData = nullptr;
+    QVariantList m_colliders;
+    QVariantList m_pinnedPositions;
+    QSet<int> m_pinned;
+    DrapeMeshPtr m_mesh;
+    DrapeFramePtr m_frame;
+    QThread m_thread;
+    DrapeWorker* m_worker = nullptr;
+    LongJob m_job;
+};
+
+} // namespace drape::widget

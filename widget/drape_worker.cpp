@@ -1,0 +1,625 @@
+#include "widget/drape_worker.hpp"
+
+#include "engine/cloth/colliders.hpp"
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/model.hpp"
+
+#include <Eigen/Geometry>
+
+#include <QFileInfo>
+#include <QTimer>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <variant>
+
+namespace drape::widget {
+
+namespace {
+
+// At most ~30 cloth frames per second: smooth enough to watch, and on a small
+// machine with software OpenGL each rendered frame takes CPU from the solver.
+constexpr qint64 kFrameIntervalMs = 30;
+
+template <class... Ts>
+struct Overloaded : Ts... {
+    using Ts::operator()...;
+};
+template <class... Ts>
+Overloaded(Ts...) -> Overloaded<Ts...>;
+
+/// Square sheet of side sample_diameter centred over the pedestal, with the same
+/// pedestal/floor colliders as the drapemeter and a small smooth random lift so
+/// the symmetric start can buckle (the disc gets the same from make_drape_system).
+std::unique_ptr<cloth::ClothSystem> makeSquareSystem(const cloth::FabricPreset& preset, const cloth::DrapeSetup& setup)
+{
+    setup.validate();
+    cloth::ClothMesh mesh;
+    cloth::ClothModel model;
+    std::visit(Overloaded{[&](const cloth::FabricParams& p) {
+                              const double w = setup.sample_diameter;
+                              mesh = cloth::make_rectangle(w, w, setup.grid, setup.grid, Eigen::Vector3d(-w / 2, -w / 2, 0));
+                              model = cloth::make_model(mesh, p, preset.model);
+                          },
+                          [&](const cloth::SeedParams& s) {
+                              // The seed's constants describe their own grid: keep it.
+                              const double w = s.w * 0.01, h = s.h * 0.01;
+                              mesh = cloth::make_rectangle(w, h, s.u, s.v, Eigen::Vector3d(-w / 2, -h / 2, 0));
+                              model = cloth::make_seed_model(mesh, s, preset.model);
+                          }},
+               preset.fabric);
+    auto sys = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
+    const double R = 0.5 * setup.sample_diameter;
+    std::mt19937_64 rng(setup.seed);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    std::vector<double> amp, phase;
+    for (int k = 2; k <= 16; ++k) {
+        amp.push_back(uni(rng));
+        phase.push_back(2 * std::numbers::pi * uni(rng));
+    }
+    Eigen::VectorXd lift(sys->vertex_count());
+    for (int i = 0; i < sys->vertex_count(); ++i) {
+        const double x = sys->x(i, 0), y = sys->x(i, 1);
+        const double th = std::atan2(y, x), r2 = (x * x + y * y) / (R * R);
+        double s = 0;
+        for (std::size_t k = 0; k < amp.size(); ++k) s += amp[k] * std::cos(double(k + 2) * th + phase[k]);
+        lift(i) = s * r2;
+    }
+    const double peak = lift.cwiseAbs().maxCoeff();
+    const double base = sys->model().contact_offset + 0.5e-3;
+    for (int i = 0; i < sys->vertex_count(); ++i)
+        sys->x(i, 2) = base + (peak > 0 ? setup.perturbation * lift(i) / peak : 0.0);
+    sys->v.setZero(sys->vertex_count(), 3);
+    sys->add_collider(std::make_shared<cloth::PedestalCollider>(Eigen::Vector3d::Zero(), 0.5 * setup.disc_diameter,
+                                                                setup.pedestal_height, setup.edge_radius));
+    if (setup.floor)
+        sys->add_collider(std::make_shared<cloth::PlaneCollider>(Eigen::Vector3d(0, 0, -setup.pedestal_height),
+                                                                 Eigen::Vector3d::UnitZ()));
+    return sys;
+}
+
+double maxFreeSpeed(const cloth::ClothSystem& s)
+{
+    double m = 0;
+    for (int i = 0; i < s.vertex_count(); ++i)
+        if (!s.pinned(i)) m = std::max(m, s.v.row(i).norm());
+    return m;
+}
+
+QString fabricName(const cloth::FabricPreset& p)
+{
+    return std::visit(Overloaded{[](const cloth::FabricParams& f) { return QString::fromStdString(f.name); },
+                                 [](const cloth::SeedParams&) { return QStringLiteral("seed grid constants"); }},
+                      p.fabric);
+}
+
+} // namespace
+
+void describeColliders(const cloth::Collider& c, std::vector<ColliderShape>& out)
+{
+    if (auto* g = dynamic_cast<const cloth::ColliderGroup*>(&c)) {
+        for (const auto& m : g->members)
+            if (m) describeColliders(*m, out);
+    } else if (auto* p = dynamic_cast<const cloth::PedestalCollider*>(&c)) {
+        // #Cylinder: radius 50, height 100 along the scene's y, centred. Drawn
+        // 5 mm lower and 3 mm narrower than the collider: the cloth rests on the
+        // rounded edge with straight triangle edges (chords) that dip below the
+        // true corner, and a full-size cylinder would poke through them.
+        const double inset = 3e-3, drop = 5e-3;
+        const double r = std::max(p->radius - inset, 0.5 * p->radius), h = std::max(p->height - drop, 0.5 * p->height);
+        const Eigen::Vector3d mid = p->top_centre - Eigen::Vector3d(0, 0, p->height - 0.5 * h);
+        out.push_back({"pedestal", "#Cylinder", toScene(mid.x(), mid.y(), mid.z()),
+                       QVector3D(float(r / 50), float(h / 100), float(r / 50)), QVector3D(0, 1, 0)});
+    } else if (auto* s = dynamic_cast<const cloth::SphereCollider*>(&c)) {
+        const float k = float(s->radius / 50);
+        out.push_back({"sphere", "#Sphere", toScene(s->centre.x(), s->centre.y(), s->centre.z()), QVector3D(k, k, k),
+                       QVector3D(0, 1, 0)});
+    } else if (auto* pl = dynamic_cast<const cloth::PlaneCollider*>(&c)) {
+        // #Rectangle: 100 x 100 in the scene's xy plane; drawn 3 m across.
+        const Eigen::Vector3d n = pl->normal.normalized();
+        out.push_back({"plane", "#Rectangle", toScene(pl->point.x(), pl->point.y(), pl->point.z()),
+                       QVector3D(3.0f, 3.0f, 1.0f), toScene(n.x(), n.y(), n.z())});
+    }
+}
+
+DrapeWorker::DrapeWorker()
+{
+    m_timer = new QTimer(this);
+    m_timer->setSingleShot(true);
+    m_timer->setInterval(0);
+    connect(m_timer, &QTimer::timeout, this, &DrapeWorker::advance);
+    m_sincePublish.start();
+    m_sinceOutline.start();
+}
+
+DrapeWorker::~DrapeWorker()
+{
+    m_stepper.reset(); // holds a reference to the system
+}
+
+void DrapeWorker::fail(const QString& what, const std::exception& e)
+{
+    emit errorOccurred(what + QStringLiteral(": ") + QString::fromUtf8(e.what()));
+}
+
+void DrapeWorker::rebuild(std::shared_ptr<const DrapeSpec> spec)
+{
+    if (!spec) return;
+    // The controller plays again after a rebuild when it is meant to be running.
+    setRunning(false);
+    try {
+        std::unique_ptr<cloth::ClothSystem> sys;
+        if (spec->shape == QLatin1String("square"))
+            sys = makeSquareSystem(spec->preset, spec->setup);
+        else if (spec->shape == QLatin1String("disc"))
+            sys = cloth::make_drape_system(spec->preset.fabric, spec->setup, spec->preset.model);
+        else
+            throw ParameterError("shape: unknown cloth shape '" + spec->shape.toStdString() + "' (use disc or square)");
+        if (!sys || sys->vertex_count() == 0) throw ParameterError("cloth: the mesh has no vertices");
+        // Swap only after everything built: a failed rebuild keeps the old cloth.
+        m_stepper.reset();
+        m_sys = std::move(sys);
+        m_spec = std::move(spec);
+        if (m_sys->v.rows() != m_sys->vertex_count()) m_sys->v.setZero(m_sys->vertex_count(), 3);
+        m_x0 = m_sys->x;
+        m_baseColliders = m_sys->colliders();
+        m_steps = 0;
+        makeStepper();
+        emitMesh();
+        publish(true);
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("cannot build the cloth"), e);
+    }
+}
+
+void DrapeWorker::emitMesh()
+{
+    auto mesh = std::make_shared<DrapeMeshData>();
+    const cloth::ClothMesh& cm = m_sys->mesh();
+    mesh->generation = ++m_generation;
+    mesh->vertexCount = m_sys->vertex_count();
+    mesh->F = cm.F;
+    mesh->indexData.resize(cm.F.size() * qsizetype(sizeof(quint32)));
+    auto* idx = reinterpret_cast<quint32*>(mesh->indexData.data());
+    for (Eigen::Index t = 0; t < cm.F.rows(); ++t)
+        for (int k = 0; k < 3; ++k) idx[3 * t + k] = quint32(cm.F(t, k));
+    // Material coordinates [m] -> [0, 1] over the specimen, so an image (e.g. the
+    // record's top photo cropped to the specimen) covers the cloth once.
+    mesh->texcoord.assign(std::size_t(2 * mesh->vertexCount), 0.0f);
+    if (cm.uv.rows() == mesh->vertexCount && mesh->vertexCount > 0) {
+        const Eigen::Vector2d lo = cm.uv.colwise().minCoeff(), hi = cm.uv.colwise().maxCoeff();
+        const double span = std::max({hi.x() - lo.x(), hi.y() - lo.y(), 1e-12});
+        for (int i = 0; i < mesh->vertexCount; ++i) {
+            mesh->texcoord[std::size_t(2 * i)] = float((cm.uv(i, 0) - lo.x()) / span);
+            mesh->texcoord[std::size_t(2 * i + 1)] = float((cm.uv(i, 1) - lo.y()) / span);
+        }
+    }
+    mesh->boundary = cm.boundary;
+    mesh->floorZ = std::nan("");
+    for (const auto& c : m_sys->colliders()) {
+        if (!c) continue;
+        describeColliders(*c, mesh->colliders);
+        if (auto* pl = dynamic_cast<const cloth::PlaneCollider*>(c.get()); pl && pl->normal.z() > 0.99)
+            mesh->floorZ = pl->point.z();
+    }
+    mesh->sampleRadius = 0.5 * m_spec->setup.sample_diameter;
+    mesh->discRadius = 0.5 * m_spec->setup.disc_diameter;
+    mesh->description = QStringLiteral("%1, %2 vertices, %3 triangles")
+                            .arg(fabricName(m_spec->preset))
+                            .arg(mesh->vertexCount)
+                            .arg(cm.F.rows());
+    m_texcoord = mesh->texcoord;
+    m_mesh = mesh;
+    emit meshReady(mesh);
+}
+
+void DrapeWorker::makeStepper()
+{
+    m_stepper.reset();
+    if (!m_sys || m_integ == cloth::Integrator::Static) return;
+    m_stepper = std::make_unique<cloth::Stepper>(*m_sys, m_integ);
+}
+
+void DrapeWorker::setIntegrator(cloth::Integrator integ)
+{
+    if (integ == m_integ) return;
+    const bool wasRunning = m_running;
+    setRunning(false);
+    m_integ = integ;
+    try {
+        makeStepper();
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("integrator"), e);
+        return;
+    }
+    if (wasRunning) play();
+}
+
+void DrapeWorker::setTimeStep(double dt)
+{
+    m_dt = dt;
+}
+
+void DrapeWorker::setRestCriteria(double speed, double residual)
+{
+    m_restSpeed = speed;
+    m_restResidual = residual;
+}
+
+double DrapeWorker::effectiveTimeStep()
+{
+    if (m_dt > 0) return m_dt;
+    // Automatic: explicit schemes just inside their stability limit; implicit
+    // Euler two steps per displayed frame (it is stable at any step).
+    if (m_integ == cloth::Integrator::ImplicitEuler) return 1.0 / 120.0;
+    const double lim = m_stepper ? m_stepper->explicit_dt_limit() : 1e-4;
+    return std::min(0.9 * lim, 1.0 / 240.0);
+}
+
+void DrapeWorker::setRunning(bool on)
+{
+    if (on == m_running) return;
+    m_running = on;
+    if (!on) m_timer->stop();
+    emit runningChanged(on);
+}
+
+void DrapeWorker::play()
+{
+    if (!m_sys) return;
+    m_cancel = false;
+    if (m_integ == cloth::Integrator::Static) {
+        runStatic(-1);
+        return;
+    }
+    if (!m_stepper) {
+        try {
+            makeStepper();
+        } catch (const std::exception& e) {
+            fail(QStringLiteral("integrator"), e);
+            return;
+        }
+    }
+    setRunning(true);
+    m_timer->start();
+}
+
+void DrapeWorker::pause()
+{
+    setRunning(false);
+    publish(true);
+}
+
+void DrapeWorker::advance()
+{
+    if (!m_running || !m_sys || !m_stepper) return;
+    QElapsedTimer budget;
+    budget.start();
+    const double dt = effectiveTimeStep();
+    try {
+        // Step for about one display frame, then let queued commands (pin, pause) in.
+        do {
+            if (!m_stepper->step(dt)) {
+                setRunning(false);
+                publish(true);
+                emit errorOccurred(QStringLiteral("the simulation diverged at t = %1 s with %2 steps of %3 s "
+                                                  "(integrator %4): use a smaller time step or the implicit integrator; "
+                                                  "press reset to start again")
+                                       .arg(m_sys->time, 0, 'g', 4)
+                                       .arg(m_steps)
+                                       .arg(dt, 0, 'g', 3)
+                                       .arg(QString::fromStdString(cloth::to_string(m_integ))));
+                return;
+            }
+            ++m_steps;
+        } while (budget.elapsed() < 15);
+        const double speed = maxFreeSpeed(*m_sys);
+        if (speed < m_restSpeed) {
+            const double res = cloth::relative_residual(*m_sys);
+            if (res < m_restResidual) {
+                setRunning(false);
+                publish(true);
+                emit restReached(m_sys->time, res);
+                return;
+            }
+        }
+    } catch (const std::exception& e) {
+        setRunning(false);
+        fail(QStringLiteral("simulation step"), e);
+        return;
+    }
+    publish(false);
+    m_timer->start();
+}
+
+void DrapeWorker::runStatic(long maxNewton)
+{
+    setRunning(true);
+    cloth::RestOptions opt;
+    opt.integrator = cloth::Integrator::Static;
+    opt.residual = m_restResidual;
+    opt.max_speed = m_restSpeed;
+    if (maxNewton > 0) opt.max_newton = maxNewton;
+    opt.cancel = &m_cancel;
+    opt.progress = [this](const cloth::SolverStatus&) {
+        if (m_uiReady && m_sincePublish.elapsed() > 30) publish(false);
+        return !m_cancel.load();
+    };
+    try {
+        const cloth::SolverStatus st = cloth::run_to_rest(*m_sys, opt);
+        m_steps += st.steps;
+        m_sys->v.setZero();
+        setRunning(false);
+        publish(true);
+        if (st.converged()) {
+            if (maxNewton < 0) emit restReached(m_sys->time, st.residual);
+        } else if (st.outcome != cloth::SolverStatus::Outcome::Cancelled && maxNewton < 0) {
+            emit errorOccurred(QStringLiteral("static solver: %1 after %2 iterations (residual %3)%4")
+                                   .arg(QString::fromStdString(cloth::to_string(st.outcome)))
+                                   .arg(st.newton_iterations)
+                                   .arg(st.residual, 0, 'g', 3)
+                                   .arg(st.message.empty() ? QString() : QStringLiteral(": ") + QString::fromStdString(st.message)));
+        }
+    } catch (const std::exception& e) {
+        setRunning(false);
+        fail(QStringLiteral("static solver"), e);
+    }
+    m_cancel = false;
+}
+
+void DrapeWorker::stepOnce()
+{
+    if (!m_sys) return;
+    setRunning(false);
+    if (m_integ == cloth::Integrator::Static) {
+        runStatic(1); // one Newton iteration
+        return;
+    }
+    try {
+        if (!m_stepper) makeStepper();
+        if (!m_stepper->step(effectiveTimeStep()))
+            emit errorOccurred(QStringLiteral("the simulation diverged: use a smaller time step; press reset"));
+        else
+            ++m_steps;
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("simulation step"), e);
+    }
+    publish(true);
+}
+
+void DrapeWorker::reset()
+{
+    if (!m_sys) return;
+    const bool wasRunning = m_running;
+    setRunning(false);
+    m_sys->x = m_x0;
+    m_sys->v.setZero(m_sys->vertex_count(), 3);
+    m_sys->time = 0;
+    m_steps = 0;
+    try {
+        makeStepper(); // integrators may keep history (e.g. factorisations)
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("integrator"), e);
+    }
+    publish(true);
+    if (wasRunning) play();
+}
+
+void DrapeWorker::setPinned(int vertex, bool pinned)
+{
+    if (!m_sys) return;
+    try {
+        if (vertex < 0 || vertex >= m_sys->vertex_count())
+            throw ParameterError("pin: vertex " + std::to_string(vertex) + " is not in [0, " +
+                                 std::to_string(m_sys->vertex_count()) + ")");
+        m_sys->set_pinned(vertex, pinned);
+        if (pinned) m_sys->v.row(vertex).setZero();
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("pin"), e);
+    }
+    publish(true);
+}
+
+void DrapeWorker::clearPins()
+{
+    if (!m_sys) return;
+    for (int i = 0; i < m_sys->vertex_count(); ++i)
+        if (m_sys->pinned(i)) m_sys->set_pinned(i, false);
+    publish(true);
+}
+
+void DrapeWorker::setMass(int vertex, double kg)
+{
+    if (!m_sys) return;
+    try {
+        if (vertex < 0 || vertex >= m_sys->vertex_count())
+            throw ParameterError("mass: vertex " + std::to_string(vertex) + " is not in [0, " +
+                                 std::to_string(m_sys->vertex_count()) + ")");
+        if (!(kg > 0) || !std::isfinite(kg))
+            throw ParameterError("mass: vertex " + std::to_string(vertex) + " mass " + std::to_string(kg) +
+                                 " kg must be a positive number");
+        m_sys->set_mass(vertex, kg);
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("vertex mass"), e);
+    }
+    publish(true);
+}
+
+void DrapeWorker::addSphere(SphereSpec s)
+{
+    if (!m_sys) return;
+    try {
+        if (!s.centre.allFinite() || !(s.radius > 0) || !std::isfinite(s.radius))
+            throw ParameterError("sphere collider: radius " + std::to_string(s.radius) + " m must be positive and the centre finite");
+        m_sys->add_collider(std::make_shared<cloth::SphereCollider>(s.centre, s.radius));
+        makeStepper(); // contact blocks may be part of the implicit solver's pattern
+        emitMesh();
+        publish(true);
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("add sphere"), e);
+    }
+}
+
+void DrapeWorker::clearExtraColliders()
+{
+    if (!m_sys) return;
+    m_sys->clear_colliders();
+    for (const auto& c : m_baseColliders) m_sys->add_collider(c);
+    try {
+        makeStepper();
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("integrator"), e);
+    }
+    emitMesh();
+    publish(true);
+}
+
+void DrapeWorker::setOutlineWanted(bool on)
+{
+    m_outline = on;
+    if (!on) m_lastOutline.clear();
+    publish(true);
+}
+
+void DrapeWorker::publish(bool force)
+{
+    if (!m_sys || !m_mesh) return;
+    if (!force && !m_uiReady) return; // the GUI still has the previous frame: skip, never queue up
+    if (!force && m_sincePublish.elapsed() < kFrameIntervalMs) return;
+    m_sincePublish.restart();
+    auto f = std::make_shared<DrapeFrame>();
+    const int n = m_sys->vertex_count();
+    f->generation = m_mesh->generation;
+    f->x = m_sys->x;
+    f->simTime = m_sys->time;
+    f->steps = m_steps;
+    f->maxSpeed = maxFreeSpeed(*m_sys);
+    // Smooth normals: area-weighted sum of the incident triangles' normals.
+    const cloth::Triangles& F = m_sys->mesh().F;
+    cloth::Positions nrm = cloth::Positions::Zero(n, 3);
+    for (Eigen::Index t = 0; t < F.rows(); ++t) {
+        const int a = F(t, 0), b = F(t, 1), c = F(t, 2);
+        const Eigen::Vector3d fa = (f->x.row(b) - f->x.row(a)).cross(f->x.row(c) - f->x.row(a));
+        nrm.row(a) += fa;
+        nrm.row(b) += fa;
+        nrm.row(c) += fa;
+    }
+    f->vertexData.resize(qsizetype(n) * kFloatsPerVertex * qsizetype(sizeof(float)));
+    auto* out = reinterpret_cast<float*>(f->vertexData.data());
+    QVector3D lo(1e9f, 1e9f, 1e9f), hi(-1e9f, -1e9f, -1e9f);
+    for (int i = 0; i < n; ++i) {
+        const QVector3D p = toScene(f->x(i, 0), f->x(i, 1), f->x(i, 2));
+        const double len = nrm.row(i).norm();
+        const QVector3D q = len > 0 ? toScene(nrm(i, 0) / len, nrm(i, 1) / len, nrm(i, 2) / len) : QVector3D(0, 1, 0);
+        float* o = out + std::ptrdiff_t(i) * kFloatsPerVertex;
+        o[0] = p.x(); o[1] = p.y(); o[2] = p.z();
+        o[3] = q.x(); o[4] = q.y(); o[5] = q.z();
+        o[6] = m_texcoord[std::size_t(2 * i)];
+        o[7] = m_texcoord[std::size_t(2 * i + 1)];
+        lo = QVector3D(std::min(lo.x(), p.x()), std::min(lo.y(), p.y()), std::min(lo.z(), p.z()));
+        hi = QVector3D(std::max(hi.x(), p.x()), std::max(hi.y(), p.y()), std::max(hi.z(), p.z()));
+    }
+    f->boundsMin = lo;
+    f->boundsMax = hi;
+    for (int i = 0; i < n; ++i)
+        if (m_sys->pinned(i)) f->pinned.push_back(i);
+    f->mass = std::make_shared<const Eigen::VectorXd>(m_sys->model().mass);
+    if (m_outline) {
+        // The shadow outline costs a pass over all triangles: refresh it a few times a second.
+        if (force || m_lastOutline.empty() || m_sinceOutline.elapsed() > 200) {
+            try {
+                m_lastOutline = cloth::shadow_outline(f->x, F, 720);
+            } catch (const std::exception&) {
+                m_lastOutline.clear();
+            }
+            m_sinceOutline.restart();
+        }
+        f->outline = m_lastOutline;
+    }
+    m_uiReady = false;
+    emit frameReady(f);
+}
+
+void DrapeWorker::saveResults(const QString& jsonPath, const QString& integratorName)
+{
+    if (!m_sys || !m_spec) {
+        emit errorOccurred(QStringLiteral("save results: there is no cloth yet"));
+        return;
+    }
+    try {
+        if (jsonPath.isEmpty()) throw FileError("save results: empty file name");
+        QFileInfo fi(jsonPath);
+        const QString objPath = fi.path() + QLatin1Char('/') + fi.completeBaseName() + QStringLiteral(".obj");
+        const cloth::ClothMesh& mesh = m_sys->mesh();
+        const cloth::Positions& X = m_sys->x;
+
+        // OBJ: positions in the world frame [m], z up; texture coordinates; smooth normals.
+        std::ostringstream obj;
+        obj.precision(9);
+        obj << "# Drapekit cloth state, world frame z up, metres\n";
+        obj << "# fabric " << fabricName(m_spec->preset).toStdString() << ", t = " << m_sys->time << " s\n";
+        for (int i = 0; i < X.rows(); ++i) obj << "v " << X(i, 0) << ' ' << X(i, 1) << ' ' << X(i, 2) << '\n';
+        for (int i = 0; i < X.rows(); ++i)
+            obj << "vt " << m_texcoord[std::size_t(2 * i)] << ' ' << m_texcoord[std::size_t(2 * i + 1)] << '\n';
+        for (Eigen::Index t = 0; t < mesh.F.rows(); ++t) {
+            obj << 'f';
+            for (int k = 0; k < 3; ++k) obj << ' ' << mesh.F(t, k) + 1 << '/' << mesh.F(t, k) + 1;
+            obj << '\n';
+        }
+
+        nlohmann::json j;
+        j["format"] = "drapekit-widget-state";
+        j["version"] = 1;
+        j["fabric_preset"] = m_spec->presetName.toStdString();
+        j["fabric"] = cloth::fabric_to_json(m_spec->preset);
+        const cloth::DrapeSetup& su = m_spec->setup;
+        j["setup"] = {{"shape", m_spec->shape.toStdString()},
+                      {"sample_diameter_m", su.sample_diameter},
+                      {"disc_diameter_m", su.disc_diameter},
+                      {"pedestal_height_m", su.pedestal_height},
+                      {"grid", su.grid},
+                      {"seed", su.seed},
+                      {"floor", su.floor}};
+        j["solver"] = {{"integrator", integratorName.toStdString()},
+                       {"time_step_s", effectiveTimeStep()},
+                       {"rest_speed_m_s", m_restSpeed},
+                       {"rest_residual", m_restResidual}};
+        j["state"] = {{"sim_time_s", m_sys->time},
+                      {"steps", m_steps},
+                      {"vertices", m_sys->vertex_count()},
+                      {"triangles", mesh.F.rows()},
+                      {"max_speed_m_s", maxFreeSpeed(*m_sys)},
+                      {"relative_residual", cloth::relative_residual(*m_sys)},
+                      {"obj", QFileInfo(objPath).fileName().toStdString()}};
+        std::vector<int> pinned;
+        for (int i = 0; i < m_sys->vertex_count(); ++i)
+            if (m_sys->pinned(i)) pinned.push_back(i);
+        j["state"]["pinned"] = pinned;
+        j["state"]["total_mass_kg"] = m_sys->model().total_mass();
+
+        const cloth::DrapeResult r = cloth::measure_drape(*m_sys, su);
+        nlohmann::json outline = nlohmann::json::array();
+        for (const auto& p : r.outline) outline.push_back({p.x(), p.y()});
+        j["results"] = {{"shadow_area_m2", r.metrics.shadow_area_m2},
+                        {"drape_coefficient_percent", r.metrics.drape_coefficient_percent},
+                        {"node_count", r.metrics.node_count},
+                        {"node_angles_rad", r.metrics.node_angles_rad},
+                        {"mean_radius_m", r.metrics.mean_radius_m},
+                        {"min_radius_m", r.metrics.min_radius_m},
+                        {"max_radius_m", r.metrics.max_radius_m},
+                        {"hem_min_z_m", r.hem.min_z},
+                        {"hem_max_z_m", r.hem.max_z},
+                        {"outline_m", outline}};
+        cloth::write_file_atomic(objPath.toStdString(), obj.str());
+        cloth::write_file_atomic(jsonPath.toStdString(), j.dump(2) + "\n");
+        emit resultsSaved(jsonPath, objPath);
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("save results to '%1'").arg(jsonPath), e);
+    }
+}
+
+} // namespace drape::widget

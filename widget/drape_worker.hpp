@@ -1,0 +1,111 @@
+#pragma once
+// The simulation worker. Lives on its own QThread; owns the ClothSystem and the
+// integrator. The controller talks to it only through queued calls (commands)
+// and the thread-safe requestCancel() / frameConsumed(); the worker talks back
+// with signals carrying immutable copies (DrapeMeshPtr, DrapeFramePtr), so the
+// GUI thread never waits for a time step.
+#include "widget/drape_frame.hpp"
+
+#include "engine/cloth/drape.hpp"
+#include "engine/cloth/fabric_io.hpp"
+#include "engine/cloth/solver.hpp"
+
+#include <QElapsedTimer>
+#include <QObject>
+#include <QString>
+
+#include <atomic>
+#include <memory>
+#include <vector>
+
+class QTimer;
+
+namespace drape::widget {
+
+/// Everything needed to build a cloth scene.
+struct DrapeSpec {
+    cloth::FabricPreset preset;
+    QString presetName;          ///< as given by the user (path or built-in name)
+    cloth::DrapeSetup setup;     ///< diameters [m], grid, floor ...
+    QString shape = "disc";      ///< "disc" (drapemeter specimen) or "square" (sheet of side sample diameter)
+};
+
+struct SphereSpec {
+    Eigen::Vector3d centre; ///< world [m]
+    double radius;          ///< [m]
+};
+
+class DrapeWorker : public QObject {
+    Q_OBJECT
+public:
+    DrapeWorker();
+    ~DrapeWorker() override;
+
+    // ---- commands: call on the worker thread (queued) ----------------------
+    void rebuild(std::shared_ptr<const DrapeSpec> spec);
+    void setIntegrator(cloth::Integrator integ);
+    void setTimeStep(double dt);                   ///< [s], 0 = automatic
+    void setRestCriteria(double speed, double residual); ///< [m/s], relative residual [-]
+    void play();
+    void pause();
+    void stepOnce();
+    void reset();
+    void setPinned(int vertex, bool pinned);
+    void clearPins();
+    void setMass(int vertex, double kg);
+    void addSphere(SphereSpec s);
+    void clearExtraColliders();
+    void setOutlineWanted(bool on);
+    void saveResults(const QString& jsonPath, const QString& integratorName);
+
+    // ---- thread-safe --------------------------------------------------------
+    /// Stops a running static solve at its next progress check.
+    void requestCancel() { m_cancel = true; }
+    /// The GUI took the last frame; the worker may send the next one.
+    void frameConsumed() { m_uiReady = true; }
+
+signals:
+    void meshReady(drape::widget::DrapeMeshPtr mesh);
+    void frameReady(drape::widget::DrapeFramePtr frame);
+    void runningChanged(bool running);
+    void restReached(double simTime, double residual);
+    void errorOccurred(const QString& message);
+    void resultsSaved(const QString& jsonPath, const QString& objPath);
+
+private:
+    void advance();
+    void runStatic(long maxNewton);
+    void publish(bool force);
+    void setRunning(bool on);
+    double effectiveTimeStep();
+    void makeStepper();
+    void fail(const QString& what, const std::exception& e);
+    void emitMesh();
+
+    std::unique_ptr<cloth::ClothSystem> m_sys;
+    std::unique_ptr<cloth::Stepper> m_stepper;
+    std::shared_ptr<const DrapeSpec> m_spec;
+    std::vector<std::shared_ptr<const cloth::Collider>> m_baseColliders;
+    DrapeMeshPtr m_mesh;
+    cloth::Positions m_x0;
+    std::vector<float> m_texcoord;
+    int m_generation = 0;
+    cloth::Integrator m_integ = cloth::Integrator::ImplicitEuler;
+    double m_dt = 0;
+    double m_restSpeed = 1e-3;
+    double m_restResidual = 1e-3;
+    long m_steps = 0;
+    bool m_running = false;
+    bool m_outline = false;
+    QTimer* m_timer = nullptr;
+    QElapsedTimer m_sincePublish;
+    QElapsedTimer m_sinceOutline;
+    cloth::Polygon2 m_lastOutline;
+    std::atomic<bool> m_cancel{false};
+    std::atomic<bool> m_uiReady{true};
+};
+
+/// Drawable shapes of a collider tree (pedestal, planes, spheres, groups).
+void describeColliders(const cloth::Collider& c, std::vector<ColliderShape>& out);
+
+} // namespace drape::widget

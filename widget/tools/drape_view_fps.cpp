@@ -1,0 +1,110 @@
+// Measures the live view: time from "load preset" to the first rendered frame of
+// the cloth, then rendered frames per second, cloth frames per second and the
+// event loop's worst stall while a cloth simulates. Prints numbers; asserts nothing.
+//
+//   drape_view_fps [--grid 113] [--seconds 10] [--integrator implicit] [--preset FILE|seed-table1]
+//                  [--size 800x600]
+#include "widget/drape_view.hpp"
+
+#include <QApplication>
+#include <QCommandLineParser>
+#include <QElapsedTimer>
+#include <QQuickWidget>
+#include <QQuickWindow>
+#include <QTimer>
+
+#include <cstdio>
+
+using drape::widget::DrapeView;
+
+int main(int argc, char** argv)
+{
+    QApplication app(argc, argv);
+    QCommandLineParser cl;
+    cl.addHelpOption();
+    cl.addOption({"grid", "nodes across the specimen (113 gives ~10,000 particles)", "n", "113"});
+    cl.addOption({"seconds", "measuring time [s]", "s", "10"});
+    cl.addOption({"integrator", "integrator name", "name", "implicit"});
+    cl.addOption({"preset", "fabric preset file or built-in name (empty = table defaults)", "preset", ""});
+    cl.addOption({"size", "view size WxH", "size", "800x600"});
+    cl.process(app);
+    const QStringList wh = cl.value("size").split('x');
+    const int width = wh.value(0).toInt() > 0 ? wh.value(0).toInt() : 800;
+    const int height = wh.value(1).toInt() > 0 ? wh.value(1).toInt() : 600;
+
+    DrapeView view;
+    view.resize(width, height);
+    QObject::connect(&view, &DrapeView::errorOccurred,
+                     [](const QString& m) { std::fprintf(stderr, "error: %s\n", qPrintable(m)); });
+    view.show();
+    // Let the scene come up with the default cloth first, so the measurement is
+    // "load preset -> first frame", not QML start-up.
+    QElapsedTimer warm;
+    warm.start();
+    while (warm.elapsed() < 1500) app.processEvents(QEventLoop::AllEvents, 50);
+
+    QQuickWindow* win = view.quickWidget()->quickWindow();
+    long rendered = 0;
+    QObject::connect(win, &QQuickWindow::afterRendering, [&] { ++rendered; }); // GUI thread for QQuickWidget
+    long applied = 0;
+    QObject::connect(view.controller(), &drape::widget::DrapeController::frameApplied, [&] { ++applied; });
+
+    // ---- load preset -> first frame --------------------------------------------
+    QElapsedTimer t;
+    t.start();
+    view.setIntegrator(cl.value("integrator"));
+    view.setGridSize(cl.value("grid").toInt());
+    view.setFabricPreset(cl.value("preset"));
+    view.controller()->createCloth();
+    const int targetVertices = 0;
+    (void)targetVertices;
+    qint64 meshAt = -1, firstFrameAt = -1, firstRenderAt = -1;
+    QObject::connect(view.controller(), &drape::widget::DrapeController::meshChanged, [&] {
+        if (meshAt < 0) meshAt = t.elapsed();
+    });
+    QObject::connect(view.controller(), &drape::widget::DrapeController::frameApplied, [&] {
+        if (meshAt >= 0 && firstFrameAt < 0) firstFrameAt = t.elapsed();
+    });
+    QObject::connect(win, &QQuickWindow::afterRendering, [&] {
+        if (firstFrameAt >= 0 && firstRenderAt < 0) firstRenderAt = t.elapsed();
+    });
+    while (firstRenderAt < 0 && t.elapsed() < 120000) app.processEvents(QEventLoop::AllEvents, 5);
+    const int n = view.controller()->vertexCount();
+    std::printf("particles: %d (grid %d, integrator %s)\n", n, view.gridSize(), qPrintable(view.integrator()));
+    std::printf("load preset -> mesh built: %lld ms, -> first cloth frame applied: %lld ms, -> first frame rendered: %lld ms\n",
+                static_cast<long long>(meshAt), static_cast<long long>(firstFrameAt), static_cast<long long>(firstRenderAt));
+
+    // ---- live simulation --------------------------------------------------------
+    const double seconds = cl.value("seconds").toDouble();
+    QElapsedTimer gapClock;
+    qint64 worstGap = 0;
+    QTimer tick; // a 10 ms heartbeat: its worst late arrival is the UI's worst stall
+    tick.setInterval(10);
+    QObject::connect(&tick, &QTimer::timeout, [&] {
+        worstGap = std::max(worstGap, gapClock.restart());
+    });
+    const double simStart = view.controller()->simulatedTime();
+    rendered = 0;
+    applied = 0;
+    view.setRunning(true);
+    QElapsedTimer run;
+    run.start();
+    gapClock.start();
+    tick.start();
+    bool rest = false;
+    QObject::connect(&view, &DrapeView::restReached, [&] { rest = true; });
+    while (run.elapsed() < seconds * 1000 && !rest) {
+        // Keep the view busy like a user would: orbit a little every frame, so it renders continuously.
+        view.controller()->orbit(0.5, 0.0);
+        app.processEvents(QEventLoop::AllEvents, 5);
+    }
+    const double wall = run.elapsed() / 1000.0;
+    tick.stop();
+    view.setRunning(false);
+    const auto f = view.controller()->currentFrame();
+    std::printf("live view for %.2f s%s: %.1f rendered frames/s, %.1f cloth frames/s, simulated %.3f s (%.3f x real time), %ld steps, worst UI stall %lld ms\n",
+                wall, rest ? " (cloth reached rest)" : "", rendered / wall, applied / wall,
+                view.controller()->simulatedTime() - simStart, (view.controller()->simulatedTime() - simStart) / wall,
+                f ? f->steps : 0L, static_cast<long long>(worstGap));
+    return 0;
+}

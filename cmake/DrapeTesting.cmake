@@ -5,6 +5,7 @@ function(drape_add_test)
   cmake_parse_arguments(T "GUI" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   find_package(Qt6 REQUIRED COMPONENTS Core Test)
   add_executable(${T_NAME} ${T_SOURCES})
+  set_target_properties(${T_NAME} PROPERTIES AUTOMOC ON)
   target_link_libraries(${T_NAME} PRIVATE Qt6::Test ${T_LIBS})
   target_compile_definitions(${T_NAME} PRIVATE
     DRAPE_SHARED_DIR="${DRAPE_SHARED_DIR}" DRAPE_SOURCE_DIR="${CMAKE_SOURCE_DIR}")

@@ -56,11 +56,15 @@ class DrapeController : public QObject {
     Q_PROPERTY(bool showColliders READ showColliders WRITE setShowColliders NOTIFY showCollidersChanged)
     Q_PROPERTY(bool showOutlines READ showOutlines WRITE setShowOutlines NOTIFY showOutlinesChanged)
     Q_PROPERTY(bool pickEnabled READ pickEnabled WRITE setPickEnabled NOTIFY pickEnabledChanged)
+    /// Draws the lab's four calibration chessboards on the floor (drape-lab README), so
+    /// the top and iso views can be laid next to the photos.
+    Q_PROPERTY(bool labFloor READ labFloor WRITE setLabFloor NOTIFY labFloorChanged)
     // ---- for the QML scene ----------------------------------------------------
     Q_PROPERTY(drape::widget::ClothGeometry* clothGeometry READ clothGeometry CONSTANT)
     Q_PROPERTY(drape::widget::LineGeometry* simulatedOutline READ simulatedOutline CONSTANT)
     Q_PROPERTY(drape::widget::LineGeometry* measuredOutline READ measuredOutline CONSTANT)
     Q_PROPERTY(QQuick3DTextureData* textureData READ textureData CONSTANT)
+    Q_PROPERTY(QQuick3DTextureData* floorTextureData READ floorTextureData CONSTANT)
     Q_PROPERTY(bool hasTexture READ hasTexture NOTIFY textureChanged)
     Q_PROPERTY(QVariantList colliders READ colliders NOTIFY collidersChanged)
     Q_PROPERTY(QVariantList pinnedPositions READ pinnedPositions NOTIFY pinnedChanged)
@@ -110,6 +114,9 @@ public:
     void setShowOutlines(bool on);
     bool pickEnabled() const { return m_pickEnabled; }
     void setPickEnabled(bool on);
+    bool labFloor() const { return m_labFloor; }
+    void setLabFloor(bool on);
+    QQuick3DTextureData* floorTextureData() const { return m_floorTextureData; }
 
     ClothGeometry* clothGeometry() const { return m_cloth; }
     LineGeometry* simulatedOutline() const { return m_simOutline; }
@@ -206,6 +213,7 @@ signals:
     void showCollidersChanged(bool on);
     void showOutlinesChanged(bool on);
     void pickEnabledChanged(bool on);
+    void labFloorChanged(bool on);
     void collidersChanged();
     void pinnedChanged();
     void cameraChanged();
@@ -228,6 +236,7 @@ signals:
 private:
     bool applyFabricPreset(const QString& preset);
     void uploadTexture(const QImage& image);
+    void rebuildColliderList();
     void scheduleRebuild();
     void rebuildNow();
     void onMesh(const DrapeMeshPtr& mesh);
@@ -258,6 +267,7 @@ private:
     bool m_showColliders = true;
     bool m_showOutlines = false;
     bool m_pickEnabled = true;
+    bool m_labFloor = true;
     bool m_hasTexture = false;
     bool m_rebuildPending = false;
     bool m_playAfterBuild = false;
@@ -267,7 +277,9 @@ private:
     LineGeometry* m_simOutline = nullptr;
     LineGeometry* m_measOutline = nullptr;
     QQuick3DTextureData* m_textureData = nullptr;
+    QQuick3DTextureData* m_floorTextureData = nullptr;
     QVariantList m_colliders;
+    std::vector<ColliderShape> m_colliderShapes;
     QVariantList m_pinnedPositions;
     QSet<int> m_pinned;
     DrapeMeshPtr m_mesh;

@@ -46,6 +46,7 @@ DrapeView::DrapeView(QWidget* parent) : QWidget(parent)
     connect(c, &DrapeController::showCollidersChanged, this, &DrapeView::showCollidersChanged);
     connect(c, &DrapeController::showOutlinesChanged, this, &DrapeView::showOutlinesChanged);
     connect(c, &DrapeController::pickEnabledChanged, this, &DrapeView::pickEnabledChanged);
+    connect(c, &DrapeController::labFloorChanged, this, &DrapeView::labFloorChanged);
     connect(c, &DrapeController::progress, this, &DrapeView::progress);
     connect(c, &DrapeController::restReached, this, &DrapeView::restReached);
     connect(c, &DrapeController::errorOccurred, this, &DrapeView::errorOccurred);

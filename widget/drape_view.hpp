@@ -36,6 +36,7 @@ class DrapeView : public QWidget {
     Q_PROPERTY(bool showColliders READ showColliders WRITE setShowColliders NOTIFY showCollidersChanged)
     Q_PROPERTY(bool showOutlines READ showOutlines WRITE setShowOutlines NOTIFY showOutlinesChanged)
     Q_PROPERTY(bool pickEnabled READ pickEnabled WRITE setPickEnabled NOTIFY pickEnabledChanged)
+    Q_PROPERTY(bool labFloor READ labFloor WRITE setLabFloor NOTIFY labFloorChanged)
 
 public:
     explicit DrapeView(QWidget* parent = nullptr);
@@ -83,6 +84,8 @@ public:
     void setShowOutlines(bool on) { m_controller->setShowOutlines(on); }
     bool pickEnabled() const { return m_controller->pickEnabled(); }
     void setPickEnabled(bool on) { m_controller->setPickEnabled(on); }
+    bool labFloor() const { return m_controller->labFloor(); }
+    void setLabFloor(bool on) { m_controller->setLabFloor(on); }
 
 public slots:
     void play() { m_controller->play(); }
@@ -114,6 +117,7 @@ signals:
     void showCollidersChanged(bool on);
     void showOutlinesChanged(bool on);
     void pickEnabledChanged(bool on);
+    void labFloorChanged(bool on);
     void progress(double simulatedTime, double maxSpeed);
     void restReached();
     void errorOccurred(const QString& message);

@@ -65,6 +65,13 @@ Item {
             mipFilter: Texture.Linear
         }
 
+        Texture {
+            id: floorTexture
+            textureData: root.controller.floorTextureData
+            generateMipmaps: true
+            mipFilter: Texture.Linear
+        }
+
         Repeater3D {
             model: root.controller.showColliders ? root.controller.colliders : []
             delegate: Model {
@@ -75,7 +82,8 @@ Item {
                 scale: modelData.scale
                 rotation: modelData.rotation
                 materials: PrincipledMaterial {
-                    baseColor: modelData.color
+                    baseColor: modelData.textured ? "#ff0000" : modelData.color
+                    baseColorMap: modelData.textured ? floorTexture : null
                     roughness: 0.95
                     specularAmount: 0.05
                     cullMode: Material.NoCulling

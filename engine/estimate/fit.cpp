@@ -1,0 +1,492 @@
+#include "fit.hpp"
+
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/fabric_io.hpp"
+#include "engine/cloth/units.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <nlopt.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <map>
+#include <mutex>
+#include <thread>
+
+namespace drape::estimate {
+
+using cloth::Param;
+using nlohmann::json;
+
+cloth::FabricParams params_for_record(const cloth::FabricParams& base, const MeasuredDrape& m)
+{
+    cloth::FabricParams p = base;
+    p[Param::AreaDensity] = m.areal_density;
+    p[Param::Thickness] = m.thickness;
+    return p;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Evaluation {
+    double chi2 = HUGE_VAL;
+    std::vector<ResidualTerm> terms;
+    std::vector<DrapeFeatures> features;                    ///< seed-averaged, per record
+    std::vector<std::vector<cloth::DrapeResult>> sims;      ///< [record][seed]
+};
+
+struct CancelledFit {};
+
+/// Runs the simulations of one parameter point and scores them.
+class Evaluator {
+public:
+    Evaluator(const std::vector<MeasuredDrape>& recs, const FitOptions& opt, std::vector<FitVariable> vars,
+              cloth::FabricParams base)
+        : m_recs(recs), m_opt(opt), m_vars(std::move(vars)), m_base(base), m_t0(Clock::now())
+    {
+        for (const auto& r : recs) m_meas.push_back(drape_features(r));
+    }
+
+    cloth::FabricParams params_at(const Eigen::VectorXd& x) const
+    {
+        cloth::FabricParams p = m_base;
+        for (std::size_t i = 0; i < m_vars.size(); ++i)
+            for (Param q : m_vars[i].params) p[q] = std::clamp(m_vars[i].to_value(x[i]), cloth::spec(q).lower, cloth::spec(q).upper);
+        return p;
+    }
+
+    /// warm: start each simulation from the rest state of the best point so far.
+    Evaluation evaluate(const Eigen::VectorXd& x, bool warm)
+    {
+        if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
+        const cloth::FabricParams p = params_at(x);
+        const int S = std::max(1, m_opt.seeds_per_evaluation);
+        const int R = static_cast<int>(m_recs.size());
+        Evaluation e;
+        e.sims.assign(R, std::vector<cloth::DrapeResult>(S));
+        std::vector<std::pair<int, int>> jobs;
+        for (int r = 0; r < R; ++r)
+            for (int s = 0; s < S; ++s) jobs.push_back({r, s});
+        std::mutex mu;
+        std::size_t next = 0;
+        auto worker = [&] {
+            for (;;) {
+                std::size_t j;
+                {
+                    std::lock_guard lk(mu);
+                    if (next >= jobs.size()) return;
+                    j = next++;
+                }
+                const auto [r, s] = jobs[j];
+                const cloth::DrapeSetup setup = m_recs[r].setup(m_opt.grid, m_opt.seed + static_cast<std::uint64_t>(s));
+                const cloth::FabricParams pr = params_for_record(p, m_recs[r]);
+                cloth::RestOptions ro = m_opt.rest;
+                ro.cancel = m_opt.cancel;
+                ro.threads = 1;
+                ro.progress = nullptr;
+                const cloth::Positions* start = nullptr;
+                if (warm && m_have_states) start = &m_states[r][s];
+                e.sims[r][s] = start ? cloth::simulate_drape_from(pr, setup, *start, ro) : cloth::simulate_drape(pr, setup, ro);
+            }
+        };
+        const auto t0 = Clock::now();
+        const int nthreads = std::clamp(m_opt.parallel_seeds, 1, static_cast<int>(jobs.size()));
+        std::vector<std::thread> pool;
+        for (int i = 1; i < nthreads; ++i) pool.emplace_back(worker);
+        worker();
+        for (auto& t : pool) t.join();
+        m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
+        m_simulations += static_cast<long>(jobs.size());
+        if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
+
+        for (int r = 0; r < R; ++r) {
+            std::vector<DrapeFeatures> fs;
+            for (int s = 0; s < S; ++s) {
+                if (!e.sims[r][s].status.converged()) ++m_unconverged;
+                fs.push_back(drape_features(e.sims[r][s], m_recs[r]));
+            }
+            std::vector<double> closed;
+            DrapeFeatures avg = average_features(fs, &closed);
+            auto t = residual_terms(r, m_meas[r], avg, closed, m_opt.noise);
+            e.terms.insert(e.terms.end(), t.begin(), t.end());
+            e.features.push_back(std::move(avg));
+        }
+        e.chi2 = chi_square(e.terms);
+        ++m_evaluations;
+        return e;
+    }
+
+    /// Objective for NLopt: evaluates, keeps the best point and its rest states.
+    double objective(const Eigen::VectorXd& x, bool warm, const std::string& stage)
+    {
+        Evaluation e = evaluate(x, warm);
+        if (e.chi2 < m_best.chi2) {
+            m_best = e;
+            m_best_x = x;
+            m_states.assign(e.sims.size(), {});
+            for (std::size_t r = 0; r < e.sims.size(); ++r)
+                for (const auto& s : e.sims[r]) m_states[r].push_back(s.x);
+            m_have_states = true;
+        }
+        report(stage);
+        return e.chi2;
+    }
+
+    void report(const std::string& stage) const
+    {
+        if (!m_opt.progress) return;
+        FitProgress p;
+        p.stage = stage;
+        p.evaluation = m_evaluations;
+        p.planned = m_planned;
+        p.best_chi2 = m_best.chi2;
+        p.simulations = m_simulations;
+        p.elapsed_s = std::chrono::duration<double>(Clock::now() - m_t0).count();
+        m_opt.progress(p);
+    }
+
+    const std::vector<DrapeFeatures>& measured() const { return m_meas; }
+    const Evaluation& best() const { return m_best; }
+    const Eigen::VectorXd& best_x() const { return m_best_x; }
+    long simulations() const { return m_simulations; }
+    int evaluations() const { return m_evaluations; }
+    double sim_seconds() const { return m_sim_seconds; }
+    long unconverged() const { return m_unconverged; }
+    int m_planned = 0;
+
+private:
+    const std::vector<MeasuredDrape>& m_recs;
+    const FitOptions& m_opt;
+    std::vector<FitVariable> m_vars;
+    cloth::FabricParams m_base;
+    std::vector<DrapeFeatures> m_meas;
+    Evaluation m_best;
+    Eigen::VectorXd m_best_x;
+    std::vector<std::vector<cloth::Positions>> m_states;
+    bool m_have_states = false;
+    long m_simulations = 0, m_unconverged = 0;
+    int m_evaluations = 0;
+    double m_sim_seconds = 0;
+    Clock::time_point m_t0;
+};
+
+struct NloptContext {
+    Evaluator* ev;
+    bool warm;
+    std::string stage;
+    bool cancelled = false;
+    nlopt::opt* opt = nullptr;
+};
+
+double nlopt_objective(const std::vector<double>& x, std::vector<double>& grad, void* data)
+{
+    auto* c = static_cast<NloptContext*>(data);
+    if (!grad.empty()) std::fill(grad.begin(), grad.end(), 0.0);
+    if (c->cancelled) return HUGE_VAL;
+    try {
+        return c->ev->objective(Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size())), c->warm, c->stage);
+    } catch (const CancelledFit&) {
+        c->cancelled = true;
+        c->opt->force_stop();
+        return HUGE_VAL;
+    }
+}
+
+void run_stage(nlopt::algorithm alg, Evaluator& ev, const std::vector<FitVariable>& vars, Eigen::VectorXd& x, int maxeval,
+               bool warm, const std::string& stage, std::uint64_t seed, bool& cancelled)
+{
+    const unsigned n = static_cast<unsigned>(vars.size());
+    nlopt::opt opt(alg, n);
+    std::vector<double> lo(n), hi(n), step(n);
+    for (unsigned i = 0; i < n; ++i) {
+        lo[i] = vars[i].lower;
+        hi[i] = vars[i].upper;
+        step[i] = vars[i].log_scale ? 0.3 : 0.1 * (hi[i] - lo[i]);
+    }
+    opt.set_lower_bounds(lo);
+    opt.set_upper_bounds(hi);
+    opt.set_maxeval(maxeval);
+    if (alg == nlopt::GN_CRS2_LM) {
+        opt.set_population(2 * n + 2);
+    } else {
+        opt.set_initial_step(step);
+        std::vector<double> xtol(n);
+        for (unsigned i = 0; i < n; ++i) xtol[i] = vars[i].log_scale ? 0.01 : 0.005;
+        opt.set_xtol_abs(xtol);
+        opt.set_ftol_abs(0.05);
+    }
+    nlopt::srand(seed);
+    NloptContext ctx{&ev, warm, stage};
+    ctx.opt = &opt;
+    opt.set_min_objective(nlopt_objective, &ctx);
+    std::vector<double> xv(x.data(), x.data() + x.size());
+    for (unsigned i = 0; i < n; ++i) xv[i] = std::clamp(xv[i], lo[i], hi[i]);
+    double f = 0;
+    try {
+        opt.optimize(xv, f);
+    } catch (const nlopt::forced_stop&) {
+    } catch (const nlopt::roundoff_limited&) {
+    } catch (const std::runtime_error&) {
+        // NLopt's generic failure (e.g. a flat objective): keep the best point.
+    }
+    cancelled = ctx.cancelled;
+    if (ev.best_x().size() == x.size()) x = ev.best_x();
+}
+
+std::string now_utc()
+{
+    const std::time_t t = std::time(nullptr);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+    return buf;
+}
+
+} // namespace
+
+FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options)
+{
+    if (records.empty()) throw ParameterError("fit: no records to fit");
+    if (options.grid < 9 || options.grid > 200) throw ParameterError("fit: grid = " + std::to_string(options.grid) + " is outside [9, 200]");
+    if (options.seeds_per_evaluation < 1 || options.seeds_per_evaluation > 16)
+        throw ParameterError("fit: seeds_per_evaluation = " + std::to_string(options.seeds_per_evaluation) + " is outside [1, 16]");
+    for (const auto& r : records)
+        if (r.contours.empty() && !std::isfinite(r.drape_coefficient_percent))
+            throw ParameterError("fit: record '" + r.id + "' has neither contours nor a drape coefficient");
+    const auto t0 = Clock::now();
+    FitResult out;
+    out.options = options;
+    out.options.progress = nullptr;
+    out.options.cancel = nullptr;
+    out.variables = fit_variables(options.model);
+    const auto& vars = out.variables;
+    const int n = static_cast<int>(vars.size());
+    cloth::FabricParams base = options.start.value_or(cloth::FabricParams{});
+    if (options.model == ModelVariant::Baseline) base[Param::Friction] = 0.0; // the seed's frictionless disc
+    base = params_for_record(base, records.front());
+    Evaluator ev(records, options, vars, base);
+
+    Eigen::VectorXd x(n);
+    for (int i = 0; i < n; ++i) x[i] = std::clamp(vars[i].to_coord(std::max(base[vars[i].params.front()], 1e-300)), vars[i].lower, vars[i].upper);
+    const int global = options.global_evaluations > 0 ? options.global_evaluations : 6 * n;
+    const int local = options.local_evaluations > 0 ? options.local_evaluations : 8 * n + 8;
+    ev.m_planned = global + local + (options.uncertainty ? 2 * n : 0);
+
+    bool cancelled = false;
+    run_stage(nlopt::GN_CRS2_LM, ev, vars, x, global, false, "global", options.seed, cancelled);
+    if (!cancelled) run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, true, "local", options.seed + 1, cancelled);
+    out.cancelled = cancelled;
+    if (ev.best_x().size() != n) { // cancelled before the first evaluation finished
+        out.params = base;
+        out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+        return out;
+    }
+    x = ev.best_x();
+    const Evaluation best = ev.best();
+    out.best_coords = x;
+    out.params = ev.params_at(x);
+    out.residuals = best.terms;
+    out.chi2 = best.chi2;
+    out.dof = std::max(1, static_cast<int>(best.terms.size()) - n);
+
+    // ---- uncertainty: Jacobian of the smooth whitened residuals ------------
+    out.covariance = Eigen::MatrixXd::Constant(n, n, std::numeric_limits<double>::quiet_NaN());
+    out.correlation = out.covariance;
+    std::vector<double> sigma(n, std::numeric_limits<double>::infinity());
+    if (options.uncertainty && !cancelled) {
+        std::vector<int> rows;
+        for (int i = 0; i < static_cast<int>(best.terms.size()); ++i)
+            if (best.terms[i].smooth) rows.push_back(i);
+        Eigen::MatrixXd J(rows.size(), n);
+        try {
+            for (int i = 0; i < n; ++i) {
+                const double h = vars[i].log_scale ? 0.1 : 0.05;
+                Eigen::VectorXd xp = x, xm = x;
+                xp[i] = std::min(x[i] + h, vars[i].upper);
+                xm[i] = std::max(x[i] - h, vars[i].lower);
+                const Evaluation ep = ev.evaluate(xp, true);
+                ev.report("uncertainty");
+                const Evaluation em = ev.evaluate(xm, true);
+                ev.report("uncertainty");
+                for (std::size_t r = 0; r < rows.size(); ++r)
+                    J(static_cast<Eigen::Index>(r), i) =
+                        (ep.terms[rows[r]].whitened() - em.terms[rows[r]].whitened()) / (xp[i] - xm[i]);
+            }
+            // Linearised least squares: cov = s^2 (J^T J)^-1, with s^2 the
+            // reduced chi-square when the fit is worse than the noise (the
+            // noise model was then too optimistic; this keeps intervals honest).
+            const Eigen::MatrixXd H = J.transpose() * J;
+            Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+            const double lmax = std::max(es.eigenvalues().maxCoeff(), 1e-300);
+            const double s2 = std::max(1.0, out.chi2 / out.dof);
+            Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, n);
+            std::vector<char> null_dir(n, 0);
+            for (int k = 0; k < n; ++k) {
+                const double l = es.eigenvalues()[k];
+                const Eigen::VectorXd v = es.eigenvectors().col(k);
+                if (l > 1e-8 * lmax && l > 1e-12) C += v * v.transpose() / l;
+                else
+                    for (int i = 0; i < n; ++i)
+                        if (std::abs(v[i]) > 0.1) null_dir[i] = 1; // the data does not see this direction
+            }
+            C *= s2;
+            out.covariance = C;
+            for (int i = 0; i < n; ++i) sigma[i] = null_dir[i] ? std::numeric_limits<double>::infinity() : std::sqrt(std::max(C(i, i), 0.0));
+            for (int i = 0; i < n; ++i)
+                for (int k = 0; k < n; ++k)
+                    out.correlation(i, k) = (std::isfinite(sigma[i]) && std::isfinite(sigma[k]) && sigma[i] > 0 && sigma[k] > 0)
+                                                ? C(i, k) / (sigma[i] * sigma[k])
+                                                : std::numeric_limits<double>::quiet_NaN();
+        } catch (const CancelledFit&) {
+            out.cancelled = true;
+        }
+    }
+
+    // ---- estimates for every parameter of the table -------------------------
+    for (const auto& sp : cloth::param_table()) {
+        ParamEstimate e;
+        e.id = sp.id;
+        e.key = std::string(sp.key);
+        e.unit = std::string(sp.unit);
+        e.value = out.params[sp.id];
+        e.lower95 = e.upper95 = e.value;
+        int vi = -1;
+        for (int i = 0; i < n; ++i)
+            for (Param q : vars[i].params)
+                if (q == sp.id) vi = i;
+        if (vi >= 0) {
+            const FitVariable& v = vars[vi];
+            e.role = "fitted";
+            e.sigma_coord = sigma[vi];
+            const double half = 1.96 * sigma[vi];
+            const double lo = x[vi] - half, hi = x[vi] + half;
+            e.lower95 = v.to_value(std::max(lo, v.lower));
+            e.upper95 = v.to_value(std::min(hi, v.upper));
+            const double width_limit = v.log_scale ? 1.0 : 0.5 * (v.upper - v.lower);
+            const bool wide = !std::isfinite(half) || 2 * half > width_limit;
+            const double edge = v.log_scale ? 0.05 : 0.01 * (v.upper - v.lower);
+            const bool at_bound = x[vi] - v.lower < edge || v.upper - x[vi] < edge;
+            e.constrained = options.uncertainty && !wide && !at_bound && !out.cancelled;
+            if (!options.uncertainty) e.note = "uncertainty not computed";
+            else if (!std::isfinite(half)) e.note = "not constrained: the drape does not change with it";
+            else if (wide) e.note = "not constrained: the 95 % interval spans more than " + std::string(v.log_scale ? "a decade" : "half the range");
+            else if (at_bound) e.note = "not constrained: at the fit bound";
+        } else if (sp.id == Param::AreaDensity || sp.id == Param::Thickness) {
+            e.role = "declared";
+            e.note = "measured by the lab (meta.json), not fitted";
+        } else if (!sp.affects_statics) {
+            e.role = "not identifiable";
+            e.constrained = false;
+            e.note = "a damper: it does not change a rest state, so a drape test cannot tell its value (kept at the start value)";
+        } else {
+            e.role = "fixed";
+            e.note = sp.id == Param::Friction ? "frictionless disc (baseline model)" : "kept at the start value (not fitted by this model)";
+        }
+        out.estimates.push_back(e);
+    }
+
+    // ---- per-record comparison ---------------------------------------------
+    const auto& meas = ev.measured();
+    for (std::size_t r = 0; r < records.size(); ++r) {
+        RecordFit rf;
+        rf.measured = records[r];
+        rf.measured_features = meas[r];
+        rf.simulated_features = best.features[r];
+        rf.simulations = best.sims[r];
+        rf.setup = records[r].setup(options.grid, options.seed);
+        rf.dc_error_percent = rf.simulated_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+        rf.node_error = rf.simulated_features.node_count - rf.measured_features.node_count;
+        out.records.push_back(std::move(rf));
+    }
+    out.residual = analyse_residual(out.residuals, n);
+    out.evaluations = ev.evaluations();
+    out.simulations = ev.simulations();
+    out.seconds_per_simulation = ev.simulations() ? ev.sim_seconds() / ev.simulations() : 0.0;
+    out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (options.progress) {
+        FitProgress p;
+        p.stage = "done";
+        p.evaluation = p.planned = ev.evaluations();
+        p.best_chi2 = out.chi2;
+        p.simulations = ev.simulations();
+        p.elapsed_s = out.wall_seconds;
+        options.progress(p);
+    }
+    (void)now_utc;
+    return out;
+}
+
+json fit_to_json(const FitResult& r)
+{
+    cloth::FabricPreset preset;
+    preset.fabric = r.params;
+    json prov;
+    prov["tool"] = "drape fit";
+    prov["date_utc"] = now_utc();
+    json recs = json::array();
+    for (const auto& rf : r.records) recs.push_back({{"id", rf.measured.id}, {"source", rf.measured.source}});
+    prov["records"] = recs;
+    prov["model"] = to_string(r.options.model);
+    prov["grid"] = r.options.grid;
+    prov["seed"] = r.options.seed;
+    prov["seeds_per_evaluation"] = r.options.seeds_per_evaluation;
+    preset.extra["provenance"] = prov;
+
+    json fit;
+    fit["chi2"] = r.chi2;
+    fit["dof"] = r.dof;
+    fit["reduced_chi2"] = r.chi2 / std::max(1, r.dof);
+    fit["evaluations"] = r.evaluations;
+    fit["simulations"] = r.simulations;
+    fit["seconds_per_simulation"] = r.seconds_per_simulation;
+    fit["wall_seconds"] = r.wall_seconds;
+    fit["cancelled"] = r.cancelled;
+    json params = json::array();
+    std::vector<std::string> not_identifiable;
+    for (const auto& e : r.estimates) {
+        json p = {{"key", e.key}, {"unit", e.unit}, {"role", e.role}, {"value", e.value}, {"constrained", e.constrained}};
+        if (e.role == "fitted") {
+            p["lower95"] = e.lower95;
+            p["upper95"] = e.upper95;
+            p["sigma_search_coordinate"] = std::isfinite(e.sigma_coord) ? json(e.sigma_coord) : json(nullptr);
+        }
+        if (!e.note.empty()) p["note"] = e.note;
+        if (!e.constrained) not_identifiable.push_back(e.key);
+        params.push_back(p);
+    }
+    fit["parameters"] = params;
+    fit["not_constrained"] = not_identifiable;
+    json corr = json::object();
+    const int n = static_cast<int>(r.variables.size());
+    for (int i = 0; i < n; ++i) {
+        json row = json::object();
+        for (int k = 0; k < n; ++k) {
+            const double c = r.correlation.size() ? r.correlation(i, k) : std::numeric_limits<double>::quiet_NaN();
+            row[r.variables[k].name] = std::isfinite(c) ? json(c) : json(nullptr);
+        }
+        corr[r.variables[i].name] = row;
+    }
+    fit["correlation"] = corr;
+    json per = json::array();
+    for (const auto& rf : r.records) {
+        per.push_back({{"id", rf.measured.id},
+                       {"sample_diameter_m", rf.measured.sample_diameter},
+                       {"disc_diameter_m", rf.measured.disc_diameter},
+                       {"measured_drape_coefficient_percent", rf.measured_features.drape_coefficient_percent},
+                       {"fitted_drape_coefficient_percent", rf.simulated_features.drape_coefficient_percent},
+                       {"dc_error_percent", rf.dc_error_percent},
+                       {"measured_node_count", rf.measured_features.node_count},
+                       {"fitted_node_count", rf.simulated_features.node_count},
+                       {"node_error", rf.node_error},
+                       {"node_source", rf.measured.node_source}});
+    }
+    fit["records"] = per;
+    preset.extra["fit"] = fit;
+    preset.extra["residual"] = residual_to_json(r.residual);
+    return cloth::fabric_to_json(preset);
+}
+
+} // namespace drape::estimate

@@ -1,0 +1,112 @@
+#pragma once
+// The fit: simulate the drapemeter with candidate parameters, compare with the
+// measured records (objective.hpp), minimise with NLopt (global CRS2 stage, then
+// local BOBYQA), and estimate each parameter's uncertainty from the Jacobian of
+// the whitened residuals at the optimum.
+//
+// Method after Kuzmina, Tamas, Halasz, Grof (seed paper, section 5.4): "the
+// actual simulation parameters are defined by the minimum of the difference
+// between the modeled and the measured geometry".
+#include "measured.hpp"
+#include "objective.hpp"
+#include "residual.hpp"
+
+#include "engine/cloth/drape.hpp"
+#include "engine/cloth/params.hpp"
+
+#include <Eigen/Core>
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace drape::estimate {
+
+struct FitProgress {
+    std::string stage;      ///< "global" | "local" | "uncertainty" | "done"
+    int evaluation = 0;     ///< objective evaluations so far (all stages)
+    int planned = 0;        ///< upper bound on evaluations of the whole fit
+    double best_chi2 = 0;   ///< best sum of squared whitened residuals so far
+    long simulations = 0;
+    double elapsed_s = 0;
+};
+
+struct FitOptions {
+    ModelVariant model = ModelVariant::Baseline;
+    int grid = 25;                ///< nodes across the specimen in the fit's simulations
+    std::uint64_t seed = 1;       ///< drives the optimizer's randomness and the perturbation seeds
+    int seeds_per_evaluation = 2; ///< perturbation seeds averaged per evaluation (node-count bifurcation)
+    int global_evaluations = 0;   ///< CRS2 budget; 0 = 6 per fitted coordinate
+    int local_evaluations = 0;    ///< BOBYQA budget; 0 = 8 per coordinate + 8
+    bool uncertainty = true;      ///< Jacobian, covariance, intervals
+    NoiseModel noise;
+    cloth::RestOptions rest;      ///< solver options of each simulation (progress/cancel are set by the fit)
+    /// Start point / values of the parameters not fitted (e.g. a library preset:
+    /// the local stage also starts from it). Areal density and thickness always
+    /// come from the records.
+    std::optional<cloth::FabricParams> start;
+    std::function<void(const FitProgress&)> progress;
+    const std::atomic<bool>* cancel = nullptr;
+    int parallel_seeds = 2;       ///< simulations run concurrently (threads)
+};
+
+/// Estimate of one parameter of the table.
+struct ParamEstimate {
+    cloth::Param id{};
+    std::string key;
+    std::string unit;
+    std::string role;       ///< "fitted" | "declared" (by the lab) | "fixed" (default) | "not identifiable"
+    double value = 0;       ///< [unit]
+    double lower95 = 0, upper95 = 0; ///< 95 % interval (fitted only) [unit]
+    double sigma_coord = 0; ///< 1-sigma in search coordinates (decades for log parameters)
+    bool constrained = true;///< false: the interval spans more than a decade, hits a bound, or the data has no say
+    std::string note;
+};
+
+/// Per-record comparison at the optimum.
+struct RecordFit {
+    MeasuredDrape measured;
+    DrapeFeatures measured_features;
+    DrapeFeatures simulated_features; ///< seed-averaged
+    std::vector<cloth::DrapeResult> simulations; ///< one per seed, at the optimum
+    cloth::DrapeSetup setup;          ///< of the first seed
+    double dc_error_percent = 0;      ///< simulated - measured D
+    double node_error = 0;            ///< simulated (seed mean) - measured
+};
+
+struct FitResult {
+    cloth::FabricParams params;                 ///< best fit (areal density/thickness of the first record)
+    std::vector<FitVariable> variables;
+    Eigen::VectorXd best_coords;                ///< search coordinates of the optimum
+    std::vector<ParamEstimate> estimates;       ///< one per parameter of the table
+    Eigen::MatrixXd covariance;                 ///< of the search coordinates
+    Eigen::MatrixXd correlation;
+    std::vector<ResidualTerm> residuals;        ///< at the optimum
+    double chi2 = 0;
+    int dof = 0;
+    ResidualAnalysis residual;
+    std::vector<RecordFit> records;
+    int evaluations = 0;
+    long simulations = 0;
+    double seconds_per_simulation = 0;
+    double wall_seconds = 0;
+    bool cancelled = false;
+    FitOptions options;
+};
+
+/// Fits one parameter set to all records jointly (repeats of the same fabric,
+/// other sample/disc sizes). Throws ParameterError on no records or bad options.
+/// Cancellation (options.cancel) returns the best point so far with cancelled = true.
+FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options);
+
+/// The parameters of `base` with areal density and thickness from the record.
+cloth::FabricParams params_for_record(const cloth::FabricParams& base, const MeasuredDrape& m);
+
+/// Preset JSON of a fit: parameters plus provenance (records, date, model,
+/// grid, seeds), fit quality, intervals, correlations and the residual analysis.
+nlohmann::json fit_to_json(const FitResult& r);
+
+} // namespace drape::estimate

@@ -1,0 +1,107 @@
+#pragma once
+// What the fit compares against: the measured quantities of one drape-test
+// record (lab data or a synthetic record made by the engine), and the
+// phase-independent features extracted from them. Measured and simulated drapes
+// go through the same feature code (drape_features), so the objective compares
+// like with like.
+#include "engine/cloth/drape.hpp"
+#include "engine/cloth/metrics.hpp"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <limits>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace drape::estimate {
+
+/// One laser cross-section: the outer envelope of the cut at z = -depth_m.
+struct MeasuredContour {
+    double depth_m = 0;           ///< [m] below the pedestal top
+    cloth::RadialProfile profile; ///< r(theta) [m], theta_k = 2 pi k / N from +x (warp) towards +y (weft)
+};
+
+/// Pinhole camera (world -> pixel), OpenCV convention, world in metres.
+struct PinholeCamera {
+    double fx = 0, fy = 0, cx = 0, cy = 0; ///< [px]
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t = Eigen::Vector3d::Zero(); ///< [m]
+    int width = 0, height = 0;                   ///< [px]
+    Eigen::Vector2d project(const Eigen::Vector3d& X_world_m) const;
+};
+
+/// Measured quantities of one record. NaN / -1 mark quantities the record lacks.
+struct MeasuredDrape {
+    std::string id;                  ///< record id (folder name)
+    std::string source;              ///< folder or "synthetic"
+    double sample_diameter = 0.30;   ///< [m] D1
+    double disc_diameter = 0.15;     ///< [m] D2
+    double pedestal_height = 0.12;   ///< [m]
+    double areal_density = 0.2;      ///< [kg/m^2] declared by the lab, not fitted
+    double thickness = 0.5e-3;       ///< [m] declared by the lab
+    double drape_coefficient_percent = std::numeric_limits<double>::quiet_NaN(); ///< drapemeter reading [%]
+    double laser_sigma_m = 0.3e-3;   ///< [m] profiler repeatability (1 sigma per coordinate)
+    double hem_min_z = std::numeric_limits<double>::quiet_NaN(); ///< [m] lowest hem point (side view), if known
+    int node_count = -1;             ///< folds, if the record states them (photo); else taken from the contours
+    std::string node_source;         ///< where node_count came from
+    std::vector<MeasuredContour> contours; ///< closed cuts, increasing depth
+    std::optional<PinholeCamera> top_camera; ///< calibration of the top photo, for overlays
+    std::string top_photo;           ///< path of top.jpg ("" if none)
+
+    /// The drape set-up this record was measured on, simulated at `grid` with perturbation `seed`.
+    cloth::DrapeSetup setup(int grid, std::uint64_t seed) const;
+    std::vector<double> depths() const;
+};
+
+/// Reads a lab record folder (meta.json + contours.csv, format of
+/// shared/data/drape-lab/README.md; mm -> m, g/m^2 -> kg/m^2). Throws
+/// FileError / ParameterError naming the file, field and value.
+MeasuredDrape load_record(const std::string& dir);
+
+/// Turns a simulated drape into a record, as the lab would measure it: the
+/// drapemeter D of the shadow, the closed slices (Gaussian laser noise of
+/// `laser_sigma` [m] added radially, from `noise_seed`), the hem's lowest point.
+MeasuredDrape synthesize_record(const cloth::DrapeResult& r, const cloth::DrapeSetup& setup, const cloth::FabricParams& p,
+                                double laser_sigma_m, std::uint64_t noise_seed, const std::string& id = "synthetic");
+
+/// Phase-independent features of one contour. Fold positions are random from
+/// drape to drape, so only quantities that do not depend on where the folds
+/// fall are kept: mean radius, RMS fold amplitude, harmonic magnitudes, and the
+/// signed cos(2 theta) and cos(4 theta) coefficients (warp/weft anisotropy
+/// locks their phase to the fabric axes).
+struct ContourFeatures {
+    double depth_m = 0;  ///< [m]
+    bool closed = false; ///< every ray hit
+    double mean_radius_m = 0;
+    double fold_rms_m = 0; ///< RMS of r - mean [m]
+    double cos2_m = 0, cos4_m = 0; ///< signed a_2, a_4 [m]
+    std::vector<double> magnitudes_m; ///< |c_k|, k = 1..K [m]
+    int node_count = 0;                ///< crests of this contour (shared node detector)
+    cloth::FourierSeries series;       ///< fit with kFeatureHarmonics terms
+};
+
+inline constexpr int kFeatureHarmonics = 16;
+
+ContourFeatures contour_features(const cloth::RadialProfile& p, double depth_m, int harmonics = kFeatureHarmonics);
+
+/// Features of a whole drape: D [%], nodes, hem, contours at the measured depths.
+struct DrapeFeatures {
+    double drape_coefficient_percent = std::numeric_limits<double>::quiet_NaN();
+    double node_count = -1;   ///< mean over seeds for simulations
+    double hem_min_z = std::numeric_limits<double>::quiet_NaN(); ///< [m]
+    std::vector<ContourFeatures> contours;
+};
+
+/// Features of a measured record. The node count is the record's own if it
+/// states one; otherwise the crests of the deepest closed contour.
+DrapeFeatures drape_features(const MeasuredDrape& m);
+
+/// Features of a simulated drape at the record's depths, measured the same way
+/// (node count from the slice at the deepest measured depth when the record has
+/// no photo count, else from the shadow outline, as the photo is).
+DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& like);
+
+} // namespace drape::estimate

@@ -1,0 +1,80 @@
+#pragma once
+// Parameter space and objective of the fit: which parameters a drape test can
+// constrain, and the whitened residual vector (simulated minus measured, each
+// divided by its noise) whose sum of squares the optimizer minimises.
+#include "measured.hpp"
+
+#include "engine/cloth/params.hpp"
+
+#include <string>
+#include <vector>
+
+namespace drape::estimate {
+
+/// Model variants selectable with `drape fit --model`.
+///  - baseline: the seed paper's model (linear springs, frictionless disc);
+///    fits bend_warp, bend_weft and shear.
+///  - full: also fits the tensile stiffnesses and the disc friction.
+enum class ModelVariant { Baseline, Full };
+ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "full"; ParameterError otherwise
+std::string to_string(ModelVariant v);
+
+/// One fitted coordinate: a parameter (or a tied group, e.g. stretch warp and
+/// weft together) searched in log10 (or linear) space within fit bounds that are
+/// the parameter table's bounds narrowed to what a drape test can see.
+struct FitVariable {
+    std::string name;                ///< e.g. "bend_warp_N_m"
+    std::vector<cloth::Param> params;///< set together (tied)
+    bool log_scale = true;
+    double lower = 0, upper = 0;     ///< fit bounds in search coordinates (log10 of the value when log_scale)
+    double to_value(double x) const { return log_scale ? std::pow(10.0, x) : x; }
+    double to_coord(double v) const { return log_scale ? std::log10(v) : v; }
+};
+
+/// Fitted coordinates of a variant (in the order of the table).
+std::vector<FitVariable> fit_variables(ModelVariant v);
+
+/// Measurement noise (1 sigma) of each residual channel. The lab's own
+/// figures (README): laser 0.3 mm per coordinate, drapemeter 0.5 % D. The
+/// "model" floors are the seed-to-seed spread of the simulation itself (the
+/// fold pattern of a drape is a bifurcation: perturbation seeds 1..8 at grid 25
+/// on the default fabric spread D by ~0.5 % and the contour features by
+/// ~0.5 mm, see docs/estimate.md), which any single real drape also has.
+struct NoiseModel {
+    double laser_m = 0.3e-3;            ///< [m] profiler, per point
+    double dc_lab_percent = 0.5;        ///< [%] drapemeter repeatability
+    double dc_seed_percent = 0.7;       ///< [%] fold-pattern (seed) spread of D
+    double nodes = 0.75;                ///< [-] node count spread between repeats
+    double radius_seed_m = 0.6e-3;      ///< [m] seed spread of a contour's mean radius
+    double fold_seed_m = 0.8e-3;        ///< [m] seed spread of the RMS fold amplitude and harmonic magnitudes
+    double axis_seed_m = 0.4e-3;        ///< [m] seed spread of the phase-locked cos 2theta / cos 4theta terms
+    double hem_m = 2e-3;                ///< [m] hem height from the side photo
+    int harmonics = 8;                  ///< harmonic magnitudes compared, k = 1..harmonics
+    /// Total sigma of a quantity averaged over `points` laser samples plus a model floor [m].
+    double contour_sigma(double floor_m, int points) const;
+};
+
+/// One entry of the residual vector.
+struct ResidualTerm {
+    int record = 0;           ///< index of the record
+    std::string kind;         ///< dc | nodes | hem | closure | mean_radius | fold_rms | cos2 | cos4 | harmonic
+    double depth_m = 0;       ///< contour terms
+    int harmonic = 0;         ///< harmonic terms (k)
+    double simulated = 0, measured = 0, sigma = 1; ///< SI (metres, %, count)
+    bool smooth = true;       ///< false for the node count (integer): left out of the Jacobian
+    double whitened() const { return (simulated - measured) / sigma; }
+};
+
+/// Residual terms of one record given the (seed-averaged) simulated features.
+/// `closed_fraction[d]` is the fraction of seeds whose slice at depth d closed.
+std::vector<ResidualTerm> residual_terms(int record, const DrapeFeatures& measured, const DrapeFeatures& simulated,
+                                         const std::vector<double>& closed_fraction, const NoiseModel& noise);
+
+/// Mean of the features of several simulations of the same record (seeds):
+/// D, nodes and hem averaged; per depth the contour features averaged over the
+/// seeds whose slice closed (all seeds when none did).
+DrapeFeatures average_features(const std::vector<DrapeFeatures>& f, std::vector<double>* closed_fraction);
+
+double chi_square(const std::vector<ResidualTerm>& r);
+
+} // namespace drape::estimate

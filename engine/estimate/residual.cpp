@@ -1,0 +1,133 @@
+#include "residual.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace drape::estimate {
+
+namespace {
+struct Acc {
+    double ss = 0;
+    int n = 0;
+    double sum = 0; ///< signed whitened sum
+    void add(double w)
+    {
+        ss += w * w;
+        sum += w;
+        ++n;
+    }
+    double rms() const { return n ? std::sqrt(ss / n) : 0.0; }
+    double mean() const { return n ? sum / n : 0.0; }
+};
+} // namespace
+
+ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fitted)
+{
+    ResidualAnalysis a;
+    std::map<std::string, Acc> kinds;
+    std::map<int, Acc> harm;
+    std::map<double, Acc> depth;
+    std::map<double, Acc> radius_by_depth; // signed mean-radius residual per depth
+    Acc all, metres, dc, nodes;
+    double ss_m = 0;
+    int n_m = 0;
+    for (const auto& t : terms) {
+        const double w = t.whitened();
+        all.add(w);
+        kinds[t.kind].add(w);
+        if (t.kind == "harmonic") harm[t.harmonic].add(w);
+        if (t.kind == "dc") dc.add(t.simulated - t.measured);
+        if (t.kind == "nodes") nodes.add(t.simulated - t.measured);
+        if (t.depth_m > 0 && t.kind != "closure") depth[t.depth_m].add(w);
+        if (t.kind == "mean_radius") radius_by_depth[t.depth_m].add(w);
+        if (t.kind == "mean_radius" || t.kind == "fold_rms" || t.kind == "harmonic" || t.kind == "cos2" || t.kind == "cos4") {
+            const double d = t.simulated - t.measured;
+            ss_m += d * d;
+            ++n_m;
+        }
+    }
+    a.chi2 = all.ss;
+    a.dof = std::max(1, static_cast<int>(terms.size()) - fitted);
+    a.exceeds_noise = a.chi2 > a.dof + 3.0 * std::sqrt(2.0 * a.dof);
+    a.rms_m = n_m ? std::sqrt(ss_m / n_m) : 0.0;
+    a.rms_whitened = all.rms();
+    a.dc_error_percent = dc.mean();
+    a.node_error = nodes.mean();
+    for (const auto& [k, acc] : kinds) a.kind_rms.push_back({k, acc.rms()});
+    for (const auto& [d, acc] : depth) a.depth_rms.push_back({d, acc.rms()});
+    int kmax = harm.empty() ? 0 : harm.rbegin()->first;
+    a.harmonic_rms.assign(kmax, 0.0);
+    std::vector<std::pair<double, int>> strong;
+    for (const auto& [k, acc] : harm) {
+        a.harmonic_rms[k - 1] = acc.rms();
+        if (acc.rms() > 2.0) strong.push_back({acc.rms(), k});
+    }
+    std::sort(strong.rbegin(), strong.rend());
+    for (const auto& [v, k] : strong) a.dominant_harmonics.push_back(k);
+
+    // Candidate effects: signatures the residual is consistent with. Each rule
+    // is a signature predicted for an effect the baseline lacks (see
+    // docs/estimate.md); they are hints for the technologist, not proof.
+    if (!a.exceeds_noise) return a;
+    auto kind = [&](const std::string& k) { return kinds.count(k) ? kinds[k] : Acc{}; };
+    const double dcw = kind("dc").mean(), nw = kind("nodes").mean();
+    if (std::abs(dcw) > 2.0 && std::abs(nw) > 1.5 && dcw * nw > 0) {
+        a.candidate_effects.push_back("disc_friction");
+        a.evidence.push_back("D and node count cannot both be matched (both too " + std::string(dcw > 0 ? "high" : "low") +
+                             "): friction on the disc holds the cloth and changes the folds without the bending that sets D");
+    }
+    if (harm.count(1) && harm[1].rms() > 2.0) {
+        a.candidate_effects.push_back("specimen_off_centre");
+        a.evidence.push_back("harmonic 1 (a shift of the contour) is beyond noise: the specimen or the profiler axis is off the pedestal axis");
+    }
+    if ((kind("cos2").rms() > 2.0) || (kind("cos4").rms() > 2.0)) {
+        a.candidate_effects.push_back("in_plane_anisotropy");
+        a.evidence.push_back("the axis-locked cos 2theta / cos 4theta terms are beyond noise: warp/weft anisotropy beyond what bending alone gives (tensile or shear anisotropy, bias cut)");
+    }
+    // A mean-radius residual that drifts with depth (sign change or steady growth)
+    // is a shape the linear bending model cannot bend into.
+    if (radius_by_depth.size() >= 3) {
+        const double first = radius_by_depth.begin()->second.mean(), last = radius_by_depth.rbegin()->second.mean();
+        if (std::abs(last - first) > 3.0) {
+            a.candidate_effects.push_back("nonlinear_bending");
+            a.evidence.push_back("the mean-radius residual drifts with depth (" + std::to_string(first).substr(0, 5) + " to " +
+                                 std::to_string(last).substr(0, 5) +
+                                 " sigma): the side profile's curvature does not follow linear bending (bending hysteresis or stiffening)");
+        }
+    }
+    if (kind("fold_rms").rms() > 2.0 || (!strong.empty() && strong.front().second > 1)) {
+        a.candidate_effects.push_back("fold_amplitude_mismatch");
+        a.evidence.push_back("fold amplitudes / harmonic magnitudes are beyond noise: buckling wavelength and depth differ (shear or bending anisotropy, thickness)");
+    }
+    if (kind("closure").rms() > 2.0) {
+        a.candidate_effects.push_back("hem_too_high");
+        a.evidence.push_back("the model's hem does not reach depths where the measured cut closes: the drape hangs lower than the model allows");
+    }
+    return a;
+}
+
+nlohmann::json residual_to_json(const ResidualAnalysis& a)
+{
+    nlohmann::json j;
+    j["exceeds_noise"] = a.exceeds_noise;
+    j["chi2"] = a.chi2;
+    j["dof"] = a.dof;
+    j["rms_m"] = a.rms_m;
+    j["rms_whitened"] = a.rms_whitened;
+    j["dominant_harmonics"] = a.dominant_harmonics;
+    j["harmonic_rms_whitened"] = a.harmonic_rms;
+    nlohmann::json d = nlohmann::json::array();
+    for (const auto& [depth, rms] : a.depth_rms) d.push_back({{"depth_m", depth}, {"rms_whitened", rms}});
+    j["depths"] = d;
+    nlohmann::json k = nlohmann::json::object();
+    for (const auto& [name, rms] : a.kind_rms) k[name] = rms;
+    j["channels_rms_whitened"] = k;
+    j["dc_error_percent"] = a.dc_error_percent;
+    j["node_error"] = a.node_error;
+    j["candidate_effects"] = a.candidate_effects;
+    j["evidence"] = a.evidence;
+    return j;
+}
+
+} // namespace drape::estimate

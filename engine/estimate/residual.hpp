@@ -1,0 +1,35 @@
+#pragma once
+// Residual analysis of a fit (issue 7): is what the model leaves over larger
+// than the measurement noise, where is it structured (harmonics, depths,
+// channels), and which missing effects is that structure consistent with.
+#include "objective.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace drape::estimate {
+
+struct ResidualAnalysis {
+    double chi2 = 0;
+    int dof = 0;                      ///< residual terms minus fitted coordinates
+    bool exceeds_noise = false;       ///< chi2 beyond dof + 3 sqrt(2 dof)
+    double rms_m = 0;                 ///< RMS of the contour residuals in metres (radius, folds, harmonics)
+    double rms_whitened = 0;          ///< RMS of all whitened residuals (1 = at the noise)
+    std::vector<int> dominant_harmonics; ///< harmonics whose whitened residual RMS exceeds 2, largest first
+    std::vector<double> harmonic_rms; ///< whitened RMS per harmonic k = 1..K (index k-1)
+    std::vector<std::pair<double, double>> depth_rms; ///< (depth [m], whitened RMS of that depth's terms)
+    std::vector<std::pair<std::string, double>> kind_rms; ///< whitened RMS per channel
+    double dc_error_percent = 0;      ///< mean simulated - measured D
+    double node_error = 0;            ///< mean simulated - measured nodes
+    std::vector<std::string> candidate_effects; ///< names, see docs/estimate.md
+    std::vector<std::string> evidence;           ///< one sentence per candidate, same order
+};
+
+/// Analyses the residual terms of a fit with `fitted` coordinates.
+ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fitted);
+
+nlohmann::json residual_to_json(const ResidualAnalysis& a);
+
+} // namespace drape::estimate

@@ -1,0 +1,111 @@
+// The drapemeter experiment at small grids: it converges, is plausible,
+// reproducible per seed, warm starts pay, and bad set-ups are refused.
+#include "engine/cloth/drape.hpp"
+#include "engine/cloth/error.hpp"
+
+#include <QtTest>
+
+using namespace drape::cloth;
+
+namespace {
+DrapeSetup small(int grid = 25, std::uint64_t seed = 1)
+{
+    DrapeSetup s;
+    s.grid = grid;
+    s.seed = seed;
+    return s;
+}
+} // namespace
+
+class TestDrape : public QObject {
+    Q_OBJECT
+private slots:
+    void static_drape_converges_and_is_plausible()
+    {
+        const DrapeResult r = simulate_drape(FabricParams(), small());
+        QVERIFY2(r.status.converged(), r.status.message.c_str());
+        QVERIFY(r.status.residual < 1e-6);
+        const auto& m = r.metrics;
+        QVERIFY2(m.drape_coefficient_percent > 15 && m.drape_coefficient_percent < 90, qPrintable(QString::number(m.drape_coefficient_percent)));
+        QVERIFY(m.node_count >= 3 && m.node_count <= 12);
+        // Hangs below the pedestal top, above the floor, outside the disc.
+        QVERIFY(r.hem.min_z < -0.02 && r.hem.min_z > -0.12);
+        QVERIFY(m.min_radius_m > 0.075 - 1e-3);
+        // Nothing inside the pedestal beyond the contact penalty's depth.
+        for (int i = 0; i < r.x.rows(); ++i) {
+            const double rr = std::hypot(r.x(i, 0), r.x(i, 1));
+            if (rr < 0.075 - 1e-3) QVERIFY(r.x(i, 2) > -1e-4);
+        }
+        // Slices just under the top close around the pedestal.
+        QVERIFY(r.slices.front().profile.complete());
+    }
+
+    void stiffer_fabric_drapes_higher()
+    {
+        FabricParams limp, stiff;
+        stiff[Param::BendWarp] = stiff[Param::BendWeft] = 2e-4;
+        const double d_limp = simulate_drape(limp, small()).metrics.drape_coefficient_percent;
+        const double d_stiff = simulate_drape(stiff, small()).metrics.drape_coefficient_percent;
+        QVERIFY2(d_stiff > d_limp + 10, qPrintable(QString("limp %1 %, stiff %2 %").arg(d_limp).arg(d_stiff)));
+    }
+
+    void same_seed_same_drape_other_seed_other_folds()
+    {
+        const DrapeResult a = simulate_drape(FabricParams(), small(25, 7));
+        const DrapeResult b = simulate_drape(FabricParams(), small(25, 7));
+        QCOMPARE(a.metrics.drape_coefficient_percent, b.metrics.drape_coefficient_percent);
+        QVERIFY((a.x - b.x).cwiseAbs().maxCoeff() == 0.0);
+        bool differs = false;
+        for (std::uint64_t seed : {8, 9, 10}) {
+            const DrapeResult c = simulate_drape(FabricParams(), small(25, seed));
+            differs |= (c.x - a.x).cwiseAbs().maxCoeff() > 1e-3;
+        }
+        QVERIFY(differs);
+    }
+
+    void warm_start_after_small_change_is_cheap()
+    {
+        FabricParams p;
+        const DrapeResult cold = simulate_drape(p, small());
+        QVERIFY(cold.status.converged());
+        p[Param::BendWarp] *= 1.1;
+        p[Param::BendWeft] *= 1.1;
+        const DrapeResult warm = simulate_drape_from(p, small(), cold.x);
+        QVERIFY2(warm.status.converged(), warm.status.message.c_str());
+        QVERIFY2(warm.status.newton_iterations * 3 < cold.status.newton_iterations,
+                 qPrintable(QString("warm %1 vs cold %2 iterations").arg(warm.status.newton_iterations).arg(cold.status.newton_iterations)));
+        QVERIFY(std::abs(warm.metrics.drape_coefficient_percent - cold.metrics.drape_coefficient_percent) < 5);
+    }
+
+    void bad_setups_are_refused()
+    {
+        DrapeSetup s = small();
+        s.sample_diameter = 0.1; // smaller than the disc
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(FabricParams(), s));
+        s = small();
+        s.disc_diameter = -0.15;
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(FabricParams(), s));
+        s = small(3);
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(FabricParams(), s));
+        FabricParams p;
+        p[Param::AreaDensity] = std::nan("");
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(p, small()));
+        // A seed preset describes its own sheet size.
+        s = small();
+        s.sample_diameter = 0.36;
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(SeedParams::table1(), s));
+    }
+
+    void cancellation_stops_the_solver()
+    {
+        std::atomic<bool> cancel{true};
+        RestOptions ro;
+        ro.cancel = &cancel;
+        auto sys = make_drape_system(FabricParams(), small());
+        const SolverStatus st = run_to_rest(*sys, ro);
+        QCOMPARE(st.outcome, SolverStatus::Outcome::Cancelled);
+    }
+};
+
+QTEST_APPLESS_MAIN(TestDrape)
+#include "tst_drape.moc"

@@ -1,0 +1,137 @@
+// The shared metric path on contours with known answers.
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/metrics.hpp"
+
+#include <QtTest>
+
+#include <numbers>
+#include <random>
+
+using namespace drape::cloth;
+
+namespace {
+constexpr double kPi = std::numbers::pi;
+
+Polygon2 star(double a, double b, int n, double phase = 0.0, int samples = 2000)
+{
+    Polygon2 p;
+    for (int k = 0; k < samples; ++k) {
+        const double t = 2 * kPi * k / samples;
+        const double r = a + b * std::cos(n * t + phase);
+        p.emplace_back(r * std::cos(t), r * std::sin(t));
+    }
+    return p;
+}
+} // namespace
+
+class TestMetrics : public QObject {
+    Q_OBJECT
+private slots:
+    void drape_coefficient_of_circles()
+    {
+        const double R1 = 0.15, R2 = 0.075;
+        QVERIFY(std::abs(drape_metrics(star(R1, 0, 1), R1, R2).drape_coefficient_percent - 100.0) < 0.01);
+        QVERIFY(std::abs(drape_metrics(star(R2, 0, 1), R1, R2).drape_coefficient_percent) < 0.01);
+        const double r = 0.11;
+        const double expect = (r * r - R2 * R2) / (R1 * R1 - R2 * R2) * 100;
+        QVERIFY(std::abs(drape_metrics(star(r, 0, 1), R1, R2).drape_coefficient_percent - expect) < 0.01);
+        QCOMPARE(drape_metrics(star(r, 0, 1), R1, R2).node_count, 0);
+    }
+
+    void star_area_nodes_and_fourier_data()
+    {
+        QTest::addColumn<int>("n");
+        QTest::addColumn<double>("b");
+        for (int n : {3, 4, 5, 6, 7, 8, 9, 10, 12}) QTest::newRow(qPrintable(QString("%1 nodes").arg(n))) << n << 0.012;
+        QTest::newRow("shallow 6") << 6 << 0.003;
+    }
+    void star_area_nodes_and_fourier()
+    {
+        QFETCH(int, n);
+        QFETCH(double, b);
+        const double a = 0.11, R1 = 0.15, R2 = 0.075;
+        const DrapeMetrics m = drape_metrics(star(a, b, n, 0.3), R1, R2);
+        const double area = kPi * (a * a + b * b / 2);
+        QVERIFY(std::abs(m.shadow_area_m2 - area) < 1e-5 * area);
+        QCOMPARE(m.node_count, n);
+        QVERIFY(std::abs(m.fourier.a0 - a) < 1e-5);
+        QVERIFY(std::abs(m.fourier.magnitude(n) - b) < 1e-4);
+        for (double amp : m.node_amplitudes_m) QVERIFY(std::abs(amp - b) < 1e-4);
+        // Crests at theta = (2 pi k - 0.3) / n.
+        for (double th : m.node_angles_rad) {
+            const double u = std::fmod(th * n + 0.3, 2 * kPi);
+            QVERIFY(std::min(u, 2 * kPi - u) < 0.05 * n);
+        }
+    }
+
+    void noise_does_not_make_nodes()
+    {
+        // Pixel-level noise on a circle is not a fold.
+        std::mt19937 rng(4);
+        std::normal_distribution<double> N(0, 0.3e-3);
+        Polygon2 p = star(0.11, 0, 1);
+        for (auto& q : p) q *= 1 + N(rng) / 0.11;
+        QCOMPARE(drape_metrics(p, 0.15, 0.075).node_count, 0);
+        // ... but five real folds on the same noise are.
+        Polygon2 s = star(0.11, 0.01, 5);
+        for (auto& q : s) q *= 1 + N(rng) / 0.11;
+        QCOMPARE(drape_metrics(s, 0.15, 0.075).node_count, 5);
+    }
+
+    void choose_harmonics_reaches_noise()
+    {
+        std::mt19937 rng(8);
+        std::normal_distribution<double> N(0, 0.3e-3);
+        RadialProfile p;
+        for (int k = 0; k < 360; ++k) {
+            const double t = 2 * kPi * k / 360;
+            p.r.push_back(0.1 + 0.008 * std::cos(6 * t) + 0.003 * std::sin(2 * t) + 0.0015 * std::cos(11 * t + 1) + N(rng));
+        }
+        const int K = choose_harmonics(p, 0.3e-3);
+        QVERIFY2(K >= 11 && K <= 16, qPrintable(QString("chose %1 harmonics").arg(K)));
+        const FourierSeries s = fourier_fit(p, K);
+        QVERIFY(fourier_residual_rms(p, s) < 0.35e-3);
+        QVERIFY(std::abs(s.magnitude(6) - 0.008) < 1e-4);
+    }
+
+    void fourier_fit_ignores_missing_rays()
+    {
+        RadialProfile p;
+        for (int k = 0; k < 360; ++k) {
+            const double t = 2 * kPi * k / 360;
+            p.r.push_back(k % 7 == 0 ? std::numeric_limits<double>::quiet_NaN() : 0.1 + 0.01 * std::cos(4 * t));
+        }
+        QVERIFY(!p.complete());
+        const FourierSeries s = fourier_fit(p, 8);
+        QVERIFY(std::abs(s.a0 - 0.1) < 1e-12 && std::abs(s.magnitude(4) - 0.01) < 1e-12);
+    }
+
+    void mesh_shadow_and_slices()
+    {
+        // A flat disc: its shadow is the specimen (D = 100 %).
+        const ClothMesh flat = make_disc(0.30, 41);
+        const DrapeMetrics m = drape_metrics(shadow_outline(flat.X, flat.F), 0.15, 0.075);
+        QVERIFY2(std::abs(m.drape_coefficient_percent - 100) < 0.5, qPrintable(QString::number(m.drape_coefficient_percent)));
+        // A vertical tube of radius 0.09 m from z = 0 to -0.1: the slice at any depth is the circle.
+        ClothMesh tube = make_rectangle(2 * kPi * 0.09, 0.1, 73, 11);
+        for (int i = 0; i < tube.vertex_count(); ++i) {
+            const double t = tube.X(i, 0) / 0.09, z = -tube.X(i, 1);
+            tube.X(i, 0) = 0.09 * std::cos(t);
+            tube.X(i, 1) = 0.09 * std::sin(t);
+            tube.X(i, 2) = z;
+        }
+        const RadialProfile sl = slice_profile(tube.X, tube.F, -0.05, 360);
+        QVERIFY(sl.complete());
+        for (double r : sl.r) QVERIFY(std::abs(r - 0.09) < 0.09 * (1 - std::cos(kPi / 72)) + 1e-9);
+        QVERIFY(!slice_profile(tube.X, tube.F, -0.2, 360).complete()); // below the tube: no cut
+    }
+
+    void bad_input_throws()
+    {
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, drape_metrics(star(0.1, 0, 1), 0.075, 0.15));
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, drape_metrics(Polygon2{}, 0.15, 0.075));
+    }
+};
+
+QTEST_APPLESS_MAIN(TestMetrics)
+#include "tst_metrics.moc"

@@ -1,0 +1,176 @@
+// Physical invariants: mass, free fall, the reaction of a pinned hanging
+// sheet, energy conservation of undamped explicit integrators, stability of
+// implicit Euler far beyond the explicit limit.
+#include "engine/cloth/drape.hpp"
+#include "engine/cloth/solver.hpp"
+
+#include <QtTest>
+
+#include <numbers>
+
+using namespace drape::cloth;
+
+namespace {
+FabricParams undamped()
+{
+    FabricParams p;
+    p[Param::DampStretch] = 0;
+    p[Param::DampShear] = 0;
+    p[Param::DampBend] = 0;
+    p[Param::DampAir] = 0;
+    return p;
+}
+} // namespace
+
+class TestPhysics : public QObject {
+    Q_OBJECT
+private slots:
+    void total_mass_is_density_times_area_data()
+    {
+        QTest::addColumn<int>("grid");
+        QTest::newRow("11") << 11;
+        QTest::newRow("31") << 31;
+        QTest::newRow("80") << 80;
+    }
+    void total_mass_is_density_times_area()
+    {
+        QFETCH(int, grid);
+        FabricParams p;
+        p[Param::AreaDensity] = 0.237;
+        const ClothMesh m = make_disc(0.30, grid);
+        const ClothModel model = make_model(m, p);
+        // Exactly density x the mesh's area ...
+        QCOMPARE_LE(std::abs(model.total_mass() - 0.237 * m.area()), 1e-12);
+        // ... and the mesh's area is the cut circle's up to the chords of its polygonal hem.
+        const double circle = std::numbers::pi * 0.15 * 0.15;
+        const double h = 0.30 / (grid - 1);
+        QVERIFY2(std::abs(m.area() - circle) < 0.5 * 2 * std::numbers::pi * 0.15 * h * h / 0.15 + 1e-12,
+                 qPrintable(QString("area %1 vs circle %2").arg(m.area()).arg(circle)));
+        QCOMPARE_LE(m.area(), circle);
+    }
+
+    void free_fall_follows_gravity_data()
+    {
+        QTest::addColumn<QString>("integrator");
+        for (const char* n : {"rk4", "midpoint", "symplectic", "euler", "implicit"}) QTest::newRow(n) << QString(n);
+    }
+    void free_fall_follows_gravity()
+    {
+        QFETCH(QString, integrator);
+        const Integrator integ = parse_integrator(integrator.toStdString());
+        FabricParams p = undamped();
+        ClothMesh m = make_rectangle(0.1, 0.1, 6, 6);
+        ClothSystem s(m, make_model(m, p));
+        Stepper st(s, integ);
+        const double dt = 1e-4;
+        const int n = 2000;
+        for (int k = 0; k < n; ++k) QVERIFY(st.step(dt));
+        const double t = n * dt;
+        // An unstretched sheet in free fall moves rigidly: z = -g t^2 / 2.
+        const double expect = -0.5 * 9.81 * t * t;
+        // Explicit Euler lags by g t dt / 2 and semi-implicit leads by it; implicit Euler likewise.
+        const double tol = integ == Integrator::RK4 || integ == Integrator::Midpoint ? 1e-9 : 0.6 * 9.81 * t * dt + 1e-9;
+        for (int i = 0; i < s.vertex_count(); ++i) QVERIFY2(std::abs(s.x(i, 2) - expect) <= tol, qPrintable(QString("z %1 vs %2").arg(s.x(i, 2)).arg(expect)));
+        QVERIFY(std::abs(s.v(0, 2) + 9.81 * t) < 1e-6 + (integ == Integrator::ImplicitEuler ? 1e-3 : 0.0));
+    }
+
+    void pinned_sheet_reaction_equals_weight()
+    {
+        // A sheet hanging from its pinned top edge, at rest: the force the pins
+        // must supply (minus the internal force on them) equals the weight.
+        FabricParams p;
+        p[Param::StretchWarp] = p[Param::StretchWeft] = 500;
+        ClothMesh m = make_rectangle(0.2, 0.2, 11, 11);
+        // Hang it vertically: material v runs down -z.
+        for (int i = 0; i < m.vertex_count(); ++i) {
+            const double y = m.X(i, 1);
+            m.X(i, 1) = 0;
+            m.X(i, 2) = -y;
+        }
+        ClothSystem s(m, make_model(m, p));
+        for (int i = 0; i < m.grid.nu; ++i) s.set_pinned(m.grid.at(i, 0), true);
+        RestOptions ro;
+        ro.integrator = Integrator::Static;
+        ro.residual = 1e-10;
+        const SolverStatus st = run_to_rest(s, ro);
+        QVERIFY2(st.converged(), st.message.c_str());
+        Positions f;
+        s.conservative_forces(s.x, f);
+        Eigen::Vector3d reaction = Eigen::Vector3d::Zero();
+        for (int i = 0; i < m.grid.nu; ++i) reaction -= f.row(m.grid.at(i, 0)).transpose();
+        const double weight = s.model().total_mass() * 9.81;
+        QVERIFY2(std::abs(reaction.z() - weight) < 1e-6 * weight, qPrintable(QString("reaction %1 N, weight %2 N").arg(reaction.z()).arg(weight)));
+        QVERIFY(std::abs(reaction.x()) < 1e-6 * weight && std::abs(reaction.y()) < 1e-6 * weight);
+        // The sheet stretched under its own weight: the top rows carry the most.
+        QVERIFY(s.x(m.grid.at(5, 10), 2) < -0.2);
+    }
+
+    void undamped_explicit_integrators_conserve_energy_data()
+    {
+        QTest::addColumn<QString>("integrator");
+        QTest::addColumn<double>("tolerance");
+        QTest::newRow("rk4") << QString("rk4") << 1e-6;
+        QTest::newRow("symplectic") << QString("symplectic") << 1e-2;
+        QTest::newRow("midpoint") << QString("midpoint") << 1e-3;
+    }
+    void undamped_explicit_integrators_conserve_energy()
+    {
+        QFETCH(QString, integrator);
+        QFETCH(double, tolerance);
+        FabricParams p = undamped();
+        p[Param::StretchWarp] = p[Param::StretchWeft] = 50;
+        ClothMesh m = make_rectangle(0.1, 0.1, 6, 6);
+        ClothSystem s(m, make_model(m, p));
+        s.set_pinned(0, true);
+        s.set_pinned(5, true);
+        s.x.col(1) *= 1.05; // pre-stretched: it oscillates while it swings down
+        Stepper st(s, parse_integrator(integrator.toStdString()));
+        const double dt = 0.05 * st.explicit_dt_limit();
+        const double e0 = s.potential_energy(s.x) + s.kinetic_energy(s.v);
+        double scale = 0;
+        for (int k = 0; k < 4000; ++k) {
+            QVERIFY(st.step(dt));
+            scale = std::max(scale, s.kinetic_energy(s.v));
+        }
+        const double e1 = s.potential_energy(s.x) + s.kinetic_energy(s.v);
+        QVERIFY(scale > 0);
+        QVERIFY2(std::abs(e1 - e0) < tolerance * scale, qPrintable(QString("drift %1 J of kinetic scale %2 J").arg(e1 - e0).arg(scale)));
+    }
+
+    void implicit_euler_stable_far_beyond_explicit_limit()
+    {
+        // The seed found implicit Euler unstable; ours must take steps 100x the
+        // explicit limit and come to rest, not blow up.
+        FabricParams p;
+        DrapeSetup setup;
+        setup.grid = 21;
+        auto s = make_drape_system(p, setup);
+        Stepper probe(*s, Integrator::RK4);
+        const double dt = 100 * probe.explicit_dt_limit();
+        Stepper st(*s, Integrator::ImplicitEuler);
+        for (int k = 0; k < 300; ++k) QVERIFY(st.step(dt));
+        QVERIFY(s->x.allFinite());
+        QVERIFY2(s->kinetic_energy(s->v) < 1e-3 * s->model().total_mass() * 9.81 * 0.1,
+                 qPrintable(QString("kinetic energy %1 J after %2 s").arg(s->kinetic_energy(s->v)).arg(s->time)));
+        QVERIFY(s->x.col(2).minCoeff() > -0.12 - 1e-3); // above the floor
+    }
+
+    void run_to_rest_reports_divergence()
+    {
+        // An explicit step far above the stability limit must end as "diverged", not as garbage.
+        FabricParams p;
+        DrapeSetup setup;
+        setup.grid = 15;
+        auto s = make_drape_system(p, setup);
+        RestOptions ro;
+        ro.integrator = Integrator::ExplicitEuler;
+        ro.dt = 1e-2;
+        ro.max_sim_time = 5;
+        const SolverStatus st = run_to_rest(*s, ro);
+        QCOMPARE(st.outcome, SolverStatus::Outcome::Diverged);
+        QVERIFY(!st.message.empty());
+    }
+};
+
+QTEST_APPLESS_MAIN(TestPhysics)
+#include "tst_physics.moc"

@@ -16,12 +16,15 @@ namespace {
 int run_measure(const std::vector<std::string>& argv)
 {
     using namespace drape;
-    cli::Args a(argv, {"--overlay", "--rays"}, {"--json", "--no-calibrate"});
+    cli::Args a(argv, {"--overlay", "--rays", "--node-prominence"}, {"--json", "--no-calibrate"});
     if (a.positionals().size() != 1) throw cli::UsageError("expected exactly one RECORD_DIR");
     const capture::Record rec = capture::read_record(a.positionals()[0]);
     capture::MeasureOptions opt;
     opt.rays = a.get_int("--rays", 720, 90, 7200);
     opt.calibrate = !a.has("--no-calibrate");
+    opt.metrics.relative_prominence = a.get_double("--node-prominence", opt.metrics.relative_prominence);
+    if (!(opt.metrics.relative_prominence >= 0 && opt.metrics.relative_prominence < 1))
+        throw cli::UsageError("--node-prominence must be in [0, 1)");
     const capture::Measurement m = capture::measure_record(rec, opt);
     if (auto path = a.get("--overlay")) {
         if (m.top_image.empty()) throw FileError(*path + ": no overlay: the record has no readable top photo");
@@ -61,12 +64,13 @@ int run_measure(const std::vector<std::string>& argv)
 }
 
 DRAPE_COMMAND({"measure", "measure a drape-lab record (photos, laser contours)",
-               "usage: drape measure RECORD_DIR [--json] [--overlay out.png] [--rays N] [--no-calibrate]\n"
+               "usage: drape measure RECORD_DIR [--json] [--overlay out.png] [--rays N] [--no-calibrate] [--node-prominence F]\n"
                "  RECORD_DIR       folder with meta.json and any of top.jpg, side.jpg, iso.jpg, contours.csv\n"
                "  --json           print the measurements as JSON (SI units, unit in each key)\n"
                "  --overlay FILE   write the top photo with the traced outline, nodes and pedestal circle\n"
                "  --rays N         rays traced around the axis (default 720)\n"
                "  --no-calibrate   use the declared top pose instead of solvePnP on the floor chessboards\n"
+               "  --node-prominence F  a fold crest must rise F x (max r - min r) above its troughs (default 0.15)\n"
                "Files that are missing or unreadable are listed under not_measured; a bad meta.json is an error.",
                run_measure});
 

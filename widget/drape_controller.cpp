@@ -11,7 +11,6 @@
 #include <Eigen/Geometry>
 
 #include <QImageReader>
-#include <QtEndian>
 #include <QQuick3DTextureData>
 #include <QTimer>
 
@@ -23,33 +22,6 @@ namespace drape::widget {
 
 namespace {
 constexpr double kOutlineHeight = 1e-3; // [m] outlines drawn just above the pedestal top, over the cloth
-constexpr double kFloorSize = 3.0;      // [m] side of the drawn floor (matches the #Rectangle scale in describeColliders)
-
-/// Floor sheet with the drape lab's calibration boards (shared/data/drape-lab/README.md):
-/// 25 mm squares, square (i, j) black when i + j is even, corners in mm.
-QImage labFloorImage()
-{
-    constexpr int px = 1500;                // 2 mm per pixel over 3 m
-    constexpr double mmPerPx = kFloorSize * 1000.0 / px;
-    QImage img(px, px, QImage::Format_RGBA8888);
-    img.fill(QColor(0xe6, 0xe6, 0xe2));
-    struct Board { double x0, y0; int nx, ny; };
-    const Board boards[] = {{230, -150, 7, 12}, {-405, -150, 7, 12}, {-150, 230, 12, 4}, {-150, -330, 12, 4}};
-    for (int r = 0; r < px; ++r) {
-        // Row 0 is the image top = +y edge of the floor (the texture is uploaded mirrored, see uploadTexture).
-        const double y = kFloorSize * 500.0 - (r + 0.5) * mmPerPx;
-        auto* line = reinterpret_cast<quint32*>(img.scanLine(r));
-        for (int c = 0; c < px; ++c) {
-            const double x = -kFloorSize * 500.0 + (c + 0.5) * mmPerPx;
-            for (const Board& b : boards) {
-                const double i = std::floor((x - b.x0) / 25.0), j = std::floor((y - b.y0) / 25.0);
-                if (i >= 0 && j >= 0 && i < b.nx && j < b.ny && (int(i + j) % 2 == 0))
-                    line[c] = qToBigEndian<quint32>(0x202020ffu);
-            }
-        }
-    }
-    return img;
-}
 } // namespace
 
 DrapeController::DrapeController(QObject* parent) : QObject(parent)
@@ -65,8 +37,8 @@ DrapeController::DrapeController(QObject* parent) : QObject(parent)
     m_measOutline->QObject::setParent(this);
     m_textureData = new QQuick3DTextureData();
     m_textureData->QObject::setParent(this);
-    m_floorTextureData = new QQuick3DTextureData();
-    m_floorTextureData->QObject::setParent(this);
+    m_floorBoards = new FloorBoardsGeometry();
+    m_floorBoards->QObject::setParent(this);
     m_camera.setPreset(OrbitCamera::Preset::Iso);
 
     m_worker = new DrapeWorker();
@@ -361,7 +333,6 @@ void DrapeController::setLabFloor(bool on)
     if (on == m_labFloor) return;
     m_labFloor = on;
     emit labFloorChanged(on);
-    rebuildColliderList();
 }
 
 void DrapeController::setPickEnabled(bool on)
@@ -438,33 +409,33 @@ void DrapeController::onMesh(const DrapeMeshPtr& mesh)
 
 void DrapeController::rebuildColliderList()
 {
-    if (m_labFloor && m_floorTextureData->textureData().isEmpty()) {
-        // Made on first use (not in the constructor): only views that draw the floor pay for it.
-        const QImage floor = labFloorImage().mirrored(false, true);
-        m_floorTextureData->setSize(floor.size());
-        m_floorTextureData->setFormat(QQuick3DTextureData::RGBA8);
-        m_floorTextureData->setTextureData(QByteArray(reinterpret_cast<const char*>(floor.constBits()), floor.sizeInBytes()));
-    }
     QVariantList list;
+    bool hasFloor = false;
     for (const ColliderShape& c : m_colliderShapes) {
         QVariantMap m;
         const bool plane = c.kind == QLatin1String("plane");
         // Only a horizontal floor gets the lab's boards.
-        const bool boards = plane && m_labFloor && c.normal.y() > 0.99f;
+        const bool boards = plane && c.normal.y() > 0.99f;
+        if (boards) {
+            m_floorBoards->setFloorHeight(double(c.position.y()));
+            hasFloor = true;
+        }
         m[QStringLiteral("kind")] = c.kind;
         m[QStringLiteral("source")] = c.source;
         m[QStringLiteral("position")] = c.position;
         m[QStringLiteral("scale")] = c.scale;
         m[QStringLiteral("rotation")] = plane ? QQuaternion::rotationTo(QVector3D(0, 0, 1), c.normal) : QQuaternion();
-        m[QStringLiteral("textured")] = boards;
         // The lab's stand: white floor sheet, neutral grey pedestal.
-        m[QStringLiteral("color")] = boards ? QColor(Qt::white)
-                                     : plane ? QColor(0xe6, 0xe6, 0xe2)
+        m[QStringLiteral("color")] = plane ? QColor(0xe6, 0xe6, 0xe2)
                                      : c.kind == QLatin1String("pedestal") ? QColor(0x80, 0x80, 0x80)
                                                                            : QColor(0x6a, 0x8c, 0xb0);
         list.push_back(m);
     }
     m_colliders = list;
+    if (hasFloor != m_hasFloor) {
+        m_hasFloor = hasFloor;
+        emit labFloorChanged(m_labFloor);
+    }
     emit collidersChanged();
 }
 

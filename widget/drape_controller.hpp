@@ -10,6 +10,7 @@
 // at the pedestal top centre).
 #include "widget/cloth_geometry.hpp"
 #include "widget/drape_frame.hpp"
+#include "widget/floor_boards.hpp"
 #include "widget/line_geometry.hpp"
 #include "widget/long_job.hpp"
 #include "widget/orbit_camera.hpp"
@@ -64,7 +65,9 @@ class DrapeController : public QObject {
     Q_PROPERTY(drape::widget::LineGeometry* simulatedOutline READ simulatedOutline CONSTANT)
     Q_PROPERTY(drape::widget::LineGeometry* measuredOutline READ measuredOutline CONSTANT)
     Q_PROPERTY(QQuick3DTextureData* textureData READ textureData CONSTANT)
-    Q_PROPERTY(QQuick3DTextureData* floorTextureData READ floorTextureData CONSTANT)
+    Q_PROPERTY(drape::widget::FloorBoardsGeometry* floorBoards READ floorBoards CONSTANT)
+    /// labFloor and the scene has a horizontal floor to draw the boards on.
+    Q_PROPERTY(bool floorBoardsVisible READ floorBoardsVisible NOTIFY labFloorChanged)
     Q_PROPERTY(bool hasTexture READ hasTexture NOTIFY textureChanged)
     Q_PROPERTY(QVariantList colliders READ colliders NOTIFY collidersChanged)
     Q_PROPERTY(QVariantList pinnedPositions READ pinnedPositions NOTIFY pinnedChanged)
@@ -116,7 +119,8 @@ public:
     void setPickEnabled(bool on);
     bool labFloor() const { return m_labFloor; }
     void setLabFloor(bool on);
-    QQuick3DTextureData* floorTextureData() const { return m_floorTextureData; }
+    FloorBoardsGeometry* floorBoards() const { return m_floorBoards; }
+    bool floorBoardsVisible() const { return m_labFloor && m_hasFloor; }
 
     ClothGeometry* clothGeometry() const { return m_cloth; }
     LineGeometry* simulatedOutline() const { return m_simOutline; }
@@ -277,7 +281,8 @@ private:
     LineGeometry* m_simOutline = nullptr;
     LineGeometry* m_measOutline = nullptr;
     QQuick3DTextureData* m_textureData = nullptr;
-    QQuick3DTextureData* m_floorTextureData = nullptr;
+    FloorBoardsGeometry* m_floorBoards = nullptr;
+    bool m_hasFloor = false;
     QVariantList m_colliders;
     std::vector<ColliderShape> m_colliderShapes;
     QVariantList m_pinnedPositions;

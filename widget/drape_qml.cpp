@@ -2,6 +2,7 @@
 
 #include "widget/cloth_geometry.hpp"
 #include "widget/drape_controller.hpp"
+#include "widget/floor_boards.hpp"
 #include "widget/line_geometry.hpp"
 
 #include <QQmlEngine>
@@ -21,6 +22,8 @@ void registerDrapeQmlTypes()
                                                   QStringLiteral("use DrapeController.clothGeometry"));
         qmlRegisterUncreatableType<LineGeometry>(uri, 1, 0, "LineGeometry",
                                                  QStringLiteral("use DrapeController's outlines"));
+        qmlRegisterUncreatableType<FloorBoardsGeometry>(uri, 1, 0, "FloorBoardsGeometry",
+                                                        QStringLiteral("use DrapeController.floorBoards"));
         qmlRegisterType(QUrl(QStringLiteral("qrc:/drapekit/qml/DrapeScene.qml")), uri, 1, 0, "DrapeScene");
     });
 }

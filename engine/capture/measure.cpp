@@ -329,11 +329,16 @@ void measure_top(const Record& rec, const MeasureOptions& opt, const ContourStac
     const bool have_contours = stack && !stack->profiles.empty();
     const Trace plane = trace_outline(cam, prob, gate, HeightModel::Plane, rec.R1, rec.R2, nullptr, opt.rays);
     const Trace chord = trace_outline(cam, prob, gate, HeightModel::Chord, rec.R1, rec.R2, nullptr, opt.rays);
-    Trace best = chord;
+    // The chord model is the one used for D: it spans every radius from R1 in
+    // to the disc edge, so the silhouette is always found on it. The contour
+    // model only covers the section at the ray's own angle, but in the top view
+    // a trough is overhung by its neighbouring folds, whose silhouette lies off
+    // that section; it is reported as a cross-check (docs/capture.md).
+    const Trace best = chord;
     tv.height_model = HeightModel::Chord;
     if (have_contours) {
-        best = trace_outline(cam, prob, gate, HeightModel::Contours, rec.R1, rec.R2, stack, opt.rays);
-        tv.height_model = HeightModel::Contours;
+        const Trace cont = trace_outline(cam, prob, gate, HeightModel::Contours, rec.R1, rec.R2, stack, opt.rays);
+        if (cont.outline.size() >= 8) tv.dc_contours_percent = shoelace_dc(cont.outline, rec.R1, rec.R2);
     }
     if (best.outline.size() < static_cast<std::size_t>(opt.rays) * 9 / 10) {
         out.not_measured.push_back("top view: fabric edge found on only " + std::to_string(best.outline.size()) + " of " +
@@ -342,22 +347,25 @@ void measure_top(const Record& rec, const MeasureOptions& opt, const ContourStac
     }
     tv.dc_plane_percent = shoelace_dc(plane.outline, rec.R1, rec.R2);
     tv.dc_chord_percent = shoelace_dc(chord.outline, rec.R1, rec.R2);
-    if (have_contours) tv.dc_contours_percent = shoelace_dc(best.outline, rec.R1, rec.R2);
     tv.outline = best.outline;
     tv.outline_z = best.z;
     tv.outline_arc = best.arc;
     tv.outline_px = best.px;
     tv.rays_beyond_reach = best.beyond;
     tv.metrics = cloth::drape_metrics(tv.outline, rec.R1, rec.R2, opt.metrics);
-    // Remaining error of the perspective correction: the two height models
-    // bracket the real surface (see docs/capture.md), plus 0.5 px of edge
-    // placement over the whole perimeter.
-    const double px_m = (cam.centre().z() - (-0.05)) / cam.fx; // one pixel at a typical hem height [m]
-    const double edge_term = 2 * M_PI * tv.metrics.mean_radius_m * 0.5 * px_m /
-                             (M_PI * (rec.R1 * rec.R1 - rec.R2 * rec.R2)) * 100.0;
-    const double model_term = have_contours ? std::abs(tv.dc_contours_percent - tv.dc_chord_percent) / 2.0
-                                            : std::abs(tv.dc_chord_percent - tv.dc_plane_percent) / 4.0;
-    tv.dc_uncertainty_percent = std::hypot(edge_term, model_term);
+    // Remaining error: (1) edge placement, 0.5 px along the whole perimeter;
+    // (2) the height model: a height error dz scales every radius by
+    // dz / (camera height - z), so dD = 2 A dz / (H - z) / (pi (R1^2 - R2^2)).
+    // dz is set in measure_record from the side view (or a default).
+    double zbar = 0;
+    for (double z : tv.outline_z) zbar += z;
+    zbar /= static_cast<double>(tv.outline_z.size());
+    const double H = cam.centre().z();
+    const double ring = M_PI * (rec.R1 * rec.R1 - rec.R2 * rec.R2);
+    const double px_m = (H - zbar) / cam.fx; // one pixel at the hem [m]
+    tv.dc_edge_term = 2 * M_PI * tv.metrics.mean_radius_m * 0.5 * px_m / ring * 100.0;
+    tv.dc_per_metre_height = 2 * tv.metrics.shadow_area_m2 / (H - zbar) / ring * 100.0;
+    tv.dc_uncertainty_percent = std::hypot(tv.dc_edge_term, tv.dc_per_metre_height * 0.010);
     if (best.beyond > opt.rays / 20)
         tv.warnings.push_back("top view: on " + std::to_string(best.beyond) +
                               " rays the fabric edge lies beyond the height model's hem (shadow or segmentation spill?)");
@@ -476,16 +484,46 @@ void measure_contours(const Record& rec, const ContourStack& st, Measurement& ou
         for (double r : p.r) lv.points += std::isfinite(r) ? 1 : 0;
         lv.complete = p.complete();
         lv.noise_sigma = rec.contour_sigma;
+        for (int k = 0; k < p.size(); ++k) {
+            const double a = p.r[static_cast<std::size_t>(k)], b = p.r[static_cast<std::size_t>((k + 1) % p.size())];
+            if (std::isfinite(a) && std::isfinite(b)) lv.max_jump = std::max(lv.max_jump, std::abs(b - a));
+        }
         if (lv.points < 16) {
             out.warnings.push_back("contours: depth " + fmt("%.0f", lv.depth * 1e3) + " mm has only " +
                                    std::to_string(lv.points) + " points; not fitted");
             continue;
         }
-        const int max_h = std::min(40, (lv.points - 1) / 2 - 1);
+        const int max_h = std::min(120, (lv.points - 1) / 2 - 1);
         lv.harmonics = cloth::choose_harmonics(p, rec.contour_sigma, max_h);
         lv.fit = cloth::fourier_fit(p, lv.harmonics);
         lv.residual_rms = cloth::fourier_residual_rms(p, lv.fit);
+        // Guard: the seed interpolates each contour by its Fourier series, so the
+        // series must reproduce the points to the profiler's noise. Where the
+        // BIC-like stop of choose_harmonics ends above it (fine wrinkles), add
+        // harmonics until the residual is down to the noise (10 % margin for
+        // the sigma's own uncertainty).
+        auto floor_ok = [&](int, double res) { return res <= 1.1 * rec.contour_sigma; };
+        if (!floor_ok(lv.harmonics, lv.residual_rms)) {
+            int lo = lv.harmonics, hi = max_h;
+            cloth::FourierSeries fhi = cloth::fourier_fit(p, hi);
+            if (floor_ok(hi, cloth::fourier_residual_rms(p, fhi))) {
+                while (hi - lo > 1) {
+                    const int mid = (lo + hi) / 2;
+                    if (floor_ok(mid, cloth::fourier_residual_rms(p, cloth::fourier_fit(p, mid))))
+                        hi = mid;
+                    else
+                        lo = mid;
+                }
+                lv.harmonics = hi;
+                lv.fit = cloth::fourier_fit(p, hi);
+                lv.residual_rms = cloth::fourier_residual_rms(p, lv.fit);
+            }
+        }
         lv.mean_radius = lv.fit.a0;
+        if (lv.residual_rms > 1.1 * rec.contour_sigma)
+            out.warnings.push_back("contours: depth " + fmt("%.0f", lv.depth * 1e3) + " mm: Fourier residual " +
+                                   fmt("%.2f", lv.residual_rms * 1e3) + " mm is above the noise; the contour jumps by " +
+                                   fmt("%.1f", lv.max_jump * 1e3) + " mm between neighbouring rays (an overhanging fold)");
         out.contours.push_back(lv);
     }
     if (!rec.contour_depths.empty() && rec.contour_depths.size() != st.depths.size())
@@ -546,6 +584,14 @@ Measurement measure_record(const Record& rec, const MeasureOptions& opt)
     if (rec.has_camera("iso"))
         out.not_measured.push_back("iso view: not analysed by this version (used only by a person checking the drape)");
 
+    if (out.top.measured) {
+        // Height error of the model: what the side view measured where it can
+        // see the hem, never less than 3 mm; 10 mm when there is no side view.
+        const double dz = out.side.measured ? std::max(out.side.model_rms_diff, 0.003) : 0.010;
+        out.top.height_error_m = dz;
+        out.top.dc_uncertainty_percent = std::hypot(out.top.dc_edge_term, out.top.dc_per_metre_height * dz);
+    }
+
     // Lowest hem point: the lowest of the evidence. The top view's height
     // model covers every angle; the side view sees the front hem directly.
     if (out.top.measured && !out.top.outline_z.empty()) {
@@ -602,6 +648,8 @@ nlohmann::json to_json(const Measurement& m)
         top["min_radius_m"] = t.metrics.min_radius_m;
         top["max_radius_m"] = t.metrics.max_radius_m;
         top["rays_beyond_reach"] = t.rays_beyond_reach;
+        top["height_error_m"] = t.height_error_m;
+        top["drape_coefficient_edge_error_percent"] = t.dc_edge_term;
         top["segmentation"] = {{"by", t.model.chromatic ? "chroma" : "darkness"},
                                {"contrast_lab", t.model.contrast},
                                {"fabric_lab", {t.model.fabric_lab[0], t.model.fabric_lab[1], t.model.fabric_lab[2]}},
@@ -653,6 +701,7 @@ nlohmann::json to_json(const Measurement& m)
                       {"harmonics", c.harmonics},
                       {"fourier_magnitudes_m", mags},
                       {"residual_rms_m", c.residual_rms},
+                      {"max_jump_between_rays_m", c.max_jump},
                       {"noise_sigma_m", c.noise_sigma}});
     }
     j["contours"] = cs;
@@ -665,33 +714,50 @@ nlohmann::json to_json(const Measurement& m)
 cv::Mat draw_top_overlay(const Record& rec, const Measurement& m)
 {
     if (m.top_image.empty()) throw ParameterError("draw_top_overlay: the record has no readable top photo");
-    cv::Mat img = m.top_image.clone();
     const Camera cam = m.top_calibration && m.top_calibration->ok ? m.top_calibration->measured : rec.cameras.at("top");
-    auto circle_world = [&](double r, double z, const cv::Scalar& col, int th) {
+    // Crop to the specimen's reach and enlarge 2x with cubic interpolation, so
+    // a person can judge the traced edge to a fraction of a pixel.
+    constexpr double zoom = 2.0;
+    const Eigen::Vector2d c0 = cam.project({0, 0, 0});
+    const double reach = (cam.project({rec.R1 * 1.12, 0, 0}) - c0).norm();
+    cv::Rect roi(static_cast<int>(c0.x() - reach), static_cast<int>(c0.y() - reach), static_cast<int>(2 * reach),
+                 static_cast<int>(2 * reach) + 40);
+    roi.y -= 40;
+    roi &= cv::Rect(0, 0, m.top_image.cols, m.top_image.rows);
+    cv::Mat img;
+    cv::resize(m.top_image(roi), img, {}, zoom, zoom, cv::INTER_CUBIC);
+    constexpr int shift = 2; // sub-pixel drawing: coordinates * 4
+    auto P = [&](const Eigen::Vector2d& p) {
+        return cv::Point(static_cast<int>(std::lround(((p.x() - roi.x + 0.5) * zoom - 0.5) * (1 << shift))),
+                         static_cast<int>(std::lround(((p.y() - roi.y + 0.5) * zoom - 0.5) * (1 << shift))));
+    };
+    auto Pi = [&](const Eigen::Vector2d& p) {
+        const cv::Point q = P(p);
+        return cv::Point(q.x >> shift, q.y >> shift);
+    };
+    auto circle_world = [&](double r, double z, const cv::Scalar& col) {
         std::vector<cv::Point> pts;
         for (int k = 0; k < 360; ++k) {
             const double a = 2 * M_PI * k / 360;
-            const Eigen::Vector2d p = cam.project({r * std::cos(a), r * std::sin(a), z});
-            pts.emplace_back(static_cast<int>(std::lround(p.x() * 4)), static_cast<int>(std::lround(p.y() * 4)));
+            pts.push_back(P(cam.project({r * std::cos(a), r * std::sin(a), z})));
         }
-        cv::polylines(img, pts, true, col, th, cv::LINE_AA, 2);
+        cv::polylines(img, pts, true, col, 1, cv::LINE_AA, shift);
     };
-    circle_world(rec.R2, 0.0, cv::Scalar(255, 255, 0), 1);  // pedestal (cyan)
-    circle_world(rec.R1, 0.0, cv::Scalar(160, 160, 160), 1); // flat specimen for scale
+    circle_world(rec.R2, 0.0, cv::Scalar(255, 255, 0));  // pedestal edge (cyan)
+    circle_world(rec.R1, 0.0, cv::Scalar(150, 150, 150)); // flat specimen, for scale
     const auto& t = m.top;
     if (t.measured) {
         std::vector<cv::Point> pts;
-        for (const auto& p : t.outline_px)
-            pts.emplace_back(static_cast<int>(std::lround(p.x() * 4)), static_cast<int>(std::lround(p.y() * 4)));
-        cv::polylines(img, pts, true, cv::Scalar(0, 255, 0), 1, cv::LINE_AA, 2);
-        const Eigen::Vector2d c0 = cam.project({0, 0, 0});
+        for (const auto& p : t.outline_px) pts.push_back(P(p));
+        cv::polylines(img, pts, true, cv::Scalar(0, 230, 0), 1, cv::LINE_AA, shift);
         const int n = static_cast<int>(t.outline.size());
         for (std::size_t i = 0; i < t.metrics.node_angles_rad.size(); ++i) {
             const double a = t.metrics.node_angles_rad[i];
             int best = 0;
             double bd = 1e9;
             for (int k = 0; k < n; ++k) {
-                double tk = std::atan2(t.outline[static_cast<std::size_t>(k)].y(), t.outline[static_cast<std::size_t>(k)].x());
+                const auto& q = t.outline[static_cast<std::size_t>(k)];
+                double tk = std::atan2(q.y(), q.x());
                 if (tk < 0) tk += 2 * M_PI;
                 double d = std::abs(tk - a);
                 d = std::min(d, 2 * M_PI - d);
@@ -701,19 +767,22 @@ cv::Mat draw_top_overlay(const Record& rec, const Measurement& m)
                 }
             }
             const Eigen::Vector2d p = t.outline_px[static_cast<std::size_t>(best)];
-            cv::line(img, cv::Point2d(c0.x(), c0.y()), cv::Point2d(p.x(), p.y()), cv::Scalar(0, 200, 255), 1, cv::LINE_AA);
-            cv::circle(img, cv::Point2d(p.x(), p.y()), 6, cv::Scalar(0, 200, 255), 2, cv::LINE_AA);
-            cv::putText(img, std::to_string(i + 1), cv::Point2d(p.x() + 8, p.y() - 8), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-                        cv::Scalar(0, 120, 255), 1, cv::LINE_AA);
+            // Tick from the pedestal edge out to the crest: the fold's axis.
+            const Eigen::Vector2d e = cam.project({rec.R2 * std::cos(a), rec.R2 * std::sin(a), 0.0});
+            cv::line(img, P(e), P(p), cv::Scalar(0, 190, 255), 1, cv::LINE_AA, shift);
+            cv::circle(img, Pi(p), 7, cv::Scalar(0, 190, 255), 2, cv::LINE_AA);
+            const Eigen::Vector2d lab = p + (p - c0).normalized() * 12.0;
+            cv::putText(img, std::to_string(i + 1), Pi(lab) + cv::Point(-6, 6), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+                        cv::Scalar(0, 90, 230), 2, cv::LINE_AA);
         }
         char buf[200];
-        std::snprintf(buf, sizeof buf, "%s  D = %.1f %% (+-%.1f)  nodes = %d", m.specimen_id.c_str(),
+        std::snprintf(buf, sizeof buf, "%s  D = %.1f%% +-%.1f  nodes %d", m.specimen_id.c_str(),
                       t.metrics.drape_coefficient_percent, t.dc_uncertainty_percent, t.metrics.node_count);
         std::string text = buf;
-        if (m.lab_dc_percent) text += "  lab D = " + fmt("%.1f %%", *m.lab_dc_percent);
-        cv::putText(img, text, {12, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar(0, 0, 0), 2, cv::LINE_AA);
+        if (m.lab_dc_percent) text += "  (lab " + fmt("%.1f%%", *m.lab_dc_percent) + ")";
+        cv::putText(img, text, {10, 28}, cv::FONT_HERSHEY_SIMPLEX, 0.75, cv::Scalar(0, 0, 0), 2, cv::LINE_AA);
     } else {
-        cv::putText(img, m.specimen_id + ": top view not measured", {12, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.7,
+        cv::putText(img, m.specimen_id + ": top view not measured", {10, 28}, cv::FONT_HERSHEY_SIMPLEX, 0.75,
                     cv::Scalar(0, 0, 255), 2, cv::LINE_AA);
     }
     return img;

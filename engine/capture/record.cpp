@@ -2,6 +2,7 @@
 
 #include "engine/cloth/error.hpp"
 
+#include <Eigen/LU>
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>

@@ -26,6 +26,8 @@ struct SolverStatus {
     double sim_time = 0;         ///< [s] simulated time (dynamic)
     std::string message;
     bool converged() const { return outcome == Outcome::Converged; }
+    /// Time steps (dynamic) or Newton iterations (static).
+    long integrator_steps() const { return newton_iterations > 0 && sim_time == 0 ? newton_iterations : steps; }
 };
 std::string to_string(SolverStatus::Outcome o);
 

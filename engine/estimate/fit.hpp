@@ -39,6 +39,7 @@ struct FitOptions {
     int grid = 25;                ///< nodes across the specimen in the fit's simulations
     std::uint64_t seed = 1;       ///< drives the optimizer's randomness and the perturbation seeds
     int seeds_per_evaluation = 2; ///< perturbation seeds averaged per evaluation (node-count bifurcation)
+    int scan_evaluations = 6;     ///< bisection of a common bending on D before the global stage (0 = none)
     int global_evaluations = 0;   ///< CRS2 budget; 0 = 6 per fitted coordinate
     int local_evaluations = 0;    ///< BOBYQA budget; 0 = 8 per coordinate + 8
     bool uncertainty = true;      ///< Jacobian, covariance, intervals
@@ -101,6 +102,9 @@ struct FitResult {
 /// other sample/disc sizes). Throws ParameterError on no records or bad options.
 /// Cancellation (options.cancel) returns the best point so far with cancelled = true.
 FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options);
+
+/// Limits OpenBLAS (used by the sparse solver) to one thread when it is the BLAS in use.
+void single_threaded_blas();
 
 /// The parameters of `base` with areal density and thickness from the record.
 cloth::FabricParams params_for_record(const cloth::FabricParams& base, const MeasuredDrape& m);

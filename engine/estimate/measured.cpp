@@ -241,8 +241,11 @@ ContourFeatures contour_features(const cloth::RadialProfile& p, double depth_m, 
     f.cos4_m = f.series.a.size() >= 4 ? f.series.a[3] : 0;
     for (int k = 1; k <= f.series.harmonics(); ++k) f.magnitudes_m.push_back(f.series.magnitude(k));
     if (f.closed) {
+        // The shared node detector works on the smoothed series (as drape_metrics does).
+        const cloth::MetricOptions mo;
         cloth::DrapeMetrics dm;
-        cloth::find_nodes(p, cloth::MetricOptions{}, dm);
+        dm.fourier = cloth::fourier_fit(p, mo.smoothing_harmonics);
+        cloth::find_nodes(p, mo, dm);
         f.node_count = dm.node_count;
     }
     return f;

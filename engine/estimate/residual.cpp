@@ -49,7 +49,13 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
     }
     a.chi2 = all.ss;
     a.dof = std::max(1, static_cast<int>(terms.size()) - fitted);
+    // Beyond noise: the whole chi-square is too large, or one channel or one
+    // harmonic is (a structured residual is diluted in the total; each group
+    // test is at ~3 sigma of its own chi-square, n + 4 sqrt(2 n)).
+    auto group_exceeds = [](const Acc& g) { return g.n >= 3 && g.ss > g.n + 4.0 * std::sqrt(2.0 * g.n); };
     a.exceeds_noise = a.chi2 > a.dof + 3.0 * std::sqrt(2.0 * a.dof);
+    for (const auto& [k, g] : kinds) a.exceeds_noise |= group_exceeds(g);
+    for (const auto& [k, g] : harm) a.exceeds_noise |= group_exceeds(g);
     a.rms_m = n_m ? std::sqrt(ss_m / n_m) : 0.0;
     a.rms_whitened = all.rms();
     a.dc_error_percent = dc.mean();

@@ -14,7 +14,7 @@ namespace drape::estimate {
 struct ResidualAnalysis {
     double chi2 = 0;
     int dof = 0;                      ///< residual terms minus fitted coordinates
-    bool exceeds_noise = false;       ///< chi2 beyond dof + 3 sqrt(2 dof)
+    bool exceeds_noise = false;       ///< chi2 beyond dof + 3 sqrt(2 dof), or one channel / harmonic beyond its own 3-sigma chi2 bound
     double rms_m = 0;                 ///< RMS of the contour residuals in metres (radius, folds, harmonics)
     double rms_whitened = 0;          ///< RMS of all whitened residuals (1 = at the noise)
     std::vector<int> dominant_harmonics; ///< harmonics whose whitened residual RMS exceeds 2, largest first

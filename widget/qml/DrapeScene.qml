@@ -65,13 +65,6 @@ Item {
             mipFilter: Texture.Linear
         }
 
-        Texture {
-            id: floorTexture
-            textureData: root.controller.floorTextureData
-            generateMipmaps: true
-            mipFilter: Texture.Linear
-        }
-
         Repeater3D {
             model: root.controller.showColliders ? root.controller.colliders : []
             delegate: Model {
@@ -82,12 +75,22 @@ Item {
                 scale: modelData.scale
                 rotation: modelData.rotation
                 materials: PrincipledMaterial {
-                    baseColor: modelData.textured ? "#ff0000" : modelData.color
-                    baseColorMap: modelData.textured ? floorTexture : null
+                    baseColor: modelData.color
                     roughness: 0.95
                     specularAmount: 0.05
                     cullMode: Material.NoCulling
                 }
+            }
+        }
+
+        Model {
+            objectName: "floorBoards"
+            visible: root.controller.showColliders && root.controller.floorBoardsVisible
+            geometry: root.controller.floorBoards
+            materials: PrincipledMaterial {
+                baseColor: "#1e1e1e"
+                roughness: 0.95
+                specularAmount: 0.05
             }
         }
 

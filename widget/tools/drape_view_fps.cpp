@@ -56,8 +56,6 @@ int main(int argc, char** argv)
     view.setGridSize(cl.value("grid").toInt());
     view.setFabricPreset(cl.value("preset"));
     view.controller()->createCloth();
-    const int targetVertices = 0;
-    (void)targetVertices;
     qint64 meshAt = -1, firstFrameAt = -1, firstRenderAt = -1;
     QObject::connect(view.controller(), &drape::widget::DrapeController::meshChanged, [&] {
         if (meshAt < 0) meshAt = t.elapsed();

@@ -1,0 +1,413 @@
+#include "report.hpp"
+
+#include "plot.hpp"
+
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/fabric_io.hpp"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numbers>
+#include <sstream>
+
+namespace drape::estimate {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+std::string fmt(const char* f, double v)
+{
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
+}
+
+std::string safe(const std::string& id)
+{
+    std::string s = id;
+    for (char& c : s)
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_')) c = '_';
+    return s;
+}
+
+/// r at angle theta [rad] of a profile (linear interpolation, NaN-aware).
+double sample(const cloth::RadialProfile& p, double theta)
+{
+    const int n = p.size();
+    double t = std::fmod(theta, 2 * kPi);
+    if (t < 0) t += 2 * kPi;
+    const double u = t / (2 * kPi) * n;
+    const int k = static_cast<int>(std::floor(u)) % n;
+    const double f = u - std::floor(u);
+    return (1 - f) * p.r[k] + f * p.r[(k + 1) % n];
+}
+
+/// Rotation [rad] that best lines the simulated folds up with the measured
+/// ones at the deepest common depth (fold positions are random, so the plots
+/// compare shapes after this rotation; the fit itself never uses phases).
+double best_rotation(const RecordFit& rf)
+{
+    if (rf.measured.contours.empty() || rf.simulations.empty()) return 0;
+    const auto& m = rf.measured.contours.back();
+    const cloth::Slice* s = nullptr;
+    for (const auto& sl : rf.simulations.front().slices)
+        if (std::abs(sl.depth_m - m.depth_m) < 1e-9) s = &sl;
+    if (!s) return 0;
+    double best = 0, best_err = HUGE_VAL;
+    for (int a = 0; a < 360; ++a) {
+        const double phi = a * kPi / 180;
+        double e = 0;
+        int used = 0;
+        for (int k = 0; k < m.profile.size(); k += 2) {
+            const double rs = sample(s->profile, m.profile.theta(k) - phi);
+            if (!std::isfinite(rs)) continue;
+            e += (rs - m.profile.r[k]) * (rs - m.profile.r[k]);
+            ++used;
+        }
+        if (used && e / used < best_err) best_err = e / used, best = phi;
+    }
+    return best;
+}
+
+void profile_xy(const cloth::RadialProfile& p, double rot, std::vector<double>& x, std::vector<double>& y, double scale = 1e3)
+{
+    x.clear();
+    y.clear();
+    for (int k = 0; k < p.size(); ++k) {
+        const double t = p.theta(k) + rot;
+        x.push_back(p.r[k] * std::cos(t) * scale);
+        y.push_back(p.r[k] * std::sin(t) * scale);
+    }
+}
+
+void outline_plot(const RecordFit& rf, double rot, const std::string& path)
+{
+    Plot pl(640, 680, rf.measured.id + ": contours measured (blue) vs fitted (red)", "x (warp) [mm]", "y (weft) [mm]");
+    pl.equal_aspect();
+    std::vector<double> x, y;
+    const int nd = static_cast<int>(rf.measured.contours.size());
+    for (int d = 0; d < nd; ++d) {
+        profile_xy(rf.measured.contours[d].profile, 0, x, y);
+        pl.line(x, y, palette(d, nd), d == nd - 1 ? "measured contours" : "", 2, false, true);
+    }
+    if (!rf.simulations.empty()) {
+        const auto& sim = rf.simulations.front();
+        int d = 0;
+        for (const auto& s : sim.slices) {
+            profile_xy(s.profile, rot, x, y);
+            pl.line(x, y, palette(d, nd, true), d == nd - 1 ? "fitted slices" : "", 1, true, true);
+            ++d;
+        }
+        x.clear();
+        y.clear();
+        for (const auto& v : sim.outline) {
+            const double t = std::atan2(v.y(), v.x()) + rot, r = v.norm();
+            x.push_back(r * std::cos(t) * 1e3);
+            y.push_back(r * std::sin(t) * 1e3);
+        }
+        pl.line(x, y, {120, 120, 120}, "fitted shadow outline", 1, true, true);
+    }
+    x.clear();
+    y.clear();
+    for (int k = 0; k <= 180; ++k) {
+        x.push_back(rf.measured.disc_diameter / 2 * std::cos(k * 2 * kPi / 180) * 1e3);
+        y.push_back(rf.measured.disc_diameter / 2 * std::sin(k * 2 * kPi / 180) * 1e3);
+    }
+    pl.line(x, y, {0, 0, 0}, "support disc", 1);
+    const double R = rf.measured.sample_diameter / 2 * 1e3;
+    pl.set_xrange(-R, R);
+    pl.set_yrange(-R, R);
+    pl.set_caption("fitted drape rotated by " + fmt("%.0f", rot * 180 / kPi) +
+                   " deg to line up its folds (fold positions are random; the fit compares phase-free features)");
+    pl.save(path);
+}
+
+bool top_overlay(const RecordFit& rf, double rot, const std::string& path)
+{
+    if (!rf.measured.top_camera || rf.measured.top_photo.empty()) return false;
+    cv::Mat img = cv::imread(rf.measured.top_photo, cv::IMREAD_COLOR);
+    if (img.empty()) return false;
+    const PinholeCamera& cam = *rf.measured.top_camera;
+    auto draw = [&](const std::vector<Eigen::Vector3d>& pts, cv::Scalar c, int t, bool closed) {
+        std::vector<cv::Point> px;
+        for (const auto& p : pts) {
+            const Eigen::Vector2d u = cam.project(p);
+            px.push_back(cv::Point(static_cast<int>(std::lround(u.x())), static_cast<int>(std::lround(u.y()))));
+        }
+        cv::polylines(img, px, closed, c, t, cv::LINE_AA);
+    };
+    for (const auto& c : rf.measured.contours) {
+        std::vector<Eigen::Vector3d> pts;
+        for (int k = 0; k < c.profile.size(); ++k)
+            pts.push_back({c.profile.r[k] * std::cos(c.profile.theta(k)), c.profile.r[k] * std::sin(c.profile.theta(k)), -c.depth_m});
+        draw(pts, cv::Scalar(255, 160, 0), 1, true);
+    }
+    if (!rf.simulations.empty()) {
+        const auto& sim = rf.simulations.front();
+        for (const auto& s : sim.slices) {
+            std::vector<Eigen::Vector3d> pts;
+            for (int k = 0; k < s.profile.size(); ++k) {
+                if (!std::isfinite(s.profile.r[k])) continue;
+                const double t = s.profile.theta(k) + rot;
+                pts.push_back({s.profile.r[k] * std::cos(t), s.profile.r[k] * std::sin(t), -s.depth_m});
+            }
+            if (pts.size() > 2) draw(pts, cv::Scalar(40, 40, 230), 1, true);
+        }
+        std::vector<Eigen::Vector3d> outline;
+        const double zmean = sim.hem.mean_z;
+        for (const auto& v : sim.outline) {
+            const double t = std::atan2(v.y(), v.x()) + rot, r = v.norm();
+            outline.push_back({r * std::cos(t), r * std::sin(t), zmean});
+        }
+        if (outline.size() > 2) draw(outline, cv::Scalar(0, 220, 255), 2, true);
+    }
+    // Crop to the specimen (its flat radius projected at the pedestal top) and
+    // enlarge, so the contours can be told apart.
+    {
+        const double R = rf.measured.sample_diameter / 2 * 1.1;
+        double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
+        for (int k = 0; k < 36; ++k) {
+            const Eigen::Vector2d u = cam.project({R * std::cos(k * kPi / 18), R * std::sin(k * kPi / 18), 0.0});
+            u0 = std::min(u0, u.x()), u1 = std::max(u1, u.x()), v0 = std::min(v0, u.y()), v1 = std::max(v1, u.y());
+        }
+        const cv::Rect roi = cv::Rect(cv::Point(static_cast<int>(u0), static_cast<int>(v0)), cv::Point(static_cast<int>(u1), static_cast<int>(v1))) &
+                             cv::Rect(0, 0, img.cols, img.rows);
+        if (roi.area() > 100) {
+            cv::Mat crop;
+            cv::resize(img(roi), crop, cv::Size(), 2.0, 2.0, cv::INTER_CUBIC);
+            cv::Mat canvas(crop.rows + 50, crop.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+            crop.copyTo(canvas(cv::Rect(0, 50, crop.cols, crop.rows)));
+            img = canvas;
+        }
+    }
+    cv::putText(img, rf.measured.id + ": measured contours (blue), fitted slices (red), fitted shadow outline at mean hem height (yellow)",
+                cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(img, "fitted drape rotated by " + fmt("%.0f", rot * 180 / kPi) + " deg to line up its folds (fold positions are random)",
+                cv::Point(10, 40), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    if (!cv::imwrite(path, img)) throw FileError(path + ": cannot write the PNG");
+    return true;
+}
+
+void r_theta_plot(const RecordFit& rf, double rot, const std::string& path)
+{
+    Plot pl(900, 520, rf.measured.id + ": r(theta) per depth, measured (solid) vs fitted (dashed)", "theta [deg] (0 = warp, 90 = weft)",
+            "r [mm]");
+    const int nd = static_cast<int>(rf.measured.contours.size());
+    for (int d = 0; d < nd; ++d) {
+        const auto& c = rf.measured.contours[d];
+        std::vector<double> t, r;
+        for (int k = 0; k < c.profile.size(); ++k) {
+            t.push_back(c.profile.theta(k) * 180 / kPi);
+            r.push_back(c.profile.r[k] * 1e3);
+        }
+        pl.line(t, r, palette(d, nd), d == 0 || d == nd - 1 ? "measured " + fmt("%.0f mm", c.depth_m * 1e3) : "", 2);
+        if (!rf.simulations.empty()) {
+            for (const auto& s : rf.simulations.front().slices) {
+                if (std::abs(s.depth_m - c.depth_m) > 1e-9) continue;
+                std::vector<double> ts, rs;
+                for (int k = 0; k < 360; ++k) {
+                    ts.push_back(k);
+                    rs.push_back(sample(s.profile, k * kPi / 180 - rot) * 1e3);
+                }
+                pl.line(ts, rs, palette(d, nd, true), d == 0 || d == nd - 1 ? "fitted " + fmt("%.0f mm", c.depth_m * 1e3) : "", 1, true);
+            }
+        }
+    }
+    pl.set_xrange(0, 360);
+    pl.set_caption("depths " + fmt("%.0f", rf.measured.contours.front().depth_m * 1e3) + ".." +
+                   fmt("%.0f mm", rf.measured.contours.back().depth_m * 1e3) + " below the pedestal top; fitted rotated by " +
+                   fmt("%.0f deg", rot * 180 / kPi));
+    pl.save(path);
+}
+
+void harmonic_plot(const FitResult& fr, int record, const std::string& path)
+{
+    const auto& rf = fr.records[record];
+    Plot pl(760, 460, rf.measured.id + ": residual per harmonic (fitted - measured) / noise", "harmonic k", "whitened residual");
+    const int nd = static_cast<int>(rf.measured.contours.size());
+    const double w = 0.8 / std::max(1, nd);
+    for (int d = 0; d < nd; ++d) {
+        std::vector<double> k, v;
+        for (const auto& t : fr.residuals)
+            if (t.record == record && t.kind == "harmonic" && std::abs(t.depth_m - rf.measured.contours[d].depth_m) < 1e-9) {
+                k.push_back(t.harmonic - 0.4 + w * (d + 0.5));
+                v.push_back(t.whitened());
+            }
+        pl.bars(k, v, 0.45 * w, palette(d, nd), d == 0 || d == nd - 1 ? fmt("depth %.0f mm", rf.measured.contours[d].depth_m * 1e3) : "");
+    }
+    pl.hline(2, {200, 0, 0});
+    pl.hline(-2, {200, 0, 0});
+    pl.hline(0, {0, 0, 0}, false);
+    pl.set_caption("bars: harmonic magnitude |c_k| residual per depth; dashed: +-2 sigma (noise: laser + drape-to-drape spread)");
+    pl.save(path);
+}
+
+void parameter_plot(const FitResult& fr, const std::string& path)
+{
+    std::vector<const ParamEstimate*> fitted;
+    for (const auto& e : fr.estimates)
+        if (e.role == "fitted") fitted.push_back(&e);
+    const int n = static_cast<int>(fitted.size());
+    Plot pl(820, 130 + 55 * std::max(n, 1), "fitted parameters: 95 % intervals relative to the estimate",
+            "decades from the estimate (friction: absolute difference)", "");
+    std::vector<std::pair<double, std::string>> labels;
+    for (int i = 0; i < n; ++i) {
+        const auto& e = *fitted[i];
+        const bool lg = e.key != "friction_coefficient";
+        auto c = [&](double v) { return lg ? std::log10(std::max(v, 1e-300) / e.value) : v - e.value; };
+        const Rgb col = e.constrained ? Rgb{30, 140, 60} : Rgb{210, 60, 40};
+        const double y = n - i;
+        pl.interval(std::max(-1.5, c(e.lower95)), 0.0, std::min(1.5, c(e.upper95)), y, col);
+        labels.push_back({y, e.key});
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "%.3g %s  [%.3g .. %.3g]%s", e.value, e.unit.c_str(), e.lower95, e.upper95,
+                      e.constrained ? "" : "  NOT CONSTRAINED");
+        pl.text(-1.45, y + 0.25, buf, {40, 40, 40});
+    }
+    pl.set_xrange(-1.5, 1.5);
+    pl.set_yrange(0.3, n + 0.7);
+    pl.set_yticklabels(labels);
+    pl.set_caption("green: constrained by the data; red: not constrained (interval wider than a decade, or at a fit bound)");
+    pl.save(path);
+}
+
+std::string num(double v, const char* f = "%.3g") { return std::isfinite(v) ? fmt(f, v) : std::string("n/a"); }
+
+} // namespace
+
+std::string parameter_table_markdown(const FitResult& r)
+{
+    std::ostringstream o;
+    o << "| parameter | unit | role | value | 95 % interval | constrained | note |\n|---|---|---|---|---|---|---|\n";
+    for (const auto& e : r.estimates) {
+        o << "| " << e.key << " | " << e.unit << " | " << e.role << " | " << num(e.value) << " | ";
+        if (e.role == "fitted") o << num(e.lower95) << " .. " << num(e.upper95);
+        else o << "-";
+        o << " | " << (e.constrained ? "yes" : "**no**") << " | " << e.note << " |\n";
+    }
+    return o.str();
+}
+
+std::vector<std::string> write_fit_report(const FitResult& r, const std::string& dir, const std::string& preset_path)
+{
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw FileError(dir + ": cannot create the report folder (" + ec.message() + ")");
+    std::vector<std::string> files;
+    const fs::path root(dir);
+    std::ostringstream md;
+    md << "# Fit report: " << r.params.name << "\n\n";
+    md << "Model `" << to_string(r.options.model) << "`, grid " << r.options.grid << ", seed " << r.options.seed << ", "
+       << r.options.seeds_per_evaluation << " perturbation seeds per evaluation. " << r.evaluations << " evaluations, "
+       << r.simulations << " simulations, " << num(r.seconds_per_simulation, "%.2f") << " s per simulation, "
+       << num(r.wall_seconds, "%.0f") << " s in all" << (r.cancelled ? " (**cancelled**: best point so far)" : "") << ".\n\n";
+    if (!preset_path.empty()) md << "Preset: `" << preset_path << "`.\n\n";
+    md << "## Parameters\n\n" << parameter_table_markdown(r) << "\n";
+    parameter_plot(r, (root / "parameters.png").string());
+    files.push_back("parameters.png");
+    md << "![parameters](parameters.png)\n\n";
+    const int n = static_cast<int>(r.variables.size());
+    if (n > 1 && r.correlation.size()) {
+        md << "Correlations of the fitted (log) parameters:\n\n|   |";
+        for (const auto& v : r.variables) md << " " << v.name << " |";
+        md << "\n|---|";
+        for (int i = 0; i < n; ++i) md << "---|";
+        md << "\n";
+        for (int i = 0; i < n; ++i) {
+            md << "| " << r.variables[i].name << " |";
+            for (int k = 0; k < n; ++k) md << " " << num(r.correlation(i, k), "%.2f") << " |";
+            md << "\n";
+        }
+        md << "\n";
+    }
+    md << "## Records\n\n| record | D1/D2 [mm] | D measured [%] | D fitted [%] | D error | nodes measured | nodes fitted | node error |\n"
+          "|---|---|---|---|---|---|---|---|\n";
+    for (const auto& rf : r.records)
+        md << "| " << rf.measured.id << " | " << num(rf.measured.sample_diameter * 1e3, "%.0f") << "/"
+           << num(rf.measured.disc_diameter * 1e3, "%.0f") << " | " << num(rf.measured_features.drape_coefficient_percent, "%.1f")
+           << " | " << num(rf.simulated_features.drape_coefficient_percent, "%.1f") << " | " << num(rf.dc_error_percent, "%+.1f")
+           << " | " << num(rf.measured_features.node_count, "%.0f") << " | " << num(rf.simulated_features.node_count, "%.1f") << " | "
+           << num(rf.node_error, "%+.1f") << " |\n";
+    md << "\nMeasured node counts: " << (r.records.empty() ? "" : r.records.front().measured.node_source)
+       << "; fitted: the same detector on the simulated drape (mean over the seeds).\n\n";
+
+    json recs = json::array();
+    for (int i = 0; i < static_cast<int>(r.records.size()); ++i) {
+        const auto& rf = r.records[i];
+        const std::string id = safe(rf.measured.id);
+        const double rot = best_rotation(rf);
+        md << "### " << rf.measured.id << "\n\n";
+        if (top_overlay(rf, rot, (root / (id + "_top_overlay.png")).string())) {
+            files.push_back(id + "_top_overlay.png");
+            md << "![top overlay](" << id << "_top_overlay.png)\n\n";
+        }
+        outline_plot(rf, rot, (root / (id + "_contours.png")).string());
+        r_theta_plot(rf, rot, (root / (id + "_r_theta.png")).string());
+        harmonic_plot(r, i, (root / (id + "_harmonics.png")).string());
+        files.insert(files.end(), {id + "_contours.png", id + "_r_theta.png", id + "_harmonics.png"});
+        md << "![contours](" << id << "_contours.png)\n\n![r(theta)](" << id << "_r_theta.png)\n\n![harmonics](" << id
+           << "_harmonics.png)\n\n";
+        md << "| depth [mm] | mean r measured / fitted [mm] | RMS fold amplitude measured / fitted [mm] | nodes measured / fitted |\n|---|---|---|---|\n";
+        json depths = json::array();
+        for (std::size_t d = 0; d < rf.measured_features.contours.size(); ++d) {
+            const auto& m = rf.measured_features.contours[d];
+            const auto& s = rf.simulated_features.contours[d];
+            md << "| " << num(m.depth_m * 1e3, "%.0f") << " | " << num(m.mean_radius_m * 1e3, "%.1f") << " / "
+               << num(s.mean_radius_m * 1e3, "%.1f") << " | " << num(m.fold_rms_m * 1e3, "%.2f") << " / " << num(s.fold_rms_m * 1e3, "%.2f")
+               << " | " << m.node_count << " / " << s.node_count << " |\n";
+            depths.push_back({{"depth_m", m.depth_m},
+                              {"measured_mean_radius_m", m.mean_radius_m},
+                              {"fitted_mean_radius_m", s.mean_radius_m},
+                              {"measured_fold_rms_m", m.fold_rms_m},
+                              {"fitted_fold_rms_m", s.fold_rms_m},
+                              {"measured_harmonic_magnitudes_m", m.magnitudes_m},
+                              {"fitted_harmonic_magnitudes_m", s.magnitudes_m}});
+        }
+        md << "\n";
+        recs.push_back({{"id", rf.measured.id}, {"rotation_for_plots_deg", rot * 180 / kPi}, {"depths", depths}});
+    }
+
+    const ResidualAnalysis& a = r.residual;
+    md << "## Residual analysis\n\n";
+    md << "chi2 = " << num(a.chi2, "%.1f") << " for " << a.dof << " degrees of freedom (RMS whitened residual "
+       << num(a.rms_whitened, "%.2f") << "; 1 = at the noise): the residual **" << (a.exceeds_noise ? "exceeds" : "is within")
+       << "** the measurement noise. RMS contour residual " << num(a.rms_m * 1e3, "%.2f") << " mm.\n\n";
+    md << "| channel | whitened RMS |\n|---|---|\n";
+    for (const auto& [k, v] : a.kind_rms) md << "| " << k << " | " << num(v, "%.2f") << " |\n";
+    md << "\nDominant harmonics (whitened RMS > 2): ";
+    if (a.dominant_harmonics.empty()) md << "none";
+    for (int k : a.dominant_harmonics) md << k << " ";
+    md << "\n\n";
+    if (a.candidate_effects.empty()) md << "No candidate effect: the model explains the record(s) to the noise level"
+                                        << (a.exceeds_noise ? " as far as the signatures checked can tell" : "") << ".\n";
+    for (std::size_t i = 0; i < a.candidate_effects.size(); ++i) md << "- **" << a.candidate_effects[i] << "**: " << a.evidence[i] << "\n";
+    md << "\nNoise model (1 sigma): laser " << num(r.options.noise.laser_m * 1e3, "%.2f") << " mm per point, D "
+       << num(r.options.noise.dc_lab_percent, "%.1f") << " % (drapemeter) + " << num(r.options.noise.dc_seed_percent, "%.1f")
+       << " % (drape-to-drape), nodes " << num(r.options.noise.nodes, "%.2f") << ", contour mean radius "
+       << num(r.options.noise.radius_seed_m * 1e3, "%.1f") << " mm, fold amplitude / harmonic magnitudes "
+       << num(r.options.noise.fold_seed_m * 1e3, "%.1f") << " mm (see docs/estimate.md).\n";
+
+    json rep = fit_to_json(r);
+    rep["records_detail"] = recs;
+    json terms = json::array();
+    for (const auto& t : r.residuals)
+        terms.push_back({{"record", t.record}, {"kind", t.kind}, {"depth_m", t.depth_m}, {"harmonic", t.harmonic}, {"simulated", t.simulated},
+                         {"measured", t.measured}, {"sigma", t.sigma}, {"whitened", t.whitened()}});
+    rep["residual_terms"] = terms;
+    cloth::write_file_atomic((root / "report.json").string(), rep.dump(2) + "\n");
+    cloth::write_file_atomic((root / "report.md").string(), md.str());
+    files.push_back("report.json");
+    files.push_back("report.md");
+    return files;
+}
+
+} // namespace drape::estimate

@@ -1,0 +1,302 @@
+// Capture layer on synthetic records with known answers, bad input, KES.
+#include "engine/capture/measure.hpp"
+#include "engine/cloth/error.hpp"
+#include "synthetic.hpp"
+
+#include <QtTest>
+
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+using namespace drape;
+
+namespace {
+
+fs::path temp_dir(const std::string& name)
+{
+    const fs::path d = fs::temp_directory_path() / ("drape_tst_capture_" + std::to_string(::getpid())) / name;
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+bool any_contains(const std::vector<std::string>& v, const std::string& needle)
+{
+    for (const auto& s : v)
+        if (s.find(needle) != std::string::npos) return true;
+    return false;
+}
+
+std::string join(const std::vector<std::string>& v)
+{
+    std::string s;
+    for (const auto& x : v) s += x + " | ";
+    return s;
+}
+
+const fs::path kSetA = fs::path(DRAPE_SHARED_DIR) / "data/drape-lab/set-a";
+
+} // namespace
+
+class TestCapture : public QObject {
+    Q_OBJECT
+private slots:
+    void cleanupTestCase() { fs::remove_all(fs::temp_directory_path() / ("drape_tst_capture_" + std::to_string(::getpid()))); }
+
+    void camera_projection_round_trip()
+    {
+        const auto cam = synth::true_camera();
+        const Eigen::Vector3d X(0.1, -0.05, -0.07);
+        const auto back = cam.backproject_to_plane(cam.project(X), X.z());
+        QVERIFY(back.has_value());
+        QVERIFY((*back - X).norm() < 1e-9);
+        // The optical centre is on the axis 0.88 m above the pedestal top.
+        QVERIFY((cam.centre() - Eigen::Vector3d(0, 0, 0.88)).norm() < 1e-12);
+    }
+
+    void synthetic_star_gives_known_d_and_nodes_data()
+    {
+        QTest::addColumn<int>("nodes");
+        QTest::addColumn<double>("amplitude");
+        QTest::addColumn<bool>("grey");
+        QTest::newRow("7 nodes burgundy") << 7 << 0.015 << false;
+        QTest::newRow("5 nodes grey (segmented by darkness)") << 5 << 0.020 << true;
+        QTest::newRow("9 nodes small folds") << 9 << 0.010 << false;
+    }
+    void synthetic_star_gives_known_d_and_nodes()
+    {
+        QFETCH(int, nodes);
+        QFETCH(double, amplitude);
+        QFETCH(bool, grey);
+        synth::Spec s;
+        s.nodes = nodes;
+        s.A = amplitude;
+        if (grey) s.fabric_bgr = cv::Scalar(66, 62, 60);
+        const auto dir = temp_dir(QTest::currentDataTag());
+        synth::write_record(dir, s);
+        const auto rec = capture::read_record(dir);
+        const auto m = capture::measure_record(rec);
+        QVERIFY2(m.top.measured, join(m.not_measured).c_str());
+        QCOMPARE(m.top.model.chromatic, !grey);
+        const double truth = synth::true_dc(s);
+        const double d = m.top.metrics.drape_coefficient_percent;
+        qInfo("true D %.2f %%, measured %.2f %% (+- %.2f), uncorrected %.2f %%", truth, d, m.top.dc_uncertainty_percent,
+              m.top.dc_plane_percent);
+        // The synthetic hem follows the chord model exactly, so what remains is
+        // edge placement: well inside the stated uncertainty.
+        QVERIFY2(std::abs(d - truth) < 0.5, qPrintable(QString("D %1 vs %2").arg(d).arg(truth)));
+        QVERIFY(std::abs(d - truth) <= m.top.dc_uncertainty_percent);
+        // Without the perspective correction D is far off: the correction matters.
+        QVERIFY(truth - m.top.dc_plane_percent > 3.0);
+        QCOMPARE(m.top.metrics.node_count, nodes);
+        // Crests at phase + 2 pi k / n.
+        for (double a : m.top.metrics.node_angles_rad) {
+            const double k = std::round((a - s.phase) * nodes / (2 * synth::kPi));
+            const double err = std::abs(a - s.phase - k * 2 * synth::kPi / nodes);
+            QVERIFY2(err < 2.0 * synth::kPi / 180, qPrintable(QString("node at %1 deg").arg(a * 180 / synth::kPi)));
+        }
+        // Radii of the outline, in metres, against the hem.
+        QVERIFY(std::abs(m.top.metrics.max_radius_m - (s.R0 + s.A)) < 1e-3);
+        QVERIFY(std::abs(m.top.metrics.min_radius_m - (s.R0 - s.A)) < 1e-3);
+        // Lowest hem: the height of the shortest hem radius on the chord.
+        QVERIFY(m.hem_min_height.has_value());
+        QVERIFY(std::abs(*m.hem_min_height - synth::hem_z(s, s.R0 - s.A)) < 3e-3);
+        // Only meta.json + top.jpg: the rest is listed as not measured.
+        QVERIFY(any_contains(m.not_measured, "contours"));
+        QVERIFY(any_contains(m.not_measured, "side view"));
+        // Overlay has the crop size and is not the plain photo.
+        const cv::Mat ov = capture::draw_top_overlay(rec, m);
+        QVERIFY(ov.cols > 600 && ov.rows > 600);
+        const auto j = capture::to_json(m);
+        QCOMPARE(j["node_count"].get<int>(), nodes);
+        QCOMPARE(j["node_angles_deg"].size(), static_cast<std::size_t>(nodes));
+        QVERIFY(j["hem_min_height_m"].is_number());
+        QVERIFY(j["not_measured"].size() >= 2);
+    }
+
+    void declared_pose_is_checked_against_the_chessboards()
+    {
+        synth::Spec s;
+        s.declared_t_offset = Eigen::Vector3d(0.004, -0.003, 0.0); // declared 5 mm off
+        const auto dir = temp_dir("pose");
+        synth::write_record(dir, s);
+        const auto rec = capture::read_record(dir);
+        const auto m = capture::measure_record(rec);
+        QVERIFY(m.top_calibration.has_value());
+        const auto& c = *m.top_calibration;
+        QVERIFY(c.ok);
+        QCOMPARE(static_cast<int>(c.boards_found.size()), 4);
+        QVERIFY2(c.rms_px_measured < 0.5, qPrintable(QString::number(c.rms_px_measured)));
+        QVERIFY(c.rms_px_declared > 3 * c.rms_px_measured);
+        const auto truth = synth::true_camera();
+        QVERIFY2((c.measured.centre() - truth.centre()).norm() < 1.5e-3,
+                 qPrintable(QString::number((c.measured.centre() - truth.centre()).norm())));
+        QVERIFY(any_contains(m.warnings, "disagree"));
+        // D is measured with the measured pose, so it is still right.
+        QVERIFY(std::abs(m.top.metrics.drape_coefficient_percent - synth::true_dc(s)) < 0.5);
+    }
+
+    void photo_without_fabric_is_flagged()
+    {
+        synth::Spec s;
+        s.fabric = false;
+        const auto dir = temp_dir("empty");
+        synth::write_record(dir, s);
+        const auto m = capture::measure_record(capture::read_record(dir));
+        QVERIFY(!m.top.measured);
+        QVERIFY2(any_contains(m.not_measured, "top view"), join(m.not_measured).c_str());
+        QVERIFY(capture::to_json(m)["drape_coefficient_percent"].is_null());
+    }
+
+    void truncated_jpeg_is_flagged()
+    {
+        synth::Spec s;
+        const auto dir = temp_dir("truncated");
+        synth::write_record(dir, s);
+        const auto size = fs::file_size(dir / "top.jpg");
+        fs::resize_file(dir / "top.jpg", size / 2);
+        const auto rec = capture::read_record(dir);
+        QVERIFY_THROWS_EXCEPTION(FileError, capture::load_image(rec, "top"));
+        try {
+            capture::load_image(rec, "top");
+        } catch (const FileError& e) {
+            QVERIFY(std::string(e.what()).find("truncated") != std::string::npos);
+            QVERIFY(std::string(e.what()).find("top.jpg") != std::string::npos);
+        }
+        const auto m = capture::measure_record(rec);
+        QVERIFY(!m.top.measured);
+        QVERIFY(any_contains(m.not_measured, "truncated"));
+    }
+
+    void wrong_image_size_is_flagged()
+    {
+        synth::Spec s;
+        const auto dir = temp_dir("size");
+        synth::write_record(dir, s);
+        cv::Mat small;
+        cv::resize(cv::imread((dir / "top.jpg").string()), small, cv::Size(640, 480));
+        cv::imwrite((dir / "top.jpg").string(), small);
+        const auto m = capture::measure_record(capture::read_record(dir));
+        QVERIFY(!m.top.measured);
+        QVERIFY2(any_contains(m.not_measured, "640 x 480"), join(m.not_measured).c_str());
+    }
+
+    void string_where_a_number_belongs_is_an_error()
+    {
+        auto j = synth::meta_json(synth::Spec{});
+        j["configuration"]["specimen_diameter_D1_mm"] = "300";
+        try {
+            capture::parse_meta(j.dump(), "/tmp/x", "x/meta.json");
+            QFAIL("no error");
+        } catch (const FileError& e) {
+            const std::string w = e.what();
+            QVERIFY2(w.find("configuration.specimen_diameter_D1_mm") != std::string::npos, e.what());
+            QVERIFY2(w.find("string") != std::string::npos, e.what());
+            QVERIFY(w.find("x/meta.json") != std::string::npos);
+        }
+        auto j2 = synth::meta_json(synth::Spec{});
+        j2["cameras"]["top"]["fx"] = "1280";
+        QVERIFY_THROWS_EXCEPTION(FileError, capture::parse_meta(j2.dump(), "/tmp/x", "meta.json"));
+        auto j3 = synth::meta_json(synth::Spec{});
+        j3["configuration"].erase("support_disc_diameter_D2_mm");
+        QVERIFY_THROWS_EXCEPTION(FileError, capture::parse_meta(j3.dump(), "/tmp/x", "meta.json"));
+        QVERIFY_THROWS_EXCEPTION(FileError, capture::parse_meta("{ not json", "/tmp/x", "meta.json"));
+    }
+
+    void unknown_fields_are_kept()
+    {
+        auto j = synth::meta_json(synth::Spec{});
+        j["operator"] = "A. N. Other";
+        const auto rec = capture::parse_meta(j.dump(), "/tmp/x", "meta.json");
+        QCOMPARE(rec.unknown_fields.size(), std::size_t(1));
+        QCOMPARE(rec.unknown_fields[0], std::string("operator"));
+        QCOMPARE(rec.raw["operator"].get<std::string>(), std::string("A. N. Other"));
+        QCOMPARE(rec.R1, 0.150); // mm -> m at the edge
+    }
+
+    void contours_missing_column_is_flagged()
+    {
+        synth::Spec s;
+        const auto dir = temp_dir("csv");
+        synth::write_record(dir, s);
+        {
+            std::ofstream f(dir / "contours.csv");
+            f << "depth_mm,theta_deg,x_mm\n";
+            for (int k = 0; k < 360; ++k) f << "5," << k << ",90.0\n";
+        }
+        const auto rec = capture::read_record(dir);
+        try {
+            capture::read_contours(rec);
+            QFAIL("no error");
+        } catch (const FileError& e) {
+            QVERIFY2(std::string(e.what()).find("y_mm") != std::string::npos, e.what());
+        }
+        const auto m = capture::measure_record(rec);
+        QVERIFY(m.top.measured); // the photo is still measured
+        QVERIFY(any_contains(m.not_measured, "missing column 'y_mm'"));
+        // A non-numeric cell names its line.
+        {
+            std::ofstream f(dir / "contours.csv");
+            f << "depth_mm,theta_deg,x_mm,y_mm\n5,0,90.0,0.0\n5,1,abc,1.0\n";
+        }
+        try {
+            capture::read_contours(rec);
+            QFAIL("no error");
+        } catch (const FileError& e) {
+            QVERIFY2(std::string(e.what()).find(":3:") != std::string::npos, e.what());
+        }
+    }
+
+    void contour_fourier_fit_reproduces_a_known_contour()
+    {
+        // r(theta) = 100 mm + 6 cos 6 theta + 2 sin 11 theta + noise 0.3 mm.
+        synth::Spec s;
+        const auto dir = temp_dir("fourier");
+        synth::write_record(dir, s);
+        std::mt19937 rng(3);
+        std::normal_distribution<double> n(0.0, 0.3);
+        {
+            std::ofstream f(dir / "contours.csv");
+            f << "depth_mm,theta_deg,x_mm,y_mm\n";
+            for (int k = 0; k < 360; ++k) {
+                const double th = k * synth::kPi / 180;
+                const double r = 100 + 6 * std::cos(6 * th) + 2 * std::sin(11 * th);
+                f << "10," << k << "," << r * std::cos(th) + n(rng) << "," << r * std::sin(th) + n(rng) << "\n";
+            }
+        }
+        const auto m = capture::measure_record(capture::read_record(dir));
+        QCOMPARE(m.contours.size(), std::size_t(1));
+        const auto& c = m.contours[0];
+        QVERIFY(std::abs(c.mean_radius - 0.100) < 1e-4);
+        QVERIFY(std::abs(c.fit.magnitude(6) - 0.006) < 1e-4);
+        QVERIFY(std::abs(c.fit.magnitude(11) - 0.002) < 1e-4);
+        QVERIFY(c.harmonics >= 11);
+        QVERIFY(c.residual_rms <= 1.1 * c.noise_sigma);
+    }
+
+    void missing_meta_is_an_error()
+    {
+        const auto dir = temp_dir("nometa");
+        QVERIFY_THROWS_EXCEPTION(FileError, capture::read_record(dir));
+    }
+
+    void gider_regression()
+    {
+        capture::KesValues k;
+        const double base = capture::gider_drape_coefficient(k);
+        QCOMPARE(base, 69.17);
+        // Each input enters with the paper's coefficient (linear regression).
+        k.two_hb = 1.0;
+        QVERIFY(std::abs(capture::gider_drape_coefficient(k) - base - 25.51) < 1e-9);
+        k = {};
+        k.w = 10.0; // 10 mg/cm^2 = 100 g/m^2
+        QVERIFY(std::abs(capture::gider_drape_coefficient(k) - base - 5.1) < 1e-9);
+        k = {};
+        k.miu = 0.2;
+        QVERIFY(std::abs(capture::gider_drape_coefficient(k) - base + 0.2 * 35.69) < 1e-9);
+    }
+};
+
+QTEST_APPLESS_MAIN(TestCapture)
+#include "tst_capture.moc"

@@ -1,0 +1,139 @@
+// Fit round trip on a small grid (unit): a record simulated with known
+// parameters is fitted; the parameters the drape constrains come back inside
+// their reported intervals, dampers are reported as not identifiable, and the
+// same seed gives the same fit.
+#include "engine/cloth/error.hpp"
+#include "engine/estimate/fit.hpp"
+
+#include <QTest>
+
+#include <cmath>
+
+using namespace drape;
+using namespace drape::estimate;
+using cloth::Param;
+
+namespace {
+cloth::FabricParams truth()
+{
+    cloth::FabricParams p;
+    p[Param::BendWarp] = 2.0e-5;
+    p[Param::BendWeft] = 8.0e-6;
+    p[Param::Shear] = 20;
+    p[Param::AreaDensity] = 0.2;
+    return p;
+}
+
+MeasuredDrape synthetic(const cloth::FabricParams& p, double D1, double D2, int grid, std::uint64_t seed)
+{
+    cloth::DrapeSetup s;
+    s.sample_diameter = D1;
+    s.disc_diameter = D2;
+    s.grid = grid;
+    s.seed = seed;
+    const cloth::DrapeResult r = cloth::simulate_drape(p, s);
+    return synthesize_record(r, s, p, 0.3e-3, seed + 100, "synthetic");
+}
+
+const ParamEstimate& est(const FitResult& r, Param p)
+{
+    for (const auto& e : r.estimates)
+        if (e.id == p) return e;
+    throw std::logic_error("missing estimate");
+}
+} // namespace
+
+class TestFit : public QObject {
+    Q_OBJECT
+private slots:
+    void roundTripSmallGrid()
+    {
+        const auto p = truth();
+        const MeasuredDrape rec = synthetic(p, 0.30, 0.15, 21, 7);
+        QVERIFY(rec.contours.size() >= 3);
+        FitOptions o;
+        o.grid = 21;
+        o.seed = 1;
+        o.seeds_per_evaluation = 1;
+        o.scan_evaluations = 6;
+        o.global_evaluations = 4;
+        o.local_evaluations = 8;
+        const FitResult r = fit_fabric({rec}, o);
+        QVERIFY(!r.cancelled);
+        QVERIFY(r.simulations > 0 && r.seconds_per_simulation > 0);
+        // the bending stiffnesses (what a drape constrains) are inside their 95 % intervals
+        for (Param q : {Param::BendWarp, Param::BendWeft}) {
+            const auto& e = est(r, q);
+            QCOMPARE(e.role, std::string("fitted"));
+            qInfo("%s: truth %.3g fitted %.3g [%.3g, %.3g] constrained %d", e.key.c_str(), p[q], e.value, e.lower95, e.upper95,
+                  int(e.constrained));
+            QVERIFY(e.lower95 <= p[q] && p[q] <= e.upper95);
+        }
+        // the fitted drape matches the record's D within 2 points (issue 4's acceptance)
+        qInfo("D measured %.2f fitted %.2f, nodes %.1f vs %.1f", r.records[0].measured_features.drape_coefficient_percent,
+              r.records[0].simulated_features.drape_coefficient_percent, r.records[0].measured_features.node_count,
+              r.records[0].simulated_features.node_count);
+        QVERIFY(std::abs(r.records[0].dc_error_percent) < 2.0);
+        // declared and non-identifiable parameters are reported as such
+        QCOMPARE(est(r, Param::AreaDensity).role, std::string("declared"));
+        QCOMPARE(est(r, Param::AreaDensity).value, rec.areal_density);
+        for (Param q : {Param::DampStretch, Param::DampShear, Param::DampBend, Param::DampAir}) {
+            QCOMPARE(est(r, q).role, std::string("not identifiable"));
+            QVERIFY(!est(r, q).constrained);
+        }
+        // the preset JSON lists them as not constrained and carries the residual object
+        const auto j = fit_to_json(r);
+        QVERIFY(j["fit"]["not_constrained"].size() >= 4);
+        QVERIFY(j["residual"].contains("exceeds_noise"));
+        QVERIFY(j["residual"].contains("dominant_harmonics"));
+        QVERIFY(j["residual"].contains("candidate_effects"));
+        QVERIFY(j["residual"]["rms_m"].get<double>() >= 0);
+    }
+
+    void sameSeedSameFit()
+    {
+        const MeasuredDrape rec = synthetic(truth(), 0.30, 0.15, 17, 3);
+        FitOptions o;
+        o.grid = 17;
+        o.seed = 4;
+        o.seeds_per_evaluation = 2;
+        o.scan_evaluations = 2;
+        o.global_evaluations = 3;
+        o.local_evaluations = 3;
+        o.uncertainty = false;
+        const FitResult a = fit_fabric({rec}, o);
+        const FitResult b = fit_fabric({rec}, o);
+        QCOMPARE(a.evaluations, b.evaluations);
+        QCOMPARE(a.chi2, b.chi2);
+        for (int i = 0; i < a.best_coords.size(); ++i) QCOMPARE(a.best_coords[i], b.best_coords[i]);
+    }
+
+    void cancellationKeepsBestSoFar()
+    {
+        const MeasuredDrape rec = synthetic(truth(), 0.30, 0.15, 15, 2);
+        std::atomic<bool> cancel{false};
+        FitOptions o;
+        o.grid = 15;
+        o.seeds_per_evaluation = 1;
+        o.cancel = &cancel;
+        int calls = 0;
+        o.progress = [&](const FitProgress& p) {
+            QVERIFY(p.evaluation <= p.planned || p.stage == "done");
+            if (++calls == 3) cancel = true;
+        };
+        const FitResult r = fit_fabric({rec}, o);
+        QVERIFY(r.cancelled);
+        QVERIFY(r.evaluations >= 3 && r.evaluations <= 4);
+        QVERIFY(std::isfinite(r.chi2));
+    }
+
+    void badInputThrows()
+    {
+        QVERIFY_THROWS_EXCEPTION(ParameterError, fit_fabric({}, FitOptions{}));
+        MeasuredDrape empty;
+        QVERIFY_THROWS_EXCEPTION(ParameterError, fit_fabric({empty}, FitOptions{}));
+    }
+};
+
+QTEST_APPLESS_MAIN(TestFit)
+#include "tst_fit.moc"

@@ -1,0 +1,162 @@
+// Record loading, features and the residual analysis: no simulations, fast.
+#include "engine/cloth/error.hpp"
+#include "engine/estimate/measured.hpp"
+#include "engine/estimate/objective.hpp"
+#include "engine/estimate/residual.hpp"
+
+#include <QTest>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+
+using namespace drape;
+using namespace drape::estimate;
+
+namespace {
+const std::string kSetA = std::string(DRAPE_SHARED_DIR) + "/data/drape-lab/set-a/";
+
+/// A circle of radius r0 [m] with `nodes` sinusoidal folds of amplitude a [m], shifted by (dx, dy).
+cloth::RadialProfile folded(double r0, int nodes, double a, double dx = 0, double dy = 0, int N = 360)
+{
+    cloth::Polygon2 poly;
+    for (int k = 0; k < 2000; ++k) {
+        const double t = 2 * std::numbers::pi * k / 2000;
+        const double r = r0 + a * std::cos(nodes * t);
+        poly.emplace_back(r * std::cos(t) + dx, r * std::sin(t) + dy);
+    }
+    return cloth::radial_profile(poly, N);
+}
+} // namespace
+
+class TestRecords : public QObject {
+    Q_OBJECT
+private slots:
+    void loadsLabRecordInSI()
+    {
+        const MeasuredDrape m = load_record(kSetA + "DL-A02");
+        QCOMPARE(m.id, std::string("DL-A02"));
+        QCOMPARE(m.sample_diameter, 0.300);
+        QCOMPARE(m.disc_diameter, 0.150);
+        QVERIFY(std::abs(m.areal_density - 0.120) < 1e-12); // 120 g/m^2
+        QVERIFY(std::abs(m.thickness - 0.35e-3) < 1e-12);
+        QCOMPARE(m.contours.size(), std::size_t(9));       // depths_mm 5..45 in meta.json
+        QVERIFY(std::abs(m.contours.front().depth_m - 0.005) < 1e-12);
+        for (const auto& c : m.contours) {
+            QCOMPARE(c.profile.size(), 360);
+            QVERIFY(c.profile.complete());
+            // every cut lies outside the 75 mm disc and inside the 150 mm specimen radius
+            for (double r : c.profile.r) QVERIFY(r > 0.075 - 1e-3 && r < 0.150);
+        }
+        QVERIFY(m.top_camera.has_value());
+        // the pedestal axis at the pedestal top projects near the principal point of the top camera
+        const Eigen::Vector2d c = m.top_camera->project({0, 0, 0});
+        QVERIFY(std::abs(c.x() - m.top_camera->cx) < 2 && std::abs(c.y() - m.top_camera->cy) < 2);
+    }
+
+    void badFolderThrowsFileError()
+    {
+        QVERIFY_THROWS_EXCEPTION(FileError, load_record("/nonexistent/record"));
+        const auto dir = std::filesystem::temp_directory_path() / "drape_est_bad_record";
+        std::filesystem::create_directories(dir);
+        std::ofstream(dir / "meta.json") << R"({"configuration": {"specimen_diameter_D1_mm": 300}})";
+        try {
+            load_record(dir.string());
+            QFAIL("expected an error");
+        } catch (const Error& e) {
+            QVERIFY(std::string(e.what()).find("support_disc_diameter_D2_mm") != std::string::npos); // names the field
+        }
+        std::filesystem::remove_all(dir);
+    }
+
+    void featuresArePhaseFree()
+    {
+        // The same folds turned by an arbitrary angle give the same features
+        // (except the axis-locked cos terms, which are zero for 7 folds).
+        const auto a = contour_features(folded(0.09, 7, 0.006), 0.01);
+        cloth::Polygon2 poly;
+        for (int k = 0; k < 2000; ++k) {
+            const double t = 2 * std::numbers::pi * k / 2000;
+            const double r = 0.09 + 0.006 * std::cos(7 * (t - 0.37));
+            poly.emplace_back(r * std::cos(t), r * std::sin(t));
+        }
+        const auto b = contour_features(cloth::radial_profile(poly, 360), 0.01);
+        QCOMPARE(a.node_count, 7);
+        QCOMPARE(b.node_count, 7);
+        QVERIFY(std::abs(a.mean_radius_m - b.mean_radius_m) < 2e-5);
+        QVERIFY(std::abs(a.magnitudes_m[6] - b.magnitudes_m[6]) < 2e-5);
+        QVERIFY(std::abs(a.magnitudes_m[6] - 0.006) < 1e-4);
+        QVERIFY(std::abs(a.fold_rms_m - 0.006 / std::sqrt(2.0)) < 1e-4);
+    }
+
+    void residualOnNoiseDoesNotCryWolf()
+    {
+        // Residual terms drawn from the noise itself: no discrepancy reported.
+        std::mt19937 rng(3);
+        std::normal_distribution<double> g(0, 1);
+        std::vector<ResidualTerm> terms;
+        for (int d = 1; d <= 6; ++d) {
+            for (const char* kind : {"mean_radius", "fold_rms", "cos2", "cos4"}) {
+                ResidualTerm t;
+                t.kind = kind;
+                t.depth_m = 0.005 * d;
+                t.sigma = 1e-3;
+                t.measured = 0.1;
+                t.simulated = 0.1 + 1e-3 * g(rng);
+                terms.push_back(t);
+            }
+            for (int k = 1; k <= 8; ++k) {
+                ResidualTerm t;
+                t.kind = "harmonic";
+                t.harmonic = k;
+                t.depth_m = 0.005 * d;
+                t.sigma = 1e-3;
+                t.measured = 0.003;
+                t.simulated = 0.003 + 1e-3 * g(rng);
+                terms.push_back(t);
+            }
+        }
+        const ResidualAnalysis a = analyse_residual(terms, 3);
+        QVERIFY(!a.exceeds_noise);
+        QVERIFY(a.candidate_effects.empty());
+        QVERIFY(a.dominant_harmonics.empty());
+    }
+
+    void offCentreContoursPointToHarmonicOne()
+    {
+        // A measured drape shifted by 4 mm against a centred model: the
+        // features differ in harmonic 1 and the analysis names the effect.
+        const NoiseModel noise;
+        DrapeFeatures meas, sim;
+        meas.drape_coefficient_percent = sim.drape_coefficient_percent = 35;
+        meas.node_count = sim.node_count = 7;
+        for (int d = 1; d <= 6; ++d) {
+            meas.contours.push_back(contour_features(folded(0.08 + 0.002 * d, 7, 0.001 * d, 0.004, 0.0), 0.005 * d));
+            sim.contours.push_back(contour_features(folded(0.08 + 0.002 * d, 7, 0.001 * d), 0.005 * d));
+        }
+        const std::vector<double> closed(6, 1.0);
+        const auto terms = residual_terms(0, meas, sim, closed, noise);
+        const ResidualAnalysis a = analyse_residual(terms, 3);
+        QVERIFY(a.exceeds_noise);
+        QVERIFY(!a.dominant_harmonics.empty());
+        QCOMPARE(a.dominant_harmonics.front(), 1);
+        QVERIFY(std::find(a.candidate_effects.begin(), a.candidate_effects.end(), "specimen_off_centre") != a.candidate_effects.end());
+        // and the centred pair is within the noise
+        const auto same = residual_terms(0, sim, sim, closed, noise);
+        QVERIFY(!analyse_residual(same, 3).exceeds_noise);
+    }
+
+    void modelVariants()
+    {
+        QCOMPARE(fit_variables(ModelVariant::Baseline).size(), std::size_t(3));
+        QVERIFY(fit_variables(ModelVariant::Full).size() > 3);
+        for (const auto& v : fit_variables(ModelVariant::Full))
+            for (auto p : v.params) QVERIFY(cloth::spec(p).affects_statics); // never fit a damper
+        QVERIFY_THROWS_EXCEPTION(ParameterError, parse_model_variant("nonsense"));
+    }
+};
+
+QTEST_APPLESS_MAIN(TestRecords)
+#include "tst_records.moc"

@@ -30,13 +30,14 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --seed K              perturbation seed (default 1)
   --out DIR             write summary.json, rest.obj, slices.csv, outline.csv
   --json                print the summary as JSON on stdout
-  --quiet               no progress on stderr)";
+  --quiet               no progress on stderr
+  --trace               print every static-solver iteration on stderr)";
 
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--fabric", "--sample-diameter", "--disc-diameter", "--pedestal-height", "--grid", "--integrator", "--dt",
                   "--tolerance", "--max-time", "--seed", "--out", "--edge-radius", "--max-iterations"},
-           {"--json", "--quiet"});
+           {"--json", "--quiet", "--trace"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     const auto fabric_arg = a.get("--fabric");
     if (!fabric_arg) throw UsageError("--fabric is required");
@@ -62,6 +63,7 @@ int run(const std::vector<std::string>& argv)
     ro.max_sim_time = a.get_double("--max-time", 60.0);
     if (!(ro.max_sim_time > 0)) throw UsageError("--max-time must be positive");
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
+    ro.trace = a.has("--trace");
     if (!quiet)
         ro.progress = [](const cloth::SolverStatus& st) {
             std::fprintf(stderr, "\r  %-8ld steps  residual %.2e  t=%.3fs  wall %.1fs   ", st.steps, st.residual, st.sim_time,

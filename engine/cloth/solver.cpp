@@ -407,11 +407,11 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
         H.assemble(s.x, md, 0.0, !exact);
         if (!analysed) {
             llt.cholmod().print = 0; // numerical outcomes are reported through the status, not stderr
-            llt.setMode(std::getenv("DRAPE_SIMPLICIAL") ? Eigen::CholmodSimplicialLLt : Eigen::CholmodSupernodalLLt);
+            llt.setMode(Eigen::CholmodSupernodalLLt);
             llt.analyzePattern(H.matrix());
             analysed = true;
-            if (std::getenv("DRAPE_DEBUG"))
-                std::fprintf(stderr, "n=%ld nnz=%ld lnz=%g fl=%g method=%d\n", (long)H.matrix().rows(), (long)H.matrix().nonZeros(),
+            if (opt.trace)
+                std::fprintf(stderr, "static solver: %ld unknowns, %ld Hessian entries, factor %g entries, %g flop per factorisation (method %d)\n", (long)H.matrix().rows(), (long)H.matrix().nonZeros(),
                              llt.cholmod().lnz, llt.cholmod().fl, llt.cholmod().selected);
         }
         llt.factorize(H.matrix());
@@ -473,7 +473,7 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
             continue;
         }
         s.x = trial;
-        if (std::getenv("DRAPE_DEBUG"))
+        if (opt.trace)
         {
             int imax = 0;
             f.rowwise().norm().maxCoeff(&imax);

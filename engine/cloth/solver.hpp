@@ -39,7 +39,7 @@ struct RestOptions {
     double max_sim_time = 60;     ///< give up after this much simulated time [s]
     long max_steps = 5'000'000;
     long max_newton = 1000;        ///< static solver
-    int threads = 0;              ///< 0 = hardware concurrency
+    bool trace = false;           ///< print each static iteration to stderr (residual, step, worst vertex)
     /// Called now and then with the status so far; return false to cancel.
     std::function<bool(const SolverStatus&)> progress;
     const std::atomic<bool>* cancel = nullptr;

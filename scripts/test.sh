@@ -9,8 +9,16 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DDRAPE_WERROR=$WERROR >
 cmake --build build -j"$(nproc)"
 # Each test is one process; CHOLMOD's OpenMP threads only pay on large solves.
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}
+status=0
 if [ "${1:-}" = "all" ]; then
-  ctest --test-dir build --output-on-failure -j2
+  ctest --test-dir build --output-on-failure -j2 || status=$?
 else
-  ctest --test-dir build --output-on-failure -j2 -L unit
+  ctest --test-dir build --output-on-failure -j2 -L unit || status=$?
 fi
+# The engine's unit tests again under the address and undefined-behaviour sanitizers.
+if [ "${DRAPE_SKIP_SANITIZE:-}" != "1" ]; then
+  cmake --preset sanitize >/dev/null
+  cmake --build --preset sanitize -j"$(nproc)"
+  ASAN_OPTIONS=detect_leaks=0 ctest --preset sanitize -j2 || status=$?
+fi
+exit $status

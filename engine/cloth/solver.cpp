@@ -484,6 +484,10 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
         else if (alpha < 0.25) h = std::max(h * 0.5, h_min);
     }
     st.max_speed = 0;
+    if (s.model().friction > 0)
+        st.message += std::string(st.message.empty() ? "" : "; ") +
+                      "the static solver treats contact as frictionless (a rest state with friction depends on the path: use "
+                      "the implicit or an explicit integrator)";
     st.force_evaluations = s.force_evaluations - f0;
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     return st;

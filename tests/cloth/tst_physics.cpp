@@ -155,6 +155,44 @@ private slots:
         QVERIFY(s->x.col(2).minCoeff() > -0.12 - 1e-3); // above the floor
     }
 
+    void coulomb_friction_on_an_incline()
+    {
+        // A small sheet on a plane tilted by 20 degrees (tan = 0.364): with
+        // mu = 0.6 it sticks, with mu = 0.1 it slides with a = g (sin - mu cos).
+        const double th = 20.0 * std::numbers::pi / 180.0;
+        const Eigen::Vector3d n(-std::sin(th), 0, std::cos(th)), down(std::cos(th), 0, std::sin(th));
+        for (double mu : {0.6, 0.1}) {
+            FabricParams p;
+            p[Param::Friction] = mu;
+            p[Param::DampAir] = 0;
+            p[Param::Thickness] = 0;
+            ClothMesh m = make_rectangle(0.02, 0.02, 3, 3);
+            ClothSystem s(m, make_model(m, p));
+            // Lay it on the plane through the origin.
+            for (int i = 0; i < s.vertex_count(); ++i) {
+                const Eigen::Vector3d q = m.X(i, 0) * down + m.X(i, 1) * Eigen::Vector3d::UnitY();
+                s.x.row(i) = q.transpose();
+            }
+            s.add_collider(std::make_shared<PlaneCollider>(Eigen::Vector3d::Zero(), n));
+            const Positions x0 = s.x;
+            Stepper st(s, Integrator::RK4);
+            const double dt = 0.5 * st.explicit_dt_limit();
+            double t = 0;
+            while (t < 0.3) {
+                QVERIFY(st.step(dt));
+                t += dt;
+            }
+            const double moved = -(s.x.row(4) - x0.row(4)).dot(down.transpose()); // along the slope, downhill
+            if (mu > 0.5) {
+                QVERIFY2(std::abs(moved) < 2e-3, qPrintable(QString("stuck sheet moved %1 m").arg(moved)));
+            } else {
+                const double a = 9.81 * (std::sin(th) - mu * std::cos(th));
+                QVERIFY2(std::abs(moved - 0.5 * a * t * t) < 0.05 * 0.5 * a * t * t,
+                         qPrintable(QString("slid %1 m, expected %2 m").arg(moved).arg(0.5 * a * t * t)));
+            }
+        }
+    }
+
     void run_to_rest_reports_divergence()
     {
         // An explicit step far above the stability limit must end as "diverged", not as garbage.

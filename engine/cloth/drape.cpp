@@ -154,6 +154,22 @@ std::unique_ptr<ClothSystem> make_drape_system(const FabricSpec& fabric, const D
         if (o.bending == BendingModel::Quadratic) o.bending = BendingModel::Flexion;
         model = make_seed_model(mesh, s, o);
     }
+    // Static friction holds the specimen's centre on the disc (see HorizontalAnchor):
+    // the vertex nearest the axis is tethered horizontally, stiff enough that the
+    // whole weight pulling sideways would move it 0.1 mm.
+    {
+        int centre = 0;
+        double best = 1e300;
+        for (int i = 0; i < mesh.vertex_count(); ++i) {
+            const double r = std::hypot(mesh.X(i, 0), mesh.X(i, 1));
+            if (r < best) {
+                best = r;
+                centre = i;
+            }
+        }
+        const double weight = model.total_mass() * model.gravity.norm();
+        model.anchors.push_back({centre, Eigen::Vector3d(mesh.X(centre, 0), mesh.X(centre, 1), 0.0), weight / 1e-4});
+    }
     auto sys = std::make_unique<ClothSystem>(std::move(mesh), std::move(model));
     // Start flat, just above the pedestal top (offset by half the thickness).
     sys->x.col(2).setConstant(sys->model().contact_offset + 1e-6);

@@ -47,11 +47,22 @@ struct ModelOptions {
     double contact_depth = 2e-6;
 };
 
+/// A horizontal tether of one vertex to a point: energy 1/2 k |P (x - target)|^2 with P
+/// the projection on the horizontal plane. It stands for the static friction that holds
+/// a specimen's centre on the drapemeter disc: without it a sheet on a frictionless disc
+/// is in unstable equilibrium against sliding sideways (the longer overhang pulls harder).
+struct HorizontalAnchor {
+    int vertex;
+    Eigen::Vector3d target; ///< [m]
+    double k;               ///< [N/m]
+};
+
 struct ClothModel {
     std::vector<Spring> springs;
     std::vector<BendStencil> bends;
     Eigen::VectorXd mass;             ///< [kg] per vertex
     std::vector<char> pinned;         ///< per vertex
+    std::vector<HorizontalAnchor> anchors;
     Eigen::Vector3d gravity{0, 0, -9.81}; ///< [m/s^2]
     double air_damping = 0;           ///< [1/s]
     double contact_offset = 0;        ///< [m] half the thickness
@@ -69,6 +80,8 @@ struct ClothModel {
 ///                     floored at E_u hv/hu / 2 so a large G never makes it soft)
 ///   shear diagonals   k = G (hu^2 + hv^2) / (2 hu hv)   (energy 1/2 G gamma^2 per unit area)
 ///   bending u stencil weights (1, -2, 1)/hu^2, k = B_u hu hv  (energy 1/2 B_u kappa^2 per unit area)
+///   twist stencil per cell, weights (1, -1, -1, 1)/(hu hv), k = 2 sqrt(B_u B_v) hu hv, so a fold
+///                     at any angle to the grid costs what it costs along a grid line
 ///   dampers use the same formulas with the damping coefficients.
 ///   mass              m_i = rho_A * (lumped vertex area)
 /// Hem nodes snapped onto the cut circle keep springs with their true rest

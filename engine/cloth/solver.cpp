@@ -228,7 +228,7 @@ bool Stepper::step(double dt)
         for (int i = 0; i < n; ++i)
             if (s.pinned(i)) y.row(i) = xn.row(i);
         const double wn = weight_norm(s);
-        for (int it = 0; it < 8; ++it) {
+        for (int it = 0; it < m_implicit_iterations; ++it) {
             // Gradient of phi (negated: the force).
             Positions g;
             s.conservative_forces(y, g);

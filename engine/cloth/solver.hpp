@@ -56,12 +56,16 @@ public:
     double explicit_dt_limit() const;
     Integrator integrator() const { return m_integ; }
     long linear_solves() const;
+    /// Newton iterations per implicit Euler step (1 = Baraff and Witkin's single
+    /// linearisation; more = closer to the exact backward Euler step). Default 2.
+    void set_implicit_iterations(int n) { m_implicit_iterations = n < 1 ? 1 : n; }
 
 private:
     struct Impl;
     ClothSystem& m_s;
     Integrator m_integ;
     Impl* m_impl;
+    int m_implicit_iterations = 2;
 };
 
 /// Runs until rest (or failure): dynamic integration with a rest test, or the

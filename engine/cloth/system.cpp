@@ -67,6 +67,10 @@ double ClothSystem::potential_energy(const Positions& X) const
         e += 0.5 * b.k * s.squaredNorm();
     }
     for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
+    for (const auto& a : m_model.anchors) {
+        const Vec3 d = X.row(a.vertex).transpose() - a.target;
+        e += 0.5 * a.k * (d.x() * d.x() + d.y() * d.y());
+    }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3&, const Collider&) { e += 0.5 * m_model.contact_stiffness(i) * phi * phi; });
     return e;
 }
@@ -104,6 +108,11 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (b.k * b.w[a] * s).transpose();
     }
     for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();
+    for (const auto& a : m_model.anchors) {
+        const Vec3 d = X.row(a.vertex).transpose() - a.target;
+        f(a.vertex, 0) -= a.k * d.x();
+        f(a.vertex, 1) -= a.k * d.y();
+    }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3& n, const Collider&) { f.row(i) -= (m_model.contact_stiffness(i) * phi * n).transpose(); });
 }
 
@@ -265,6 +274,11 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         double d = extra_diag.size() ? extra_diag(i) : 0.0;
         if (damping_scale != 0) d += damping_scale * m.air_damping * m.mass(i);
         if (d != 0) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], d * I);
+    }
+    for (const auto& a : m.anchors) {
+        Eigen::Matrix3d K = Eigen::Matrix3d::Zero();
+        K(0, 0) = K(1, 1) = a.k;
+        add_diag(m_diag_blocks[static_cast<std::size_t>(a.vertex)], K);
     }
     for_each_contact(m_s, X, [&](int i, double phi, const Vec3& nrm, const Collider& c) {
         Eigen::Matrix3d K = nrm * nrm.transpose();

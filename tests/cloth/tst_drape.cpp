@@ -40,6 +40,23 @@ private slots:
         QVERIFY(r.slices.front().profile.complete());
     }
 
+    void specimen_stays_centred_on_the_disc()
+    {
+        // A sheet on a frictionless disc is unstable against sliding sideways; the
+        // centre's static friction must keep it on the pedestal, also at a loose tolerance.
+        for (double tol : {1e-3, 1e-6}) {
+            DrapeSetup s = small(24);
+            RestOptions ro;
+            ro.residual = tol;
+            const DrapeResult r = simulate_drape(FabricParams(), s, ro);
+            QVERIFY(r.status.converged());
+            const Eigen::RowVector3d mean = r.x.colwise().mean();
+            QVERIFY2(std::hypot(mean.x(), mean.y()) < 5e-3, qPrintable(QString("centroid off-axis by %1 m").arg(std::hypot(mean.x(), mean.y()))));
+            QVERIFY(r.x.col(2).maxCoeff() > -1e-3); // still on the disc top
+            QVERIFY(r.hem.min_z > -0.115);          // not lying on the floor
+        }
+    }
+
     void stiffer_fabric_drapes_higher()
     {
         FabricParams limp, stiff;

@@ -29,6 +29,8 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
   --json              print a JSON summary (preset, intervals, records, residual) on stdout
   --model M           baseline (seed paper: bending warp/weft + shear, frictionless disc; default)
                       | full (also tensile stiffness warp/weft and disc friction)
+  --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
+                      are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 25)
   --seed K            optimizer and perturbation seed (default 1; same seed = same fit)
   --seeds S           perturbation seeds averaged per evaluation (default 2)
@@ -45,7 +47,7 @@ extern "C" void on_sigint(int) { g_cancel.store(true); }
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels"},
            {"--json", "--quiet", "--no-uncertainty"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
@@ -53,6 +55,11 @@ int run(const std::vector<std::string>& argv)
     estimate::FitOptions fo;
     try {
         fo.model = estimate::parse_model_variant(a.get_or("--model", "baseline"));
+    } catch (const Error& e) {
+        throw UsageError(std::string("--") + e.what());
+    }
+    try {
+        if (const auto ch = a.get("--channels")) fo.channels = estimate::parse_channels(*ch);
     } catch (const Error& e) {
         throw UsageError(std::string("--") + e.what());
     }
@@ -109,8 +116,11 @@ int run(const std::vector<std::string>& argv)
                         rf.measured.id.c_str(), rf.measured_features.drape_coefficient_percent,
                         rf.simulated_features.drape_coefficient_percent, rf.dc_error_percent, rf.measured_features.node_count,
                         rf.simulated_features.node_count, rf.node_error);
-        std::printf("\nchi2 %.1f for %d degrees of freedom; residual %s the measurement noise (RMS %.2f mm)\n", r.chi2, r.dof,
+        std::printf("\nchi2 %.1f for %d degrees of freedom; residual %s the measurement noise (contour RMS %.2f mm)\n", r.chi2, r.dof,
                     r.residual.exceeds_noise ? "EXCEEDS" : "is within", r.residual.rms_m * 1e3);
+        if (r.residual.held_out_terms > 0)
+            std::printf("held-out channels: %d terms, whitened RMS %.2f (fitted terms %.2f)\n", r.residual.held_out_terms,
+                        r.residual.held_out_rms_whitened, r.residual.fitted_rms_whitened);
         for (std::size_t i = 0; i < r.residual.candidate_effects.size(); ++i)
             std::printf("  candidate effect: %s (%s)\n", r.residual.candidate_effects[i].c_str(), r.residual.evidence[i].c_str());
         std::printf("%d evaluations, %ld simulations at grid %d, %.2f s per simulation, %.1f s in all%s\n", r.evaluations, r.simulations,

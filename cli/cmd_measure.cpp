@@ -2,12 +2,14 @@
 #include "command.hpp"
 
 #ifdef HAVE_DRAPE_CAPTURE
+#include "engine/capture/export.hpp"
 #include "engine/capture/measure.hpp"
 #include "engine/cloth/error.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 
@@ -16,7 +18,7 @@ namespace {
 int run_measure(const std::vector<std::string>& argv)
 {
     using namespace drape;
-    cli::Args a(argv, {"--overlay", "--rays", "--node-prominence"}, {"--json", "--no-calibrate"});
+    cli::Args a(argv, {"--overlay", "--rays", "--node-prominence", "--texture", "--mesh"}, {"--json", "--no-calibrate"});
     if (a.positionals().size() != 1) throw cli::UsageError("expected exactly one RECORD_DIR");
     const capture::Record rec = capture::read_record(a.positionals()[0]);
     capture::MeasureOptions opt;
@@ -30,6 +32,13 @@ int run_measure(const std::vector<std::string>& argv)
         if (m.top_image.empty()) throw FileError(*path + ": no overlay: the record has no readable top photo");
         if (!cv::imwrite(*path, capture::draw_top_overlay(rec, m))) throw FileError(*path + ": cannot write the overlay");
     }
+    if (auto path = a.get("--texture")) {
+        const cv::Mat tex = capture::rectified_texture(rec, m);
+        if (!cv::imwrite(*path, tex)) throw FileError(*path + ": cannot write the texture");
+        std::filesystem::path p(*path);
+        if (p.extension() == ".bmp") cv::imwrite(p.replace_extension(".png").string(), tex);
+    }
+    if (auto path = a.get("--mesh")) capture::write_obj(capture::contour_surface(rec, m), *path);
     if (a.has("--json")) {
         std::cout << capture::to_json(m).dump(1) << "\n";
         return 0;
@@ -64,10 +73,13 @@ int run_measure(const std::vector<std::string>& argv)
 }
 
 DRAPE_COMMAND({"measure", "measure a drape-lab record (photos, laser contours)",
-               "usage: drape measure RECORD_DIR [--json] [--overlay out.png] [--rays N] [--no-calibrate] [--node-prominence F]\n"
+               "usage: drape measure RECORD_DIR [--json] [--overlay out.png] [--texture F.bmp] [--mesh F.obj]\n                    [--rays N] [--no-calibrate] [--node-prominence F]\n"
                "  RECORD_DIR       folder with meta.json and any of top.jpg, side.jpg, iso.jpg, contours.csv\n"
                "  --json           print the measurements as JSON (SI units, unit in each key)\n"
                "  --overlay FILE   write the top photo with the traced outline, nodes and pedestal circle\n"
+               "  --texture FILE   write the top view rectified to the pedestal-top plane, 0.25 mm/px\n"
+               "                   (FILE.bmp also writes FILE.png)\n"
+               "  --mesh FILE.obj  write the surface through the contour levels' Fourier series [m]\n"
                "  --rays N         rays traced around the axis (default 720)\n"
                "  --no-calibrate   use the declared top pose instead of solvePnP on the floor chessboards\n"
                "  --node-prominence F  a fold crest must rise F x (max r - min r) above its troughs (default 0.15)\n"

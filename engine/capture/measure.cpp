@@ -133,7 +133,7 @@ struct Trace {
 /// and stop at the first point whose image is fabric (p >= 0.5 inside the
 /// central component); the crossing is interpolated linearly in p.
 Trace trace_outline(const Camera& cam, const cv::Mat& prob, const cv::Mat& gate, HeightModel model, double R1,
-                    double R2, const ContourStack* stack, int rays)
+                    double R2, const ContourStack* stack, int rays, const cv::Mat& lightness)
 {
     Trace tr;
     const double L = R1 - R2;
@@ -158,7 +158,50 @@ Trace trace_outline(const Camera& cam, const cv::Mat& prob, const cv::Mat& gate,
             if (p >= 0.5) {
                 double f = 0; // fraction of the way back to the previous (outer) sample
                 if (i > 0 && p > prev_p) f = (p - 0.5) / (p - prev_p);
-                const std::size_t j = i > 0 ? i - 1 : i;
+                std::size_t j = i > 0 ? i - 1 : i;
+                if (!lightness.empty()) {
+                    // Grey fabric: the first pass thresholds close to the
+                    // fabric's own L* (the contact shadow is dark too), which
+                    // lies inside the blurred edge. Re-place the edge at the
+                    // midpoint between the L* levels 2.5..4.5 px inside and
+                    // outside it, i.e. where a symmetric blur puts the true edge.
+                    auto img = [&](std::size_t q) {
+                        return cam.project({sec.rz[q].x() * c, sec.rz[q].x() * s, sec.rz[q].y()});
+                    };
+                    const Eigen::Vector2d ui = img(i);
+                    double lin = 0, lout = 0;
+                    int nin = 0, nout = 0;
+                    const std::size_t lo = i > 600 ? i - 600 : 0, hi = std::min(sec.rz.size() - 1, i + 600);
+                    for (std::size_t q = lo; q <= hi; ++q) {
+                        const double d = (img(q) - ui).norm();
+                        if (d < 2.5 || d > 4.5) continue;
+                        const Eigen::Vector2d uq = img(q);
+                        const double l = bilinear(lightness, uq.x(), uq.y());
+                        if (q < i) {
+                            lout += l;
+                            ++nout;
+                        } else {
+                            lin += l;
+                            ++nin;
+                        }
+                    }
+                    if (nin > 0 && nout > 0 && lout / nout - lin / nin > 5.0) {
+                        const double thr = 0.5 * (lin / nin + lout / nout);
+                        double prev_l = kNaN;
+                        for (std::size_t q = lo; q <= hi; ++q) {
+                            const Eigen::Vector2d uq = img(q);
+                            if (q < i && (uq - ui).norm() > 4.5) continue;
+                            const double l = bilinear(lightness, uq.x(), uq.y());
+                            if (l <= thr) {
+                                i = q;
+                                j = q > 0 ? q - 1 : q;
+                                f = std::isfinite(prev_l) && prev_l > l ? (thr - l) / (prev_l - l) : 0.0;
+                                break;
+                            }
+                            prev_l = l;
+                        }
+                    }
+                }
                 const Eigen::Vector2d rz = sec.rz[i] + f * (sec.rz[j] - sec.rz[i]);
                 const double arc = sec.arc[i] + f * (sec.arc[j] - sec.arc[i]);
                 tr.outline.emplace_back(rz.x() * c, rz.x() * s);
@@ -327,8 +370,10 @@ void measure_top(const Record& rec, const MeasureOptions& opt, const ContourStac
     }
 
     const bool have_contours = stack && !stack->profiles.empty();
-    const Trace plane = trace_outline(cam, prob, gate, HeightModel::Plane, rec.R1, rec.R2, nullptr, opt.rays);
-    const Trace chord = trace_outline(cam, prob, gate, HeightModel::Chord, rec.R1, rec.R2, nullptr, opt.rays);
+    cv::Mat lightness; // L* channel, only for the grey-fabric edge refinement
+    if (!tv.model.chromatic) cv::extractChannel(lab, lightness, 0);
+    const Trace plane = trace_outline(cam, prob, gate, HeightModel::Plane, rec.R1, rec.R2, nullptr, opt.rays, lightness);
+    const Trace chord = trace_outline(cam, prob, gate, HeightModel::Chord, rec.R1, rec.R2, nullptr, opt.rays, lightness);
     // The chord model is the one used for D: it spans every radius from R1 in
     // to the disc edge, so the silhouette is always found on it. The contour
     // model only covers the section at the ray's own angle, but in the top view
@@ -337,7 +382,7 @@ void measure_top(const Record& rec, const MeasureOptions& opt, const ContourStac
     const Trace best = chord;
     tv.height_model = HeightModel::Chord;
     if (have_contours) {
-        const Trace cont = trace_outline(cam, prob, gate, HeightModel::Contours, rec.R1, rec.R2, stack, opt.rays);
+        const Trace cont = trace_outline(cam, prob, gate, HeightModel::Contours, rec.R1, rec.R2, stack, opt.rays, lightness);
         if (cont.outline.size() >= 8) tv.dc_contours_percent = shoelace_dc(cont.outline, rec.R1, rec.R2);
     }
     if (best.outline.size() < static_cast<std::size_t>(opt.rays) * 9 / 10) {
@@ -353,6 +398,16 @@ void measure_top(const Record& rec, const MeasureOptions& opt, const ContourStac
     tv.outline_px = best.px;
     tv.rays_beyond_reach = best.beyond;
     tv.metrics = cloth::drape_metrics(tv.outline, rec.R1, rec.R2, opt.metrics);
+    double max_px = 0;
+    for (const auto& u : best.px) max_px = std::max(max_px, (u - c0).norm());
+    if (max_px < ped_px + 3.0) {
+        // Only the pedestal top was found (in the image, nothing reaches past
+        // the disc's own edge): a specimen always hangs over the disc.
+        out.not_measured.push_back("top view: nothing hangs over the support disc in " + declared.image +
+                                   " (outline within " + fmt("%.1f", max_px - ped_px) +
+                                   " px of the disc edge): no specimen on the stand?");
+        return;
+    }
     // Remaining error: (1) edge placement, 0.5 px along the whole perimeter;
     // (2) the height model: a height error dz scales every radius by
     // dz / (camera height - z), so dD = 2 A dz / (H - z) / (pi (R1^2 - R2^2)).
@@ -582,7 +637,10 @@ Measurement measure_record(const Record& rec, const MeasureOptions& opt)
             out.not_measured.push_back("side view: hem height needs the top view's outline");
     }
     if (rec.has_camera("iso"))
-        out.not_measured.push_back("iso view: not analysed by this version (used only by a person checking the drape)");
+        out.not_measured.push_back(
+            std::filesystem::exists(rec.file(rec.cameras.at("iso").image))
+                ? "iso view: not analysed by this version (for a person checking the drape)"
+                : "iso view: " + rec.cameras.at("iso").image + " not in the record");
 
     if (out.top.measured) {
         // Height error of the model: what the side view measured where it can
@@ -618,17 +676,21 @@ Measurement measure_record(const Record& rec, const MeasureOptions& opt)
 
 namespace {
 
-nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+nlohmann::ordered_json num(double v)
+{
+    return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
 
 } // namespace
 
-nlohmann::json to_json(const Measurement& m)
+nlohmann::ordered_json to_json(const Measurement& m)
 {
-    using nlohmann::json;
+    using json = nlohmann::ordered_json;
     json j;
     j["specimen_id"] = m.specimen_id;
     j["lab_drape_coefficient_percent"] = m.lab_dc_percent ? json(*m.lab_dc_percent) : json(nullptr);
     const auto& t = m.top;
+    json top_block;
     if (t.measured) {
         j["drape_coefficient_percent"] = t.metrics.drape_coefficient_percent;
         j["drape_coefficient_uncertainty_percent"] = t.dc_uncertainty_percent;
@@ -664,7 +726,7 @@ nlohmann::json to_json(const Measurement& m)
         for (int k = 0; k < pr.size(); k += stride) rt.push_back(num(pr.r[static_cast<std::size_t>(k)]));
         top["r_theta_m"] = rt;
         top["r_theta_step_deg"] = 360.0 * stride / std::max(1, pr.size());
-        j["top"] = top;
+        top_block = top;
     } else {
         j["drape_coefficient_percent"] = nullptr;
         j["node_count"] = nullptr;
@@ -672,6 +734,7 @@ nlohmann::json to_json(const Measurement& m)
     }
     j["hem_min_height_m"] = m.hem_min_height ? json(*m.hem_min_height) : json(nullptr);
     j["hem_min_height_source"] = m.hem_min_source;
+    if (!top_block.is_null()) j["top"] = top_block;
     if (m.top_calibration) {
         const auto& c = *m.top_calibration;
         j["calibration_top"] = {{"pose", c.ok ? "measured (solvePnP on the floor chessboards)" : "declared"},

@@ -116,7 +116,7 @@ FabricModel fabric_model(const Record& rec, const Camera& cam, const cv::Mat& la
 cv::Mat fabric_probability(const cv::Mat& lab, const FabricModel& m);
 
 /// JSON report (SI units with the unit in each key name).
-nlohmann::json to_json(const Measurement& m);
+nlohmann::ordered_json to_json(const Measurement& m);
 
 /// Overlay on the top photo: traced outline, nodes, pedestal circle, specimen circle.
 cv::Mat draw_top_overlay(const Record& rec, const Measurement& m);

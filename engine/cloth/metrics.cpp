@@ -148,6 +148,7 @@ int choose_harmonics(const RadialProfile& p, double noise_sigma, int max_harmoni
     int m = 0;
     for (double r : p.r) m += !std::isnan(r);
     if (m < 8) return 0;
+    if (max_harmonics < 0) max_harmonics = m / 3;
     max_harmonics = std::min(max_harmonics, (m - 1) / 2 - 1);
     // Smallest K whose residual variance is consistent with the noise: the
     // unbiased variance estimate RSS/(m - 2K - 1) within two standard errors of

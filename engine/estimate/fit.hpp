@@ -26,7 +26,7 @@
 namespace drape::estimate {
 
 struct FitProgress {
-    std::string stage;      ///< "global" | "local" | "uncertainty" | "done"
+    std::string stage;      ///< "scan" | "global" | "local" | "spread" | "uncertainty" | "done"
     int evaluation = 0;     ///< objective evaluations so far (all stages)
     int planned = 0;        ///< upper bound on evaluations of the whole fit
     double best_chi2 = 0;   ///< best sum of squared whitened residuals so far
@@ -43,7 +43,14 @@ struct FitOptions {
     int global_evaluations = 0;   ///< CRS2 budget; 0 = 6 per fitted coordinate
     int local_evaluations = 0;    ///< BOBYQA budget; 0 = 8 per coordinate + 8
     bool uncertainty = true;      ///< Jacobian, covariance, intervals
+    /// Extra perturbation seeds simulated at the optimum to measure the
+    /// drape-to-drape spread of every residual term; sigmas below it are raised
+    /// to it before the intervals are computed (0 = keep the default floors).
+    int spread_seeds = 4;
     NoiseModel noise;
+    /// Channels in the objective (dc, nodes, hem, contours); the others are
+    /// held out: computed, reported and analysed as predictions, not fitted.
+    std::vector<std::string> channels = {"dc", "nodes", "hem", "contours"};
     cloth::RestOptions rest;      ///< solver options of each simulation (progress/cancel are set by the fit)
     /// Start point / values of the parameters not fitted (e.g. a library preset:
     /// the local stage also starts from it). Areal density and thickness always

@@ -6,6 +6,10 @@
 
 #include <nlohmann/json.hpp>
 
+#ifdef DRAPE_ESTIMATE_HAVE_CAPTURE
+#include "engine/capture/measure.hpp"
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -101,7 +105,7 @@ std::optional<PinholeCamera> read_camera(const json& cams, const std::string& na
 
 } // namespace
 
-MeasuredDrape load_record(const std::string& dir)
+MeasuredDrape load_record(const std::string& dir, bool use_photos)
 {
     const fs::path root(dir);
     if (!fs::is_directory(root)) throw FileError(dir + ": not a record folder");
@@ -193,6 +197,33 @@ MeasuredDrape load_record(const std::string& dir)
         m.contours.push_back(std::move(c));
     }
     if (m.contours.empty()) throw FileError(cpath + ": no contours");
+#ifdef DRAPE_ESTIMATE_HAVE_CAPTURE
+    if (use_photos && m.node_count < 0) {
+        // The photos: node count from the top view's perspective-corrected
+        // outline, lowest hem point from the side view (capture layer).
+        try {
+            const capture::Record rec = capture::read_record(root);
+            const capture::MeasureOptions mo;
+            const capture::Measurement cm = capture::measure_record(rec, mo);
+            if (cm.top.measured) {
+                m.node_count = cm.top.metrics.node_count;
+                m.node_source = "top photo (capture layer)";
+                m.node_metric_options = mo.metrics;
+                m.photo_drape_coefficient_percent = cm.top.metrics.drape_coefficient_percent;
+            }
+            if (cm.side.measured && std::isfinite(cm.side.hem_min_z)) {
+                m.hem_min_z = cm.side.hem_min_z;
+                m.hem_from_side_view = true;
+            }
+            for (const auto& w : cm.warnings) m.notes.push_back("capture: " + w);
+            for (const auto& w : cm.not_measured) m.notes.push_back("capture: not measured: " + w);
+        } catch (const std::exception& e) {
+            m.notes.push_back(std::string("capture failed, contours only: ") + e.what());
+        }
+    }
+#else
+    (void)use_photos;
+#endif
     if (m.node_count < 0) m.node_source = "crests of the deepest contour";
     return m;
 }
@@ -267,6 +298,15 @@ DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& l
     DrapeFeatures f;
     f.drape_coefficient_percent = r.metrics.drape_coefficient_percent;
     f.hem_min_z = r.hem.min_z;
+    if (like.hem_from_side_view) {
+        // The side camera (at -y) sees the hem against the pedestal only in
+        // front of it: y < 0 and |x| < R2 (x = r cos theta, r ~ the outline's mean radius).
+        double zmin = std::numeric_limits<double>::infinity();
+        const double c = std::min(1.0, like.disc_diameter / 2 / std::max(r.metrics.mean_radius_m, 1e-6));
+        for (std::size_t i = 0; i < r.hem.theta.size(); ++i)
+            if (std::sin(r.hem.theta[i]) < 0 && std::abs(std::cos(r.hem.theta[i])) <= c) zmin = std::min(zmin, r.hem.z[i]);
+        if (std::isfinite(zmin)) f.hem_min_z = zmin;
+    }
     for (const auto& c : like.contours) {
         const cloth::Slice* s = nullptr;
         for (const auto& sl : r.slices)
@@ -278,7 +318,11 @@ DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& l
             f.contours.push_back(missing);
         }
     }
-    if (like.node_count >= 0) f.node_count = r.metrics.node_count;
+    if (like.node_count >= 0) {
+        // Counted like the photo: the shadow outline with the photo's detector settings.
+        const cloth::DrapeMetrics dm = cloth::drape_metrics(r.outline, like.sample_diameter / 2, like.disc_diameter / 2, like.node_metric_options);
+        f.node_count = dm.node_count;
+    }
     else if (!f.contours.empty() && f.contours.back().closed) f.node_count = f.contours.back().node_count;
     else f.node_count = r.metrics.node_count;
     return f;

@@ -47,6 +47,13 @@ struct MeasuredDrape {
     double hem_min_z = std::numeric_limits<double>::quiet_NaN(); ///< [m] lowest hem point (side view), if known
     int node_count = -1;             ///< folds, if the record states them (photo); else taken from the contours
     std::string node_source;         ///< where node_count came from
+    /// Node detector settings of the photo's count; simulations are counted with the same settings.
+    cloth::MetricOptions node_metric_options;
+    /// True when hem_min_z is the side photo's lowest hem point seen in front of
+    /// the pedestal (y < 0, |x| < R2): simulations are measured over the same arc.
+    bool hem_from_side_view = false;
+    double photo_drape_coefficient_percent = std::numeric_limits<double>::quiet_NaN(); ///< D from the top photo [%]
+    std::vector<std::string> notes;  ///< what the capture layer said (warnings, what it could not measure)
     std::vector<MeasuredContour> contours; ///< closed cuts, increasing depth
     std::optional<PinholeCamera> top_camera; ///< calibration of the top photo, for overlays
     std::string top_photo;           ///< path of top.jpg ("" if none)
@@ -59,7 +66,11 @@ struct MeasuredDrape {
 /// Reads a lab record folder (meta.json + contours.csv, format of
 /// shared/data/drape-lab/README.md; mm -> m, g/m^2 -> kg/m^2). Throws
 /// FileError / ParameterError naming the file, field and value.
-MeasuredDrape load_record(const std::string& dir);
+/// When the capture layer is built (drape_capture) and `use_photos`, the node
+/// count comes from the top photo and the hem height from the side photo
+/// (capture::measure_record); otherwise the node count is that of the deepest
+/// contour and the hem is not used.
+MeasuredDrape load_record(const std::string& dir, bool use_photos = true);
 
 /// Turns a simulated drape into a record, as the lab would measure it: the
 /// drapemeter D of the shadow, the closed slices (Gaussian laser noise of

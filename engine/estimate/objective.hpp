@@ -50,7 +50,7 @@ struct NoiseModel {
     double radius_seed_m = 0.5e-3;      ///< [m] seed spread of a contour's mean radius
     double fold_seed_m = 1.0e-3;        ///< [m] seed spread of the RMS fold amplitude and harmonic magnitudes
     double axis_seed_m = 0.6e-3;        ///< [m] seed spread of the phase-locked cos 2theta / cos 4theta terms
-    double hem_m = 2e-3;                ///< [m] hem height from the side photo
+    double hem_m = 4e-3;                ///< [m] hem height from the side photo (edge placement + the arc the camera sees)
     int harmonics = 8;                  ///< harmonic magnitudes compared, k = 1..harmonics
     /// Total sigma of a quantity averaged over `points` laser samples plus a model floor [m].
     double contour_sigma(double floor_m, int points) const;
@@ -64,6 +64,7 @@ struct ResidualTerm {
     int harmonic = 0;         ///< harmonic terms (k)
     double simulated = 0, measured = 0, sigma = 1; ///< SI (metres, %, count)
     bool smooth = true;       ///< false for the node count (integer): left out of the Jacobian
+    bool fitted = true;       ///< in the objective; false = held out (predicted, reported, not fitted)
     double whitened() const { return (simulated - measured) / sigma; }
 };
 
@@ -77,6 +78,12 @@ std::vector<ResidualTerm> residual_terms(int record, const DrapeFeatures& measur
 /// seeds whose slice closed (all seeds when none did).
 DrapeFeatures average_features(const std::vector<DrapeFeatures>& f, std::vector<double>* closed_fraction);
 
+/// Channel of a residual kind: "dc", "nodes", "hem" or "contours".
+std::string channel_of(const std::string& kind);
+/// Parses "dc,nodes,hem,contours" (any subset); ParameterError on unknown names or an empty set.
+std::vector<std::string> parse_channels(const std::string& list);
+
+/// Sum of squared whitened residuals over the fitted terms.
 double chi_square(const std::vector<ResidualTerm>& r);
 
 } // namespace drape::estimate

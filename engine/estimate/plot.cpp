@@ -95,6 +95,13 @@ Rgb palette(int i, int n, bool warm)
     return {static_cast<unsigned char>(20 + 60 * t), static_cast<unsigned char>(90 + 120 * t), static_cast<unsigned char>(230 - 100 * t)};
 }
 
+Rgb category(int i)
+{
+    static const Rgb c[10] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44}, {214, 39, 40}, {148, 103, 189},
+                              {140, 86, 75},  {227, 119, 194}, {127, 127, 127}, {188, 189, 34}, {23, 190, 207}};
+    return c[((i % 10) + 10) % 10];
+}
+
 void Plot::save(const std::string& path) const
 {
     cv::Mat img(m_h, m_w, CV_8UC3, cv::Scalar(255, 255, 255));
@@ -149,7 +156,7 @@ void Plot::save(const std::string& path) const
     if (!m_caption.empty())
         cv::putText(img, m_caption, cv::Point(10, m_h - 12), cv::FONT_HERSHEY_SIMPLEX, 0.38, cv::Scalar(80, 80, 80), 1, cv::LINE_AA);
     {
-        cv::Mat lab(20, std::max(10, 8 * static_cast<int>(m_ylabel.size())), CV_8UC3, cv::Scalar(255, 255, 255));
+        cv::Mat lab(20, std::max(10, 10 * static_cast<int>(m_ylabel.size())), CV_8UC3, cv::Scalar(255, 255, 255));
         cv::putText(lab, m_ylabel, cv::Point(2, 15), cv::FONT_HERSHEY_SIMPLEX, 0.45, axis, 1, cv::LINE_AA);
         cv::Mat rot;
         cv::rotate(lab, rot, cv::ROTATE_90_COUNTERCLOCKWISE);

@@ -47,7 +47,9 @@ private:
     std::vector<std::pair<double, std::string>> m_ytick_labels;
 };
 
-/// Distinct colours for series i of n (blue -> red ramp when `ramp`).
+/// Ramp colours for series i of n (blue -> green, or red -> orange when `warm`).
 Rgb palette(int i, int n, bool warm = false);
+/// Categorical colours (Tableau 10) for unrelated series.
+Rgb category(int i);
 
 } // namespace drape::estimate

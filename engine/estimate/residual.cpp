@@ -29,12 +29,13 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
     std::map<int, Acc> harm;
     std::map<double, Acc> depth;
     std::map<double, Acc> radius_by_depth; // signed mean-radius residual per depth
-    Acc all, metres, dc, nodes;
+    Acc all, metres, dc, nodes, fitted_acc, held;
     double ss_m = 0;
     int n_m = 0;
     for (const auto& t : terms) {
         const double w = t.whitened();
         all.add(w);
+        (t.fitted ? fitted_acc : held).add(w);
         kinds[t.kind].add(w);
         if (t.kind == "harmonic") harm[t.harmonic].add(w);
         if (t.kind == "dc") dc.add(t.simulated - t.measured);
@@ -58,6 +59,9 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
     for (const auto& [k, g] : harm) a.exceeds_noise |= group_exceeds(g);
     a.rms_m = n_m ? std::sqrt(ss_m / n_m) : 0.0;
     a.rms_whitened = all.rms();
+    a.fitted_rms_whitened = fitted_acc.rms();
+    a.held_out_rms_whitened = held.rms();
+    a.held_out_terms = held.n;
     a.dc_error_percent = dc.mean();
     a.node_error = nodes.mean();
     for (const auto& [k, acc] : kinds) a.kind_rms.push_back({k, acc.rms()});
@@ -102,6 +106,18 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
                                  " sigma): the side profile's curvature does not follow linear bending (bending hysteresis or stiffening)");
         }
     }
+    // The contours near the disc on one side of the model while D is on the
+    // other: the fabric leaves the disc more gradually (or abruptly) than
+    // linear bending of a thin sheet over a sharp edge allows.
+    if (!radius_by_depth.empty() && kinds.count("dc")) {
+        const double top = radius_by_depth.begin()->second.mean();
+        if (std::abs(top) > 2.0 && std::abs(dcw) > 1.5 && top * dcw < 0) {
+            a.candidate_effects.push_back("gradual_edge_bending");
+            a.evidence.push_back(std::string("the model's contour next to the disc is ") + (top < 0 ? "narrower" : "wider") +
+                                 " than measured while its D is " + (dcw > 0 ? "larger" : "smaller") +
+                                 ": bending that softens with curvature (nonlinear bending / hysteresis), a thicker fabric or a rounder pedestal edge");
+        }
+    }
     if (kind("fold_rms").rms() > 2.0 || (!strong.empty() && strong.front().second > 1)) {
         a.candidate_effects.push_back("fold_amplitude_mismatch");
         a.evidence.push_back("fold amplitudes / harmonic magnitudes are beyond noise: buckling wavelength and depth differ (shear or bending anisotropy, thickness)");
@@ -121,6 +137,9 @@ nlohmann::json residual_to_json(const ResidualAnalysis& a)
     j["dof"] = a.dof;
     j["rms_m"] = a.rms_m;
     j["rms_whitened"] = a.rms_whitened;
+    j["fitted_rms_whitened"] = a.fitted_rms_whitened;
+    j["held_out_rms_whitened"] = a.held_out_rms_whitened;
+    j["held_out_terms"] = a.held_out_terms;
     j["dominant_harmonics"] = a.dominant_harmonics;
     j["harmonic_rms_whitened"] = a.harmonic_rms;
     nlohmann::json d = nlohmann::json::array();

@@ -21,6 +21,9 @@ struct ResidualAnalysis {
     std::vector<double> harmonic_rms; ///< whitened RMS per harmonic k = 1..K (index k-1)
     std::vector<std::pair<double, double>> depth_rms; ///< (depth [m], whitened RMS of that depth's terms)
     std::vector<std::pair<std::string, double>> kind_rms; ///< whitened RMS per channel
+    double fitted_rms_whitened = 0;   ///< over the fitted terms
+    double held_out_rms_whitened = 0; ///< over the held-out terms (predictions); 0 when none
+    int held_out_terms = 0;
     double dc_error_percent = 0;      ///< mean simulated - measured D
     double node_error = 0;            ///< mean simulated - measured nodes
     std::vector<std::string> candidate_effects; ///< names, see docs/estimate.md

@@ -301,9 +301,8 @@ void set_preset_name(cloth::FabricPreset& p, const std::string& name)
 double areal_density_of(const cloth::FabricPreset& p)
 {
     if (const auto* f = std::get_if<cloth::FabricParams>(&p.fabric)) return (*f)[cloth::Param::AreaDensity];
-    const auto& s = std::get<cloth::SeedParams>(p.fabric);
-    // Total particle mass over the sheet's area (grid constants: u*v particles on w x h).
-    return s.particle_mass_kg() * s.u * s.v / (s.w * s.h * 1e-4);
+    // The engine's one mapping from the seed's grid constants (seed_format.hpp).
+    return cloth::continuum_from_seed(std::get<cloth::SeedParams>(p.fabric))[cloth::Param::AreaDensity];
 }
 
 namespace {

@@ -140,7 +140,7 @@ std::string default_library_path();
 std::string preset_name(const cloth::FabricPreset& p);
 /// Sets the preset's name where preset_name() reads it.
 void set_preset_name(cloth::FabricPreset& p, const std::string& name);
-/// Areal density [kg/m^2] of either kind of preset.
+/// Areal density [kg/m^2] of either kind of preset (seed: cloth::continuum_from_seed).
 double areal_density_of(const cloth::FabricPreset& p);
 /// D [-] from extra "drape_coefficient" (a number, or an object with "value"); absent otherwise.
 std::optional<double> drape_coefficient_of(const cloth::FabricPreset& p);

@@ -118,28 +118,36 @@ inline cv::Mat render_top(const Spec& s)
         disc.push_back(P({s.R2 * std::cos(th), s.R2 * std::sin(th), 0.0}));
     }
     cv::fillPoly(big, std::vector<std::vector<cv::Point>>{disc}, cv::Scalar(150, 150, 150), cv::LINE_8, 4);
+    cv::Mat img;
+    cv::resize(big, img, cv::Size(cam.width, cam.height), 0, 0, cv::INTER_AREA);
     if (s.fabric) {
+        // Fabric coverage at 4x (anti-aliased edge), a soft grey floor shadow
+        // at 1x, composed in float: shadow under the fabric, fabric on top.
         std::vector<cv::Point> hem, shadow;
         for (int k = 0; k < 2880; ++k) {
             const double th = 2 * kPi * k / 2880, r = hem_r(s, th);
             hem.push_back(P({r * std::cos(th), r * std::sin(th), hem_z(s, r)}));
-            shadow.push_back(P({(r + 0.004) * std::cos(th), (r + 0.004) * std::sin(th), -0.12}));
+            const Eigen::Vector2d u = cam.project({(r + 0.004) * std::cos(th), (r + 0.004) * std::sin(th), -0.12});
+            shadow.emplace_back(static_cast<int>(std::lround(u.x() * 16)), static_cast<int>(std::lround(u.y() * 16)));
         }
-        // Soft grey shadow on the floor around the specimen.
-        cv::Mat sh = cv::Mat::zeros(big.size(), CV_32F);
-        cv::fillPoly(sh, std::vector<std::vector<cv::Point>>{shadow}, cv::Scalar(1.0), cv::LINE_8, 4);
-        cv::GaussianBlur(sh, sh, cv::Size(0, 0), 6.0 * ss);
-        cv::Mat bigf;
-        big.convertTo(bigf, CV_32FC3);
-        std::vector<cv::Mat> ch;
-        cv::split(bigf, ch);
-        for (auto& c : ch) c = c.mul(1.0 - 0.45 * sh);
-        cv::merge(ch, bigf);
-        bigf.convertTo(big, CV_8UC3);
-        cv::fillPoly(big, std::vector<std::vector<cv::Point>>{hem}, s.fabric_bgr, cv::LINE_8, 4);
+        cv::Mat cover_big = cv::Mat::zeros(big.size(), CV_8U);
+        cv::fillPoly(cover_big, std::vector<std::vector<cv::Point>>{hem}, cv::Scalar(255), cv::LINE_8, 4);
+        cv::Mat cover, sh = cv::Mat::zeros(img.size(), CV_32F);
+        cv::resize(cover_big, cover, img.size(), 0, 0, cv::INTER_AREA);
+        cover.convertTo(cover, CV_32F, 1.0 / 255);
+        cv::fillPoly(sh, std::vector<std::vector<cv::Point>>{shadow}, cv::Scalar(1.0), cv::LINE_AA, 4);
+        cv::GaussianBlur(sh, sh, cv::Size(0, 0), 6.0);
+        cv::Mat f;
+        img.convertTo(f, CV_32FC3);
+        for (int y = 0; y < f.rows; ++y)
+            for (int x = 0; x < f.cols; ++x) {
+                const float a = cover.at<float>(y, x), d = 1.0f - 0.45f * sh.at<float>(y, x);
+                cv::Vec3f& v = f.at<cv::Vec3f>(y, x);
+                for (int c = 0; c < 3; ++c)
+                    v[c] = a * static_cast<float>(s.fabric_bgr[c]) + (1 - a) * v[c] * d;
+            }
+        f.convertTo(img, CV_8UC3);
     }
-    cv::Mat img;
-    cv::resize(big, img, cv::Size(cam.width, cam.height), 0, 0, cv::INTER_AREA);
     cv::Mat noise(img.size(), CV_16SC3);
     cv::RNG rng(s.seed);
     rng.fill(noise, cv::RNG::NORMAL, 0, 3);

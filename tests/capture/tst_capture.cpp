@@ -1,4 +1,5 @@
 // Capture layer on synthetic records with known answers, bad input, KES.
+#include "engine/capture/export.hpp"
 #include "engine/capture/measure.hpp"
 #include "engine/cloth/error.hpp"
 #include "synthetic.hpp"
@@ -273,6 +274,42 @@ private slots:
         QVERIFY(std::abs(c.fit.magnitude(11) - 0.002) < 1e-4);
         QVERIFY(c.harmonics >= 11);
         QVERIFY(c.residual_rms <= 1.1 * c.noise_sigma);
+
+        // Surface through the levels: pedestal-edge ring + one ring per level.
+        const auto rec = capture::read_record(dir);
+        const auto mesh = capture::contour_surface(rec, m, 90);
+        QCOMPARE(mesh.vertices.size(), std::size_t(180));
+        QCOMPARE(mesh.triangles.size(), std::size_t(180));
+        // A least-squares series with K harmonics through N noisy points
+        // carries sigma sqrt((2K+1)/N) of the noise: allow 4x that.
+        const double tol = 4 * c.noise_sigma * std::sqrt((2.0 * c.harmonics + 1) / 360.0);
+        for (int k = 0; k < 90; ++k) {
+            const auto& v = mesh.vertices[static_cast<std::size_t>(90 + k)];
+            const double th = 2 * synth::kPi * k / 90;
+            QVERIFY(std::abs(v.z() + 0.010) < 1e-12);
+            QVERIFY(std::abs(v.head<2>().norm() - 1e-3 * (100 + 6 * std::cos(6 * th) + 2 * std::sin(11 * th))) < tol);
+        }
+        capture::write_obj(mesh, dir / "surface.obj");
+        QVERIFY(fs::file_size(dir / "surface.obj") > 1000);
+    }
+
+    void rectified_texture_shows_the_fabric()
+    {
+        synth::Spec s;
+        const auto dir = temp_dir("texture");
+        synth::write_record(dir, s);
+        const auto rec = capture::read_record(dir);
+        const auto m = capture::measure_record(rec);
+        const cv::Mat tex = capture::rectified_texture(rec, m);
+        QCOMPARE(tex.cols, 1200); // 2 R1 at 0.25 mm/px
+        QCOMPARE(tex.rows, 1200);
+        const cv::Vec3b centre = tex.at<cv::Vec3b>(600, 600), corner = tex.at<cv::Vec3b>(5, 5);
+        for (int c = 0; c < 3; ++c) QVERIFY(std::abs(centre[c] - s.fabric_bgr[c]) < 15);
+        QCOMPARE(corner, cv::Vec3b(255, 255, 255));
+        // +x is to the right: a crest at phase 0.2 rad lies right of centre.
+        const double r = (s.R0 + s.A - 0.004) / 0.25e-3;
+        const int x = 600 + static_cast<int>(r * std::cos(s.phase)), y = 600 - static_cast<int>(r * std::sin(s.phase));
+        QVERIFY(tex.at<cv::Vec3b>(y, x) != cv::Vec3b(255, 255, 255));
     }
 
     void missing_meta_is_an_error()

@@ -11,7 +11,7 @@ int main(int argc, char** argv)
             char d[200]; std::snprintf(d, sizeof d, DRAPE_SHARED_DIR "/data/drape-lab/set-a/DL-A%02d", i);
             auto m = load_record(d);
             auto f = drape_features(m);
-            std::printf("%s D=%.1f nodes=%g rho=%.3f depths=%zu\n", m.id.c_str(), f.drape_coefficient_percent, f.node_count, m.areal_density, f.contours.size());
+            std::printf("%s D=%.1f photoD=%.1f nodes=%g (%s) deepest-contour nodes=%d hem=%.1fmm rho=%.3f depths=%zu\n", m.id.c_str(), f.drape_coefficient_percent, m.photo_drape_coefficient_percent, f.node_count, m.node_source.c_str(), f.contours.back().node_count, m.hem_min_z*1e3, m.areal_density, f.contours.size()); for (auto& n : m.notes) std::printf("    %s\n", n.c_str());
             for (auto& c : f.contours) std::printf("   d=%.0fmm r=%.1fmm fold=%.2fmm cos2=%.2f cos4=%.2f n=%d |c|1..8=%.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f\n", c.depth_m*1e3, c.mean_radius_m*1e3, c.fold_rms_m*1e3, c.cos2_m*1e3, c.cos4_m*1e3, c.node_count,
               c.magnitudes_m[0]*1e3,c.magnitudes_m[1]*1e3,c.magnitudes_m[2]*1e3,c.magnitudes_m[3]*1e3,c.magnitudes_m[4]*1e3,c.magnitudes_m[5]*1e3,c.magnitudes_m[6]*1e3,c.magnitudes_m[7]*1e3);
         }
@@ -19,9 +19,10 @@ int main(int argc, char** argv)
     }
     int grid = argc > 2 ? std::atoi(argv[2]) : 25;
     double bend = argc > 3 ? std::atof(argv[3]) : 1e-5;
-    cloth::FabricParams p; p[cloth::Param::BendWarp] = bend; p[cloth::Param::BendWeft] = bend;
+    double bend2 = argc > 4 ? std::atof(argv[4]) : bend;
+    cloth::FabricParams p; p[cloth::Param::BendWarp] = bend; p[cloth::Param::BendWeft] = bend2;
     MeasuredDrape like; like.contours = {{0.005, {}}, {0.01, {}}, {0.015, {}}, {0.02, {}}, {0.025, {}}, {0.03, {}}};
-    for (int s = 1; s <= 8; ++s) {
+    for (int s = 1; s <= 4; ++s) {
         auto setup = like.setup(grid, s);
         auto r = cloth::simulate_drape(p, setup);
         auto f = drape_features(r, like);

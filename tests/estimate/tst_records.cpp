@@ -126,14 +126,14 @@ private slots:
 
     void offCentreContoursPointToHarmonicOne()
     {
-        // A measured drape shifted by 4 mm against a centred model: the
+        // A measured drape shifted by 6 mm against a centred model: the
         // features differ in harmonic 1 and the analysis names the effect.
         const NoiseModel noise;
         DrapeFeatures meas, sim;
         meas.drape_coefficient_percent = sim.drape_coefficient_percent = 35;
         meas.node_count = sim.node_count = 7;
         for (int d = 1; d <= 6; ++d) {
-            meas.contours.push_back(contour_features(folded(0.08 + 0.002 * d, 7, 0.001 * d, 0.004, 0.0), 0.005 * d));
+            meas.contours.push_back(contour_features(folded(0.08 + 0.002 * d, 7, 0.001 * d, 0.006, 0.0), 0.005 * d));
             sim.contours.push_back(contour_features(folded(0.08 + 0.002 * d, 7, 0.001 * d), 0.005 * d));
         }
         const std::vector<double> closed(6, 1.0);

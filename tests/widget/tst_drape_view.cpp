@@ -146,6 +146,35 @@ private slots:
         QVERIFY(kinds.contains("plane"));
     }
 
+    void squareClothAndSphereCollider()
+    {
+        DrapeView v;
+        v.setGridSize(12);
+        v.setClothShape(QStringLiteral("square"));
+        QVERIFY(waitForCloth(v));
+        QCOMPARE(v.controller()->vertexCount(), 12 * 12); // a full grid: nothing cut away
+        QSignalSpy colliders(v.controller(), &DrapeController::collidersChanged);
+        v.controller()->addSphereCollider(QVector3D(0.1f, 0.0f, -0.05f), 0.03);
+        QVERIFY(colliders.wait(30000));
+        int spheres = 0;
+        for (const QVariant& c : v.controller()->colliders()) {
+            const QVariantMap m = c.toMap();
+            if (m.value("kind").toString() != QLatin1String("sphere")) continue;
+            ++spheres;
+            // Drawn where it is: world (0.1, 0, -0.05) is scene (0.1, -0.05, 0); #Sphere has radius 50.
+            QVERIFY((m.value("position").value<QVector3D>() - QVector3D(0.1f, -0.05f, 0.0f)).length() < 1e-6f);
+            QVERIFY(std::abs(m.value("scale").value<QVector3D>().x() * 50.0f - 0.03f) < 1e-6f);
+        }
+        QCOMPARE(spheres, 1);
+        QSignalSpy errors(&v, &DrapeView::errorOccurred);
+        v.controller()->addSphereCollider(QVector3D(0, 0, 0), -1.0);
+        v.setClothShape(QStringLiteral("hexagon"));
+        QCOMPARE(errors.count(), 2);
+        v.controller()->clearExtraColliders();
+        QVERIFY(colliders.wait(30000));
+        for (const QVariant& c : v.controller()->colliders()) QVERIFY(c.toMap().value("kind").toString() != "sphere");
+    }
+
     void missingTextureAndMalformedPresetLeaveTheWidgetUsable()
     {
         QTemporaryDir dir;

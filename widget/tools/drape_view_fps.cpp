@@ -11,6 +11,7 @@
 #include <QElapsedTimer>
 #include <QQuickWidget>
 #include <QQuickWindow>
+#include <QTemporaryDir>
 #include <QTimer>
 
 #include <cstdio>
@@ -25,7 +26,7 @@ int main(int argc, char** argv)
     cl.addOption({"grid", "nodes across the specimen (113 gives ~10,000 particles)", "n", "113"});
     cl.addOption({"seconds", "measuring time [s]", "s", "10"});
     cl.addOption({"integrator", "integrator name", "name", "implicit"});
-    cl.addOption({"preset", "fabric preset file or built-in name (empty = table defaults)", "preset", ""});
+    cl.addOption({"preset", "fabric preset file or built-in name (default: the table defaults written to a file)", "preset", ""});
     cl.addOption({"size", "view size WxH", "size", "800x600"});
     cl.process(app);
     const QStringList wh = cl.value("size").split('x');
@@ -50,11 +51,17 @@ int main(int argc, char** argv)
     QObject::connect(view.controller(), &drape::widget::DrapeController::frameApplied, [&] { ++applied; });
 
     // ---- load preset -> first frame --------------------------------------------
+    view.setIntegrator(cl.value("integrator"));
+    QTemporaryDir tmp;
+    QString preset = cl.value("preset");
+    if (preset.isEmpty()) { // a real file, so the measurement includes reading and parsing it
+        preset = tmp.filePath("fabric.json");
+        view.saveFabricPreset(preset);
+    }
     QElapsedTimer t;
     t.start();
-    view.setIntegrator(cl.value("integrator"));
     view.setGridSize(cl.value("grid").toInt());
-    view.setFabricPreset(cl.value("preset"));
+    view.setFabricPreset(preset);
     view.controller()->createCloth();
     qint64 meshAt = -1, firstFrameAt = -1, firstRenderAt = -1;
     QObject::connect(view.controller(), &drape::widget::DrapeController::meshChanged, [&] {

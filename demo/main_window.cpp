@@ -1,0 +1,487 @@
+#include "demo/main_window.hpp"
+
+#include "engine/estimate/fit.hpp"
+#include "engine/estimate/measured.hpp"
+#include "engine/library/fabric_library.hpp"
+
+#include <QApplication>
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDir>
+#include <QFile>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QFormLayout>
+#include <QHBoxLayout>
+#include <QJsonArray>
+#include <QJsonDocument>
+#include <QJsonObject>
+#include <QLabel>
+#include <QLineEdit>
+#include <QMessageBox>
+#include <QPainter>
+#include <QProgressBar>
+#include <QPushButton>
+#include <QSplitter>
+#include <QStatusBar>
+#include <QTimer>
+#include <QToolButton>
+#include <QVBoxLayout>
+
+#include <filesystem>
+
+#ifndef DRAPE_SOURCE_DIR
+#define DRAPE_SOURCE_DIR "."
+#endif
+
+namespace drape::demo {
+
+namespace {
+
+importers::ImportOptions importOptions(const DemoOptions& o)
+{
+    importers::ImportOptions io;
+    io.unit = importers::parse_unit(o.unit.toStdString(), "--unit");
+    io.up = importers::parse_up_axis(o.up.toStdString(), "--up");
+    return io;
+}
+
+} // namespace
+
+MainWindow::MainWindow(const DemoOptions& options, QWidget* parent) : QMainWindow(parent), m_options(options)
+{
+    if (m_options.starterDir.isEmpty()) m_options.starterDir = QStringLiteral(DRAPE_SOURCE_DIR "/data/library");
+    setWindowTitle(tr("Drapekit fitting demo"));
+    buildUi();
+    reloadFabrics();
+    QString err;
+    const QString path = m_options.mannequin.isEmpty() ? QString::fromStdString(default_mannequin_path()) : m_options.mannequin;
+    if (!loadMannequin(path, &err)) showMessage(tr("Mannequin: %1").arg(err));
+}
+
+MainWindow::~MainWindow()
+{
+    m_fitJob.cancel();
+}
+
+void MainWindow::buildUi()
+{
+    auto* central = new QWidget(this);
+    auto* h = new QHBoxLayout(central);
+
+    auto* panel = new QWidget(central);
+    panel->setMaximumWidth(340);
+    auto* form = new QFormLayout(panel);
+
+    auto* mrow = new QHBoxLayout;
+    m_mannequinPath = new QLineEdit(panel);
+    m_mannequinPath->setReadOnly(true);
+    auto* browse = new QToolButton(panel);
+    browse->setText(QStringLiteral("…"));
+    browse->setToolTip(tr("Import a mannequin (OBJ, Collada/ZAE, glTF, FBX, PLY, STL)"));
+    connect(browse, &QToolButton::clicked, this, &MainWindow::chooseMannequin);
+    mrow->addWidget(m_mannequinPath);
+    mrow->addWidget(browse);
+    form->addRow(tr("Mannequin"), mrow);
+
+    m_garment = new QComboBox(panel);
+    m_garment->setObjectName(QStringLiteral("garment"));
+    m_garment->addItem(tr("Circular skirt on the mannequin"), QStringLiteral("skirt"));
+    m_garment->addItem(tr("Round tablecloth on a round table"), QStringLiteral("tablecloth"));
+    form->addRow(tr("Garment"), m_garment);
+
+    m_fabricA = new QComboBox(panel);
+    m_fabricA->setObjectName(QStringLiteral("fabricA"));
+    form->addRow(tr("Fabric"), m_fabricA);
+
+    m_compare = new QCheckBox(tr("Compare with a second fabric"), panel);
+    m_compare->setObjectName(QStringLiteral("compare"));
+    form->addRow(m_compare);
+    m_fabricB = new QComboBox(panel);
+    m_fabricB->setObjectName(QStringLiteral("fabricB"));
+    m_fabricB->setEnabled(false);
+    form->addRow(tr("Second fabric"), m_fabricB);
+
+    m_fit = new QPushButton(tr("Fit a fabric from a record…"), panel);
+    m_fit->setObjectName(QStringLiteral("fit"));
+    m_fit->setToolTip(tr("Fits the fabric parameters to a drape-test record folder (meta.json + contours.csv) "
+                         "or a folder of records of one fabric, then adds the result to the library."));
+    connect(m_fit, &QPushButton::clicked, this, &MainWindow::fitFromRecord);
+    form->addRow(m_fit);
+
+    auto* brow = new QHBoxLayout;
+    m_drape = new QPushButton(tr("Drape"), panel);
+    m_drape->setObjectName(QStringLiteral("drape"));
+    m_drape->setDefault(true);
+    m_cancel = new QPushButton(tr("Cancel"), panel);
+    m_cancel->setEnabled(false);
+    brow->addWidget(m_drape);
+    brow->addWidget(m_cancel);
+    form->addRow(brow);
+
+    m_progress = new QProgressBar(panel);
+    m_progress->setRange(0, 1000);
+    m_progress->setValue(0);
+    form->addRow(m_progress);
+
+    m_shot = new QPushButton(tr("Save screenshot…"), panel);
+    form->addRow(m_shot);
+
+    m_status = new QLabel(panel);
+    m_status->setWordWrap(true);
+    form->addRow(m_status);
+
+    auto* help = new QLabel(tr("Drag to orbit, wheel to zoom."), panel);
+    help->setStyleSheet(QStringLiteral("color: gray"));
+    form->addRow(help);
+
+    m_split = new QSplitter(Qt::Horizontal, central);
+    m_viewA = new FittingView(m_split);
+    m_viewB = new FittingView(m_split);
+    m_viewB->setClothColor(QColor(0x2f, 0x6f, 0xb0));
+    m_viewB->hide();
+    h->addWidget(panel);
+    h->addWidget(m_split, 1);
+    setCentralWidget(central);
+
+    connect(m_compare, &QCheckBox::toggled, this, [this](bool on) {
+        m_fabricB->setEnabled(on);
+        m_viewB->setVisible(on);
+    });
+    connect(m_drape, &QPushButton::clicked, this, [this] {
+        QString err;
+        if (!startDrape(&err)) showMessage(err);
+    });
+    connect(m_cancel, &QPushButton::clicked, this, [this] {
+        m_viewA->cancel();
+        m_viewB->cancel();
+        m_fitJob.cancel();
+    });
+    connect(m_shot, &QPushButton::clicked, this, [this] {
+        const QString path = QFileDialog::getSaveFileName(this, tr("Save screenshot"), QStringLiteral("fitting.png"),
+                                                          tr("PNG images (*.png)"));
+        QString err;
+        if (!path.isEmpty() && !saveScreenshot(path, &err)) showMessage(err);
+    });
+    for (FittingView* v : {m_viewA, m_viewB}) {
+        connect(v, &FittingView::progress, this, [this, v](double f, const QString& msg) {
+            if (v == m_viewA || !m_viewA->busy()) {
+                if (f < 0) m_progress->setRange(0, 0);
+                else {
+                    m_progress->setRange(0, 1000);
+                    m_progress->setValue(int(1000 * f));
+                }
+            }
+            m_status->setText(msg);
+        });
+        connect(v, &FittingView::finished, this, [this](bool ok, const QString& msg) {
+            m_allOk = m_allOk && ok;
+            m_lastMessage = msg;
+            if (--m_pending <= 0) onViewFinished();
+        });
+    }
+    connect(&m_fitJob, &widget::LongJob::progress, this, [this](double f, const QString& msg) {
+        if (f < 0) m_progress->setRange(0, 0);
+        else {
+            m_progress->setRange(0, 1000);
+            m_progress->setValue(int(1000 * f));
+        }
+        m_status->setText(msg);
+    });
+    resize(1180, 760);
+}
+
+bool MainWindow::loadMannequin(const QString& path, QString* error)
+{
+    try {
+        auto m = std::make_shared<Mannequin>(load_mannequin(path.toStdString(), importOptions(m_options)));
+        m_mannequin = m;
+        m_viewA->setMannequin(m);
+        m_viewB->setMannequin(m);
+        m_mannequinPath->setText(QFileInfo(path).fileName());
+        m_mannequinPath->setToolTip(QStringLiteral("%1\n%2 vertices, %3 triangles, %4 m tall")
+                                        .arg(path)
+                                        .arg(m->mesh.vertex_count())
+                                        .arg(m->mesh.triangle_count())
+                                        .arg(m->height(), 0, 'f', 3));
+        return true;
+    } catch (const std::exception& e) {
+        if (error) *error = QString::fromStdString(e.what());
+        return false;
+    }
+}
+
+void MainWindow::chooseMannequin()
+{
+    const QString path = QFileDialog::getOpenFileName(this, tr("Mannequin"), QString(),
+                                                      tr("Meshes (*.obj *.dae *.zae *.gltf *.glb *.fbx *.ply *.stl);;All files (*)"));
+    if (path.isEmpty()) return;
+    QString err;
+    if (!loadMannequin(path, &err)) QMessageBox::warning(this, tr("Mannequin"), err);
+}
+
+void MainWindow::reloadFabrics(const QString& select)
+{
+    std::vector<std::string> warnings;
+    m_fabrics = available_fabrics(m_options.library.toStdString(), m_options.starterDir.toStdString(), &warnings);
+    for (QComboBox* box : {m_fabricA, m_fabricB}) {
+        const QString keep = select.isEmpty() ? box->currentText() : select;
+        box->clear();
+        for (const auto& f : m_fabrics)
+            box->addItem(QStringLiteral("%1  (%2)").arg(QString::fromStdString(f.name), QString::fromStdString(f.origin)));
+        const int i = keep.isEmpty() ? -1 : findFabric(keep.section(QStringLiteral("  ("), 0, 0));
+        if (i >= 0) box->setCurrentIndex(i);
+    }
+    if (m_fabricB->count() > 1 && m_fabricB->currentIndex() == m_fabricA->currentIndex() && select.isEmpty())
+        m_fabricB->setCurrentIndex(1);
+    if (!warnings.empty()) showMessage(QString::fromStdString(warnings.front()));
+}
+
+int MainWindow::findFabric(const QString& text) const
+{
+    for (std::size_t i = 0; i < m_fabrics.size(); ++i)
+        if (QString::fromStdString(m_fabrics[i].name).compare(text, Qt::CaseInsensitive) == 0) return int(i);
+    for (std::size_t i = 0; i < m_fabrics.size(); ++i)
+        if (QString::fromStdString(m_fabrics[i].name).contains(text, Qt::CaseInsensitive)) return int(i);
+    return -1;
+}
+
+bool MainWindow::draping() const
+{
+    return m_viewA->busy() || m_viewB->busy();
+}
+
+bool MainWindow::startDrape(QString* error)
+{
+    if (draping() || m_fitJob.running()) {
+        if (error) *error = tr("busy: wait for the running job or cancel it");
+        return false;
+    }
+    const int a = m_fabricA->currentIndex();
+    if (a < 0 || a >= int(m_fabrics.size())) {
+        if (error) *error = tr("no fabric chosen");
+        return false;
+    }
+    const Garment g = parse_garment(m_garment->currentData().toString().toStdString());
+    if (g == Garment::Skirt && !m_mannequin) {
+        if (error) *error = tr("no mannequin loaded");
+        return false;
+    }
+    m_allOk = true;
+    m_pending = 0;
+    if (!m_viewA->drape(g, m_fabrics[std::size_t(a)], error)) return false;
+    ++m_pending;
+    if (m_compare->isChecked()) {
+        const int b = m_fabricB->currentIndex();
+        if (b >= 0 && b < int(m_fabrics.size())) {
+            if (!m_viewB->drape(g, m_fabrics[std::size_t(b)], error)) {
+                m_viewA->cancel();
+                return false;
+            }
+            ++m_pending;
+        }
+    }
+    setBusy(true);
+    m_status->setText(tr("Draping…"));
+    return true;
+}
+
+void MainWindow::onViewFinished()
+{
+    setBusy(false);
+    QString text = m_lastMessage;
+    if (auto* s = m_viewA->scene(); s && s->mannequin && m_allOk) {
+        const Penetration p = body_penetration(*s->mannequin, m_viewA->lastPositions());
+        text += tr("; closest cloth vertex %1 mm from the body").arg(p.min_distance * 1000, 0, 'f', 1);
+    }
+    m_status->setText(text);
+    m_progress->setRange(0, 1000);
+    m_progress->setValue(m_allOk ? 1000 : 0);
+    emit drapeFinished(m_allOk, m_lastMessage);
+}
+
+void MainWindow::setBusy(bool busy)
+{
+    m_drape->setEnabled(!busy);
+    m_cancel->setEnabled(busy);
+    m_fit->setEnabled(!busy);
+    m_garment->setEnabled(!busy);
+}
+
+void MainWindow::showMessage(const QString& text)
+{
+    m_status->setText(text);
+    statusBar()->showMessage(text, 10000);
+}
+
+void MainWindow::fitFromRecord()
+{
+    const QString dir = QFileDialog::getExistingDirectory(this, tr("Drape-test record folder"),
+                                                          QStringLiteral(DRAPE_SHARED_DIR "/data/drape-lab"));
+    if (dir.isEmpty()) return;
+    namespace fs = std::filesystem;
+    std::vector<estimate::MeasuredDrape> records;
+    try {
+        const fs::path p(dir.toStdString());
+        if (fs::exists(p / "meta.json")) records.push_back(estimate::load_record(p.string()));
+        else
+            for (const auto& e : fs::directory_iterator(p))
+                if (e.is_directory() && fs::exists(e.path() / "meta.json")) records.push_back(estimate::load_record(e.path().string()));
+        if (records.empty()) throw std::runtime_error(dir.toStdString() + ": no record (meta.json) in this folder or its subfolders");
+    } catch (const std::exception& e) {
+        QMessageBox::warning(this, tr("Fit"), QString::fromStdString(e.what()));
+        return;
+    }
+    auto result = std::make_shared<nlohmann::json>();
+    const std::string where = dir.toStdString();
+    setBusy(true);
+    m_cancel->setEnabled(true);
+    const bool started = m_fitJob.start(tr("fit"), [records, result, where](widget::JobContext& ctx) {
+        estimate::FitOptions o;
+        o.cancel = ctx.cancelFlag();
+        o.progress = [&ctx](const estimate::FitProgress& p) {
+            ctx.report(p.planned > 0 ? std::min(1.0, double(p.evaluation) / p.planned) : -1.0,
+                       QStringLiteral("fit: %1, evaluation %2 of at most %3, chi2 %4")
+                           .arg(QString::fromStdString(p.stage))
+                           .arg(p.evaluation)
+                           .arg(p.planned)
+                           .arg(p.best_chi2, 0, 'g', 4));
+        };
+        const estimate::FitResult r = estimate::fit_fabric(records, o);
+        if (r.cancelled) throw std::runtime_error("cancelled");
+        *result = estimate::fit_to_json(r);
+        (void)where;
+    });
+    if (!started) {
+        setBusy(false);
+        return;
+    }
+    connect(&m_fitJob, &widget::LongJob::finished, this, [this, result, records](bool ok, const QString& msg) {
+        setBusy(false);
+        if (!ok) {
+            showMessage(tr("Fit: %1").arg(msg));
+            return;
+        }
+        QString name = QString::fromStdString(records.front().id) + tr(" (fitted)");
+        try {
+            cloth::FabricPreset preset = cloth::fabric_from_json(*result, "fit of " + records.front().source);
+            library::set_preset_name(preset, name.toStdString());
+            const std::string path =
+                m_options.library.isEmpty() ? library::default_library_path() : m_options.library.toStdString();
+            library::FabricLibrary lib(path);
+            lib.import_preset(cloth::fabric_to_json(preset), "fit", name.toStdString(), library::OnConflict::Rename);
+            reloadFabrics(name);
+            showMessage(tr("Fitted fabric added to the library %1").arg(QString::fromStdString(path)));
+        } catch (const std::exception& e) {
+            showMessage(tr("Fit: %1").arg(QString::fromStdString(e.what())));
+        }
+    }, Qt::SingleShotConnection);
+}
+
+QImage MainWindow::screenshot()
+{
+    const QImage a = m_viewA->grabFrame();
+    if (!m_compare->isChecked() || !m_viewB->isVisible()) return a;
+    const QImage b = m_viewB->grabFrame();
+    QImage out(a.width() + b.width() + 4, std::max(a.height(), b.height()), QImage::Format_RGB32);
+    out.fill(QColor(0x20, 0x20, 0x20));
+    QPainter p(&out);
+    p.drawImage(0, 0, a);
+    p.drawImage(a.width() + 4, 0, b);
+    return out;
+}
+
+bool MainWindow::saveScreenshot(const QString& path, QString* error)
+{
+    const QImage img = screenshot();
+    if (img.isNull() || !img.save(path)) {
+        if (error) *error = tr("cannot write the screenshot %1").arg(path);
+        return false;
+    }
+    return true;
+}
+
+QByteArray MainWindow::summaryJson() const
+{
+    QJsonObject root;
+    QJsonArray views;
+    for (FittingView* v : {m_viewA, m_viewB}) {
+        const Scene* s = v->scene();
+        if (!s || (v == m_viewB && !m_compare->isChecked())) continue;
+        QJsonObject o;
+        const cloth::SolverStatus& st = v->lastStatus();
+        o["garment"] = QString::fromStdString(to_string(s->garment));
+        o["fabric"] = v->fabricName();
+        o["vertices"] = s->system->vertex_count();
+        o["triangles"] = int(s->system->mesh().F.rows());
+        o["outcome"] = QString::fromStdString(cloth::to_string(st.outcome));
+        o["newton_iterations"] = double(st.newton_iterations);
+        o["residual"] = st.residual;
+        o["wall_seconds"] = st.wall_seconds;
+        const cloth::Positions x = v->lastPositions();
+        if (s->mannequin && x.rows() > 0) {
+            const Penetration p = body_penetration(*s->mannequin, x);
+            o["min_body_distance_m"] = p.min_distance;
+            o["vertices_inside_body"] = p.inside;
+            o["waist_z_m"] = s->waist.z;
+            o["waist_radius_m"] = s->waist.max_radius;
+            const auto& b = s->mannequin->bounds;
+            o["mannequin_bounding_box_m"] = QJsonObject{
+                {"min", QJsonArray{b.min.x(), b.min.y(), b.min.z()}},
+                {"max", QJsonArray{b.max.x(), b.max.y(), b.max.z()}}};
+        }
+        if (x.rows() > 0) {
+            o["cloth_min_z_m"] = x.col(2).minCoeff();
+            o["cloth_max_z_m"] = x.col(2).maxCoeff();
+        }
+        views.append(o);
+    }
+    root["views"] = views;
+    return QJsonDocument(root).toJson();
+}
+
+void MainWindow::runScript(const ScriptOptions& s)
+{
+    auto fail = [this](const QString& msg) {
+        qCritical("drape-demo: %s", qPrintable(msg));
+        QTimer::singleShot(0, this, [this] { emit scriptFinished(1); });
+    };
+    const int gi = m_garment->findData(s.garment);
+    if (gi < 0) return fail(tr("unknown garment \"%1\" (expected skirt or tablecloth)").arg(s.garment));
+    m_garment->setCurrentIndex(gi);
+    if (!s.fabric.isEmpty()) {
+        const int i = findFabric(s.fabric);
+        if (i < 0) return fail(tr("no fabric matches \"%1\"").arg(s.fabric));
+        m_fabricA->setCurrentIndex(i);
+    }
+    if (!s.fabric2.isEmpty()) {
+        const int i = findFabric(s.fabric2);
+        if (i < 0) return fail(tr("no fabric matches \"%1\"").arg(s.fabric2));
+        m_compare->setChecked(true);
+        m_fabricB->setCurrentIndex(i);
+    }
+    connect(this, &MainWindow::drapeFinished, this, [this, s](bool ok, const QString& msg) {
+        qInfo("drape-demo: %s", qPrintable(msg));
+        int code = ok ? 0 : 1;
+        if (!s.screenshot.isEmpty()) {
+            QString err;
+            if (!saveScreenshot(s.screenshot, &err)) {
+                qCritical("drape-demo: %s", qPrintable(err));
+                code = 1;
+            } else
+                qInfo("drape-demo: wrote %s", qPrintable(s.screenshot));
+        }
+        const QByteArray summary = summaryJson();
+        if (!s.json.isEmpty()) {
+            QFile f(s.json);
+            if (f.open(QIODevice::WriteOnly)) f.write(summary);
+            else code = 1;
+        }
+        fputs(summary.constData(), stdout);
+        emit scriptFinished(code);
+    }, Qt::SingleShotConnection);
+    QString err;
+    if (!startDrape(&err)) return fail(err);
+}
+
+} // namespace drape::demo

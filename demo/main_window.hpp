@@ -1,0 +1,112 @@
+#pragma once
+// The demo app for fittings: choose a mannequin, a garment and a fabric (from
+// the library, the starter presets, or fitted now from a drape-test record),
+// drape it, orbit, compare two fabrics side by side, save a screenshot.
+// A scripted mode runs one fitting without a user (for Xvfb, tests and docs).
+#include "demo/fitting_view.hpp"
+
+#include "widget/long_job.hpp"
+
+#include <QMainWindow>
+#include <QString>
+
+#include <memory>
+#include <vector>
+
+class QCheckBox;
+class QComboBox;
+class QLabel;
+class QLineEdit;
+class QProgressBar;
+class QPushButton;
+class QSplitter;
+
+namespace drape::demo {
+
+struct DemoOptions {
+    QString mannequin;      ///< empty = default_mannequin_path()
+    QString unit = "file";  ///< mannequin unit: file|mm|cm|m
+    QString up = "file";    ///< mannequin up axis: file|y|z
+    QString library;        ///< fabric library path, empty = default
+    QString starterDir;     ///< starter presets folder, empty = the source tree's data/library
+};
+
+/// What a scripted run does.
+struct ScriptOptions {
+    QString garment = "skirt"; ///< skirt | tablecloth
+    QString fabric;            ///< fabric name (substring match), empty = the first one
+    QString fabric2;           ///< second fabric: compare side by side
+    QString screenshot;        ///< PNG path
+    QString json;              ///< summary JSON path (optional)
+};
+
+class MainWindow : public QMainWindow {
+    Q_OBJECT
+public:
+    explicit MainWindow(const DemoOptions& options, QWidget* parent = nullptr);
+    ~MainWindow() override;
+
+    /// Loads the mannequin; false (and an error message) when it cannot.
+    bool loadMannequin(const QString& path, QString* error = nullptr);
+    const std::vector<FabricChoice>& fabrics() const { return m_fabrics; }
+    /// Index of the first fabric whose name contains `text` (case-insensitive), -1 if none.
+    int findFabric(const QString& text) const;
+
+    /// Starts the drape of the current choices in one or both views.
+    bool startDrape(QString* error = nullptr);
+    bool draping() const;
+    /// The view(s) as one image (side by side when comparing).
+    QImage screenshot();
+    bool saveScreenshot(const QString& path, QString* error = nullptr);
+
+    /// Runs a scripted fitting; emits scriptFinished(exitCode) when done.
+    void runScript(const ScriptOptions& s);
+
+    FittingView* viewA() const { return m_viewA; }
+    FittingView* viewB() const { return m_viewB; }
+    QComboBox* garmentBox() const { return m_garment; }
+    QComboBox* fabricBoxA() const { return m_fabricA; }
+    QComboBox* fabricBoxB() const { return m_fabricB; }
+    QCheckBox* compareBox() const { return m_compare; }
+    QPushButton* fitButton() const { return m_fit; }
+    QProgressBar* progressBar() const { return m_progress; }
+    /// Summary of the last drape of view A (and B) as JSON text.
+    QByteArray summaryJson() const;
+
+signals:
+    void drapeFinished(bool ok, const QString& message);
+    void scriptFinished(int exitCode);
+
+private:
+    void buildUi();
+    void reloadFabrics(const QString& select = {});
+    void onViewFinished();
+    void fitFromRecord();
+    void chooseMannequin();
+    void setBusy(bool busy);
+    void showMessage(const QString& text);
+
+    DemoOptions m_options;
+    std::shared_ptr<const Mannequin> m_mannequin;
+    std::vector<FabricChoice> m_fabrics;
+    FittingView* m_viewA = nullptr;
+    FittingView* m_viewB = nullptr;
+    QSplitter* m_split = nullptr;
+    QLineEdit* m_mannequinPath = nullptr;
+    QComboBox* m_garment = nullptr;
+    QComboBox* m_fabricA = nullptr;
+    QComboBox* m_fabricB = nullptr;
+    QCheckBox* m_compare = nullptr;
+    QPushButton* m_drape = nullptr;
+    QPushButton* m_cancel = nullptr;
+    QPushButton* m_fit = nullptr;
+    QPushButton* m_shot = nullptr;
+    QProgressBar* m_progress = nullptr;
+    QLabel* m_status = nullptr;
+    widget::LongJob m_fitJob;
+    int m_pending = 0;  ///< views still draping
+    bool m_allOk = true;
+    QString m_lastMessage;
+};
+
+} // namespace drape::demo

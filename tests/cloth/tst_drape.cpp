@@ -82,7 +82,12 @@ private slots:
 
     void warm_start_after_small_change_is_cheap()
     {
+        // A mid-weight fabric whose fold pattern survives a 10 % change. (A limp one
+        // at this coarse grid may re-buckle into another fold count after the change,
+        // and then the warm start costs nearly a cold one: 151 vs 191 iterations seen.)
         FabricParams p;
+        p[Param::BendWarp] = 5e-5;
+        p[Param::BendWeft] = 4e-5;
         const DrapeResult cold = simulate_drape(p, small());
         QVERIFY(cold.status.converged());
         p[Param::BendWarp] *= 1.1;

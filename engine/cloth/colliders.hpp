@@ -21,7 +21,9 @@ class Collider {
 public:
     virtual ~Collider() = default;
     /// Signed distance and normal at p [m]. May return false when p is farther
-    /// than `band` [m] from the surface (the answer is then not needed).
+    /// than `band` [m] outside the surface (the answer is then not needed); a point
+    /// inside must always be answered, however deep, or a vertex pushed through
+    /// would feel no force.
     virtual bool query(const Eigen::Vector3d& p, double band, ContactSample& out) const = 0;
     /// Second derivative of the signed distance at p [1/m] (the change of the
     /// normal); zero for planes. Used for an exact contact Hessian near rest.

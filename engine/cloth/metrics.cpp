@@ -237,8 +237,9 @@ void find_nodes(const RadialProfile& p, const MetricOptions& opt, DrapeMetrics& 
                 out.node_amplitudes_m.push_back(val(e) - out.fourier.a0);
             }
         if (out.node_angles_rad.size() > 1) { // two crests with one trough between them each way
-            out.node_angles_rad.resize(1);
-            out.node_amplitudes_m.resize(1);
+            // (erase, not resize: GCC 12 warns falsely about resize(1) here)
+            out.node_angles_rad.erase(out.node_angles_rad.begin() + 1, out.node_angles_rad.end());
+            out.node_amplitudes_m.erase(out.node_amplitudes_m.begin() + 1, out.node_amplitudes_m.end());
         }
     } else {
         for (const Ext& e : ext)

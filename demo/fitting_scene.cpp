@@ -241,7 +241,7 @@ cloth::Positions hang_skirt(const Mannequin& m, const Panel& p, const Eigen::Vec
         const int i = std::clamp(int((z_band - z) / dz), 0, int(body.size()) - 1);
         return body[std::size_t(i)];
     };
-    const double slope = 0.25; // [rad] from vertical: a little flare
+    const double slope = 0.05; // [rad] from vertical: the fabric chooses its own flare
     cloth::Positions x = p.X;
     // The pattern ring at radius rho hangs at slant distance s = rho - r_in
     // below the waistband; its length 2 pi rho is taken up by k outward folds

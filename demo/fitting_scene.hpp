@@ -81,9 +81,11 @@ struct SkirtOptions;
 
 /// The start shape of a skirt pattern `p` pinned at its waistband (radius
 /// `r_in` [m] around `centre`, height `z_band` [m]): each ring hangs on a
-/// slightly flared cone that clears the body, its length gathered into eight
-/// outward folds, so the drape starts outside the body with springs near their
-/// rest length (a flat pattern would cut through arms held away from the body).
+/// nearly vertical cone (3 degrees) that clears the body, its length gathered
+/// into eight outward folds, so the drape starts outside the body with springs
+/// near their rest length (a flat pattern would cut through arms held away
+/// from the body) and the fabric chooses its own flare. The number of folds is
+/// the start's: the static solver finds the rest state nearest to it.
 cloth::Positions hang_skirt(const Mannequin& m, const Panel& p, const Eigen::Vector2d& centre, double z_band,
                             double r_in, const SkirtOptions& opt);
 

@@ -394,7 +394,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
        << num(r.options.noise.dc_lab_percent, "%.1f") << " % (drapemeter) + " << num(r.options.noise.dc_seed_percent, "%.1f")
        << " % (drape-to-drape), nodes " << num(r.options.noise.nodes, "%.2f") << ", contour mean radius "
        << num(r.options.noise.radius_seed_m * 1e3, "%.1f") << " mm, fold amplitude / harmonic magnitudes "
-       << num(r.options.noise.fold_seed_m * 1e3, "%.1f") << " mm (see docs/estimate.md).\n";
+       << num(r.options.noise.fold_seed_m * 1e3, "%.1f") << " mm (defaults; each term's sigma is then multiplied by sqrt(1 + 1/seeds), contour floors by sqrt(depths), and raised to the drape-to-drape spread measured at the optimum: see the `sigma` of each term in report.json and docs/estimate.md).\n";
 
     json rep = fit_to_json(r);
     rep["records_detail"] = recs;

@@ -72,7 +72,7 @@ private slots:
     void coverageAndPrediction()
     {
         const auto p = truth();
-        int inside = 0, cases = 0;
+        int inside = 0, cases = 0, good_fits = 0;
         FitResult first;
         for (std::uint64_t seed : {11, 12, 13}) {
             const FitResult r = fit_fabric({synthetic(p, 0.30, 0.15, seed)}, options());
@@ -84,12 +84,9 @@ private slots:
             }
             qInfo("  D error %+.2f, node error %+.2f, %ld simulations, %.2f s each", r.records[0].dc_error_percent, r.records[0].node_error,
                   r.simulations, r.seconds_per_simulation);
-            QVERIFY(std::abs(r.records[0].dc_error_percent) < 2.0);
-            QVERIFY(std::abs(r.records[0].node_error) <= 1.0);
+            good_fits += (std::abs(r.records[0].dc_error_percent) < 2.0 && std::abs(r.records[0].node_error) <= 1.0) ? 1 : 0;
             if (seed == 11) first = r;
         }
-        // 95 % intervals: with 6 cases, at most one miss is expected by chance
-        QVERIFY2(inside >= 5, qPrintable(QString("%1 of %2 intervals hold the truth").arg(inside).arg(cases)));
 
         // Prediction of set-ups the fit never saw, against the known truth
         // (D averaged over 3 perturbation seeds on both sides).
@@ -99,6 +96,10 @@ private slots:
             qInfo("predict %.0f/%.0f mm: truth D %.1f, predicted %.1f", D1 * 1e3, D2 * 1e3, dt, df);
             QVERIFY(std::abs(dt - df) < 3.0);
         }
+        // issue 4: D within 2 points and nodes within 1 for every fit
+        QCOMPARE(good_fits, 3);
+        // 95 % intervals: with 6 cases, at most one miss is expected by chance
+        QVERIFY2(inside >= 5, qPrintable(QString("%1 of %2 intervals hold the truth").arg(inside).arg(cases)));
     }
 
     void jointFitOfTwoSetups()
@@ -151,5 +152,12 @@ private slots:
     }
 };
 
-QTEST_APPLESS_MAIN(TestFitSlow)
+// Each function runs several full fits (minutes each on a loaded 2-core
+// machine): lift Qt Test's 5-minute per-function watchdog.
+int main(int argc, char** argv)
+{
+    if (qEnvironmentVariableIsEmpty("QTEST_FUNCTION_TIMEOUT")) qputenv("QTEST_FUNCTION_TIMEOUT", "3000000");
+    TestFitSlow t;
+    return QTest::qExec(&t, argc, argv);
+}
 #include "tst_fit_slow.moc"

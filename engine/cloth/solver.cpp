@@ -371,6 +371,7 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
     Positions f, trial;
     s.v.setZero();
     int exact_ok = 1;
+    auto last_report = t0;
     // Energy scale for rounding: the whole cloth lowered by 1 m [J].
     const double e_scale = s.model().total_mass() * 9.81;
     while (true) {
@@ -393,8 +394,13 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
             break;
         }
         st.force_evaluations = s.force_evaluations - f0;
-        st.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-        if (cancelled(opt, st)) {
+        const auto now = Clock::now();
+        st.wall_seconds = std::chrono::duration<double>(now - t0).count();
+        // The cancel flag is read every iteration, the progress callback at most
+        // five times a second (a terminal or a log needs no more).
+        const bool report = st.steps == 0 || now - last_report > std::chrono::milliseconds(200);
+        if (report) last_report = now;
+        if ((opt.cancel && opt.cancel->load()) || (report && opt.progress && !opt.progress(st))) {
             st.outcome = SolverStatus::Outcome::Cancelled;
             break;
         }

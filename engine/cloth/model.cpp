@@ -79,6 +79,8 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
 {
     p.validate();
     if (!(opt.contact_depth > 0)) throw ParameterError("ModelOptions: contact_depth must be positive");
+    if (mesh.grid.valid() && opt.bending != BendingModel::Quadratic)
+        throw ParameterError("make_model: the seed's flexion springs are grid constants; use a seed-19 preset for them");
     ClothModel m;
     m.mass = p[Param::AreaDensity] * mesh.vertex_areas();
     m.air_damping = p[Param::DampAir];
@@ -110,8 +112,6 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
                 }
             }
         m.description = "grid mass-spring model (stretch, shear, quadratic bending) from continuum parameters";
-        if (opt.bending != BendingModel::Quadratic)
-            throw ParameterError("make_model: the seed's flexion springs are grid constants; use a seed-19 preset for them");
         return m;
     }
     // General triangle mesh.
@@ -179,6 +179,8 @@ ClothModel make_seed_model(const ClothMesh& mesh, const SeedParams& s, const Mod
 {
     s.validate("seed parameters");
     if (!mesh.grid.valid()) throw ParameterError("make_seed_model: the seed's model needs a grid mesh");
+    if (opt.bending == BendingModel::Quadratic)
+        throw ParameterError("make_seed_model: the seed's model bends with flexion springs (BendingModel::Flexion)");
     ClothModel m;
     m.mass = Eigen::VectorXd::Constant(mesh.vertex_count(), s.particle_mass_kg());
     m.air_damping = 0;
@@ -199,8 +201,6 @@ ClothModel make_seed_model(const ClothMesh& mesh, const SeedParams& s, const Mod
                 add_spring(m, mesh, a, g.at(i, j + 2), s.sfl_kv, s.sfl_dv, SpringKind::FlexionV);
             }
         }
-    if (opt.bending == BendingModel::Quadratic)
-        throw ParameterError("make_seed_model: the seed's model bends with flexion springs (BendingModel::Flexion)");
     m.description = "the seed paper's mass-spring model (structural, shear, flexion springs) on its own grid";
     return m;
 }

@@ -28,7 +28,8 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
   --report DIR        write the report folder (PNG plots, report.json, report.md)
   --json              print a JSON summary (preset, intervals, records, residual) on stdout
   --model M           baseline (seed paper: bending warp/weft + shear, frictionless disc; default)
-                      | full (also tensile stiffness warp/weft and disc friction)
+                      | stiffening (+ stiffening bending, bend_stiffening_radius_m)
+                      | full (stiffening + tensile stiffness warp/weft)
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 25)

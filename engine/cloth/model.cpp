@@ -86,7 +86,9 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
     m.air_damping = p[Param::DampAir];
     m.contact_offset = 0.5 * p[Param::Thickness];
     m.friction = p[Param::Friction];
+    m.bend_stiffening = p[Param::BendStiffeningRadius] * p[Param::BendStiffeningRadius];
     add_common(m, mesh, opt.contact_depth);
+    m.edge_contact = opt.edge_contact;
     const double Eu = p[Param::StretchWarp], Ev = p[Param::StretchWeft], G = p[Param::Shear];
     const double Bu = p[Param::BendWarp], Bv = p[Param::BendWeft];
     const double cs = p[Param::DampStretch], csh = p[Param::DampShear], cb = p[Param::DampBend];
@@ -187,6 +189,7 @@ ClothModel make_seed_model(const ClothMesh& mesh, const SeedParams& s, const Mod
     m.contact_offset = 0;
     m.friction = 0;
     add_common(m, mesh, opt.contact_depth);
+    m.edge_contact = opt.edge_contact;
     const auto& g = mesh.grid;
     for (int j = 0; j < g.nv; ++j)
         for (int i = 0; i < g.nu; ++i) {

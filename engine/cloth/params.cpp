@@ -37,6 +37,9 @@ constexpr std::array<ParamSpec, kParamCount> kTable{{
      "Fabric thickness; half of it is the contact offset from colliders."},
     {Param::Friction, "friction_coefficient", "-", 0.0, 2.0, 0.0, false, true,
      "Coulomb friction coefficient between cloth and colliders (0 = frictionless, as in the seed paper)."},
+    {Param::BendStiffeningRadius, "bend_stiffening_radius_m", "m", 0.0, 0.05, 0.0, false, true,
+     "Nonlinear (stiffening) bending: the moment per unit width is B*kappa*(1 + (r*kappa)^2), so M/kappa doubles "
+     "where the radius of curvature falls to r (0 = linear bending, as in the seed paper)."},
 }};
 } // namespace
 

@@ -29,6 +29,7 @@ enum class Param : int {
     DampAir,          ///< [1/s] mass-proportional (air) damping rate
     Thickness,        ///< [m] cloth thickness, used as contact offset
     Friction,         ///< [-] Coulomb friction coefficient with colliders (0 = frictionless, the seed's)
+    BendStiffeningRadius, ///< [m] radius of curvature at which the bending stiffness doubles (0 = linear bending, the seed's)
     Count
 };
 

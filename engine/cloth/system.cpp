@@ -16,6 +16,13 @@ ClothSystem::ClothSystem(ClothMesh mesh, ClothModel model) : m_mesh(std::move(me
         throw ParameterError("ClothSystem: model has " + std::to_string(m_model.vertex_count()) + " vertices, mesh " + std::to_string(n));
     x = m_mesh.X;
     v = Positions::Zero(n, 3);
+    for (int f = 0; f < m_mesh.F.rows(); ++f)
+        for (int c = 0; c < m_mesh.F.cols(); ++c) {
+            const int a = m_mesh.F(f, c), b = m_mesh.F(f, (c + 1) % m_mesh.F.cols());
+            m_edges.push_back({std::min(a, b), std::max(a, b)});
+        }
+    std::sort(m_edges.begin(), m_edges.end());
+    m_edges.erase(std::unique(m_edges.begin(), m_edges.end()), m_edges.end());
 }
 
 void ClothSystem::set_pinned(int vertex, bool p)
@@ -52,6 +59,88 @@ void for_each_contact(const ClothSystem& s, const Positions& X, F&& f)
             if (phi < 0) f(i, phi, cs.normal, *c);
         }
 }
+
+/// One edge in contact at an interior point: p(t) = (1 - t) x_a + t x_b is the
+/// point of the edge deepest in the offset surface (phi(p(t)) minimal in t).
+struct EdgeContact {
+    int edge;         ///< index into ClothSystem::edges()
+    double t;         ///< (0, 1)
+    double phi;       ///< < 0 [m]
+    Vec3 n;           ///< outward normal at p(t)
+    Eigen::Matrix3d H;///< distance Hessian at p(t) [1/m]
+    Vec3 e;           ///< x_b - x_a [m]
+    double k;         ///< penalty stiffness [N/m]
+};
+
+/// Edge contact with curved convex colliders (pedestal, sphere): the signed
+/// distance is convex along a segment, so its minimum is found by golden
+/// section and polished by Newton. Minima at an end point are the vertex
+/// contact's; planes (distance linear along an edge) never have interior minima.
+template <class F>
+void for_each_edge_contact(const ClothSystem& s, const Positions& X, F&& f)
+{
+    const auto& m = s.model();
+    if (!m.edge_contact) return;
+    const double off = m.contact_offset;
+    const auto& edges = s.edges();
+    for (const auto& c : s.colliders()) {
+        const std::string kind = c->kind();
+        if (kind != "pedestal" && kind != "sphere") continue;
+        for (std::size_t ei = 0; ei < edges.size(); ++ei) {
+            const int a = edges[ei][0], b = edges[ei][1];
+            if (m.pinned[static_cast<std::size_t>(a)] && m.pinned[static_cast<std::size_t>(b)]) continue;
+            const Vec3 xa = X.row(a).transpose(), xb = X.row(b).transpose();
+            const Vec3 e = xb - xa;
+            const double L = e.norm();
+            if (L <= 1e-12) continue;
+            // Every point of the edge is within L/2 of an end point.
+            ContactSample ca, cb;
+            const bool qa = c->query(xa, 0.5 * L + off, ca), qb = c->query(xb, 0.5 * L + off, cb);
+            if (!qa && !qb) continue;
+            auto dist = [&](double t) {
+                ContactSample cs;
+                c->query(xa + t * e, 1e300, cs);
+                return cs.distance;
+            };
+            double lo = 0, hi = 1;
+            const double g = 0.5 * (std::sqrt(5.0) - 1);
+            double t1 = hi - g * (hi - lo), t2 = lo + g * (hi - lo), d1 = dist(t1), d2 = dist(t2);
+            for (int it = 0; it < 40 && hi - lo > 1e-7; ++it) {
+                if (d1 < d2) {
+                    hi = t2;
+                    t2 = t1;
+                    d2 = d1;
+                    t1 = hi - g * (hi - lo);
+                    d1 = dist(t1);
+                } else {
+                    lo = t1;
+                    t1 = t2;
+                    d1 = d2;
+                    t2 = lo + g * (hi - lo);
+                    d2 = dist(t2);
+                }
+            }
+            double t = 0.5 * (lo + hi);
+            ContactSample cs;
+            Eigen::Matrix3d H;
+            for (int it = 0; it < 3; ++it) { // Newton on d/dt phi = n . e
+                c->query(xa + t * e, 1e300, cs);
+                H = c->distance_hessian(xa + t * e);
+                const double gt = cs.normal.dot(e), gtt = e.dot(H * e);
+                if (!(gtt > 1e-12 * L * L * (1.0 / L))) break;
+                t = std::clamp(t - gt / gtt, 0.0, 1.0);
+            }
+            if (t < 1e-4 || t > 1 - 1e-4) continue;
+            c->query(xa + t * e, 1e300, cs);
+            const double phi = cs.distance - off;
+            if (phi >= 0) continue;
+            H = c->distance_hessian(xa + t * e);
+            if (!(e.dot(H * e) > 1e-9 / L * L * L)) continue; // no curvature along the edge: no interior minimum
+            const double k = 0.5 * (m.contact_stiffness(a) + m.contact_stiffness(b));
+            f(EdgeContact{static_cast<int>(ei), t, phi, cs.normal, H, e, k});
+        }
+    }
+}
 } // namespace
 
 double ClothSystem::potential_energy(const Positions& X) const
@@ -61,10 +150,12 @@ double ClothSystem::potential_energy(const Positions& X) const
         const double l = (X.row(sp.i) - X.row(sp.j)).norm();
         e += 0.5 * sp.k * (l - sp.rest) * (l - sp.rest);
     }
+    const double beta = m_model.bend_stiffening;
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        e += 0.5 * b.k * s.squaredNorm();
+        const double s2 = s.squaredNorm();
+        e += b.k * (0.5 * s2 + 0.25 * beta * s2 * s2);
     }
     for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
     for (const auto& a : m_model.anchors) {
@@ -72,6 +163,7 @@ double ClothSystem::potential_energy(const Positions& X) const
         e += 0.5 * a.k * (d.x() * d.x() + d.y() * d.y());
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3&, const Collider&) { e += 0.5 * m_model.contact_stiffness(i) * phi * phi; });
+    for_each_edge_contact(*this, X, [&](const EdgeContact& c) { e += 0.5 * c.k * c.phi * c.phi; });
     return e;
 }
 
@@ -102,10 +194,12 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         f.row(sp.i) += fi.transpose();
         f.row(sp.j) -= fi.transpose();
     }
+    const double beta = m_model.bend_stiffening;
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (b.k * b.w[a] * s).transpose();
+        const double c = b.k * (1.0 + beta * s.squaredNorm());
+        for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (c * b.w[a] * s).transpose();
     }
     for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();
     for (const auto& a : m_model.anchors) {
@@ -114,6 +208,11 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         f(a.vertex, 1) -= a.k * d.y();
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3& n, const Collider&) { f.row(i) -= (m_model.contact_stiffness(i) * phi * n).transpose(); });
+    for_each_edge_contact(*this, X, [&](const EdgeContact& c) {
+        const auto& ed = m_edges[static_cast<std::size_t>(c.edge)];
+        f.row(ed[0]) -= ((1 - c.t) * c.k * c.phi * c.n).transpose();
+        f.row(ed[1]) -= (c.t * c.k * c.phi * c.n).transpose();
+    });
 }
 
 void ClothSystem::add_damping_forces(const Positions& X, const Positions& V, Positions& f) const
@@ -178,6 +277,7 @@ HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
     for (const auto& b : m.bends)
         for (int p = 0; p < b.n; ++p)
             for (int q = p + 1; q < b.n; ++q) link(b.v[p], b.v[q]);
+    for (const auto& e : s.edges()) link(e[0], e[1]);
     std::vector<int> colptr(static_cast<std::size_t>(3 * n + 1), 0);
     long nnz = 0;
     for (int j = 0; j < n; ++j) {
@@ -218,6 +318,8 @@ HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
                 if (q < b.n) bl[static_cast<std::size_t>(t)] = block(std::min(b.v[p], b.v[q]), std::max(b.v[p], b.v[q]));
         m_bend_blocks.push_back(bl);
     }
+    m_edge_blocks.reserve(s.edges().size());
+    for (const auto& e : s.edges()) m_edge_blocks.push_back(block(e[0], e[1]));
 }
 
 HessianAssembler::Block HessianAssembler::block(int i, int j) const
@@ -260,14 +362,22 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.j)], K);
         add_off(m_spring_blocks[s], -K);
     }
+    const double beta = m.bend_stiffening;
     for (std::size_t s = 0; s < m.bends.size(); ++s) {
         const auto& b = m.bends[s];
-        const double c = b.k + damping_scale * b.d;
-        for (int p = 0; p < b.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(b.v[p])], c * b.w[p] * b.w[p] * I);
+        // Hessian of k (|d|^2/2 + beta |d|^4/4) in d: k ((1 + beta |d|^2) I + 2 beta d d^T)
+        // (positive definite), plus the damping term; vertex blocks are w_p w_q times it.
+        Eigen::Matrix3d Kd = (b.k + damping_scale * b.d) * I;
+        if (beta > 0) {
+            Vec3 d = Vec3::Zero();
+            for (int a = 0; a < b.n; ++a) d += b.w[a] * X.row(b.v[a]).transpose();
+            Kd += b.k * beta * (d.squaredNorm() * I + 2.0 * d * d.transpose());
+        }
+        for (int p = 0; p < b.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(b.v[p])], b.w[p] * b.w[p] * Kd);
         int t = 0;
         for (int p = 0; p < 4; ++p)
             for (int q = p + 1; q < 4; ++q, ++t)
-                if (q < b.n) add_off(m_bend_blocks[s][static_cast<std::size_t>(t)], c * b.w[p] * b.w[q] * I);
+                if (q < b.n) add_off(m_bend_blocks[s][static_cast<std::size_t>(t)], b.w[p] * b.w[q] * Kd);
     }
     const int n = m_s.vertex_count();
     for (int i = 0; i < n; ++i) {
@@ -286,6 +396,31 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         // with phi < 0 this term is negative, so the projected form drops it.
         if (!project) K += phi * c.distance_hessian(X.row(i).transpose());
         add_diag(m_diag_blocks[static_cast<std::size_t>(i)], m.contact_stiffness(i) * K);
+    });
+    for_each_edge_contact(m_s, X, [&](const EdgeContact& c) {
+        // E = k phi^2 / 2 with phi(x_a, x_b) = min_t d((1-t) x_a + t x_b) - offset.
+        // grad phi = ((1-t) n, t n); Hessian (Danskin, t interior) =
+        // [w_p w_q H] - g g^T / (e^T H e), g = ((1-t) H e - n, t H e + n).
+        const auto& ed = m_s.edges()[static_cast<std::size_t>(c.edge)];
+        const double w[2] = {1 - c.t, c.t};
+        Eigen::Matrix<double, 6, 6> K;
+        Eigen::Matrix<double, 6, 1> gp;
+        gp << w[0] * c.n, w[1] * c.n;
+        K = gp * gp.transpose();
+        if (!project) {
+            const Vec3 He = c.H * c.e;
+            Eigen::Matrix<double, 6, 1> g;
+            g << w[0] * He - c.n, w[1] * He + c.n;
+            Eigen::Matrix<double, 6, 6> Hp;
+            for (int p = 0; p < 2; ++p)
+                for (int q = 0; q < 2; ++q) Hp.block<3, 3>(3 * p, 3 * q) = w[p] * w[q] * c.H;
+            Hp -= g * g.transpose() / c.e.dot(He);
+            K += c.phi * Hp;
+        }
+        K *= c.k;
+        add_diag(m_diag_blocks[static_cast<std::size_t>(ed[0])], K.block<3, 3>(0, 0));
+        add_diag(m_diag_blocks[static_cast<std::size_t>(ed[1])], K.block<3, 3>(3, 3));
+        add_off(m_edge_blocks[static_cast<std::size_t>(c.edge)], K.block<3, 3>(0, 3));
     });
     // Pinned vertices: identity rows and columns (their update is zero).
     bool any_pinned = false;

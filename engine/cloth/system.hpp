@@ -59,11 +59,15 @@ public:
     /// below `v_eps` [m/s] so the force is continuous at rest).
     void add_friction_forces(const Positions& X, const Positions& V, Positions& f, double v_eps = 1e-4) const;
 
+    /// Unique edges of the mesh's faces (a < b): where edge contact is checked.
+    const std::vector<std::array<int, 2>>& edges() const { return m_edges; }
+
 private:
     friend class HessianAssembler;
     ClothMesh m_mesh;
     ClothModel m_model;
     std::vector<std::shared_ptr<const Collider>> m_colliders;
+    std::vector<std::array<int, 2>> m_edges;
 };
 
 /// Sparse symmetric Hessian of the potential energy with a fixed sparsity
@@ -92,6 +96,7 @@ private:
     std::vector<Block> m_spring_blocks;  // per spring: off-diagonal block (min, max)
     std::vector<Block> m_diag_blocks;    // per vertex
     std::vector<std::array<Block, 6>> m_bend_blocks; // per stencil: pairs (p<q) in order 01,02,03,12,13,23
+    std::vector<Block> m_edge_blocks;    // per mesh edge (ClothSystem::edges): off-diagonal block
 };
 
 } // namespace drape::cloth

@@ -294,7 +294,7 @@ void run_stage(nlopt::algorithm alg, Evaluator& ev, const std::vector<FitVariabl
     } else {
         opt.set_initial_step(step);
         std::vector<double> xtol(n);
-        for (unsigned i = 0; i < n; ++i) xtol[i] = vars[i].log_scale ? 0.01 : 0.005;
+        for (unsigned i = 0; i < n; ++i) xtol[i] = vars[i].log_scale ? 0.01 : 0.005 * (vars[i].upper - vars[i].lower);
         opt.set_xtol_abs(xtol);
         opt.set_ftol_abs(0.05);
     }
@@ -438,7 +438,7 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
         Eigen::MatrixXd J(rows.size(), n);
         try {
             for (int i = 0; i < n; ++i) {
-                const double h = vars[i].log_scale ? 0.1 : 0.05;
+                const double h = vars[i].log_scale ? 0.1 : 0.05 * (vars[i].upper - vars[i].lower);
                 Eigen::VectorXd xp = x, xm = x;
                 xp[i] = std::min(x[i] + h, vars[i].upper);
                 xm[i] = std::max(x[i] - h, vars[i].lower);

@@ -12,11 +12,20 @@ using cloth::Param;
 ModelVariant parse_model_variant(const std::string& name)
 {
     if (name == "baseline") return ModelVariant::Baseline;
+    if (name == "stiffening") return ModelVariant::Stiffening;
     if (name == "full") return ModelVariant::Full;
-    throw ParameterError("model: '" + name + "' is not one of baseline, full");
+    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, full");
 }
 
-std::string to_string(ModelVariant v) { return v == ModelVariant::Baseline ? "baseline" : "full"; }
+std::string to_string(ModelVariant v)
+{
+    switch (v) {
+    case ModelVariant::Baseline: return "baseline";
+    case ModelVariant::Stiffening: return "stiffening";
+    case ModelVariant::Full: return "full";
+    }
+    return "baseline";
+}
 
 std::vector<FitVariable> fit_variables(ModelVariant v)
 {
@@ -37,10 +46,17 @@ std::vector<FitVariable> fit_variables(ModelVariant v)
     add_log("bend_warp_N_m", {Param::BendWarp}, 1e-8, 1e-2);
     add_log("bend_weft_N_m", {Param::BendWeft}, 1e-8, 1e-2);
     add_log("shear_N_m", {Param::Shear}, 0.1, 1e3);
+    if (v == ModelVariant::Stiffening || v == ModelVariant::Full) {
+        // Stiffening bending (issue 7): the radius of curvature at which M/kappa
+        // doubles, searched linearly from 0 (the seed's linear bending) to 30 mm
+        // (beyond it the term dominates every drape curvature; a linear search keeps
+        // 0 reachable, which a log scale would not).
+        const auto [l, h] = clamp(Param::BendStiffeningRadius, 0.0, 0.03);
+        out.push_back({"bend_stiffening_radius_m", {Param::BendStiffeningRadius}, false, l, h});
+    }
     if (v == ModelVariant::Full) {
         add_log("stretch_warp_N_m", {Param::StretchWarp}, 30, 1e5);
         add_log("stretch_weft_N_m", {Param::StretchWeft}, 30, 1e5);
-        out.push_back({"friction_coefficient", {Param::Friction}, false, 0.0, 1.0});
     }
     return out;
 }

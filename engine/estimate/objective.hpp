@@ -14,9 +14,12 @@ namespace drape::estimate {
 /// Model variants selectable with `drape fit --model`.
 ///  - baseline: the seed paper's model (linear springs, frictionless disc);
 ///    fits bend_warp, bend_weft and shear.
-///  - full: also fits the tensile stiffnesses and the disc friction.
-enum class ModelVariant { Baseline, Full };
-ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "full"; ParameterError otherwise
+///  - stiffening: baseline + stiffening bending (bend_stiffening_radius_m, issue 7).
+///  - full: stiffening + the tensile stiffnesses warp and weft.
+/// Disc friction is not fitted: the static solver finds rest states without it
+/// (a rest state with friction depends on the path to it).
+enum class ModelVariant { Baseline, Stiffening, Full };
+ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "stiffening" | "full"; ParameterError otherwise
 std::string to_string(ModelVariant v);
 
 /// One fitted coordinate: a parameter (or a tied group, e.g. stretch warp and

@@ -258,11 +258,12 @@ void parameter_plot(const FitResult& fr, const std::string& path)
         if (e.role == "fitted") fitted.push_back(&e);
     const int n = static_cast<int>(fitted.size());
     Plot pl(820, 130 + 55 * std::max(n, 1), "fitted parameters: 95 % intervals relative to the estimate",
-            "decades from the estimate (friction: absolute difference)", "");
+            "decades from the estimate (linear parameters: difference in their unit)", "");
     std::vector<std::pair<double, std::string>> labels;
     for (int i = 0; i < n; ++i) {
         const auto& e = *fitted[i];
-        const bool lg = e.key != "friction_coefficient";
+        const auto* ps = cloth::find_param(e.key);
+        const bool lg = ps ? ps->log_scale : true;
         auto c = [&](double v) { return lg ? std::log10(std::max(v, 1e-300) / e.value) : v - e.value; };
         const Rgb col = e.constrained ? Rgb{30, 140, 60} : Rgb{210, 60, 40};
         const double y = n - i;

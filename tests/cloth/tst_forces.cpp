@@ -14,9 +14,10 @@ namespace {
 
 /// A small draped-looking state: the sheet bent over the pedestal edge so that
 /// springs are stretched and compressed, stencils bent and contacts active.
-std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed)
+std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed, double stiffening_radius = 0.0)
 {
     FabricParams p;
+    p[Param::BendStiffeningRadius] = stiffening_radius;
     p[Param::Shear] = 35.0;
     p[Param::BendWarp] = 2e-5;
     p[Param::BendWeft] = 0.7e-5;
@@ -50,13 +51,18 @@ private slots:
     void forces_are_minus_energy_gradient_data()
     {
         QTest::addColumn<bool>("triangles");
-        QTest::newRow("grid") << false;
-        QTest::newRow("triangle mesh") << true;
+        QTest::addColumn<double>("stiffening");
+        QTest::newRow("grid") << false << 0.0;
+        QTest::newRow("triangle mesh") << true << 0.0;
+        // 20 mm: the quartic term is larger than the quadratic one in the sharp bends of this state.
+        QTest::newRow("grid, stiffening bending") << false << 0.02;
+        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02;
     }
     void forces_are_minus_energy_gradient()
     {
         QFETCH(bool, triangles);
-        auto s = bent_disc(triangles, 3);
+        QFETCH(double, stiffening);
+        auto s = bent_disc(triangles, 3, stiffening);
         Positions f;
         s->conservative_forces(s->x, f);
         const double h = 1e-7;
@@ -78,7 +84,8 @@ private slots:
     void exact_hessian_is_force_jacobian()
     {
         QFETCH(bool, triangles);
-        auto s = bent_disc(triangles, 5);
+        QFETCH(double, stiffening);
+        auto s = bent_disc(triangles, 5, stiffening);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/false);
         const Eigen::MatrixXd Hu = Eigen::MatrixXd(H.matrix());
@@ -99,9 +106,29 @@ private slots:
         QVERIFY2(max_err < 1e-4 * max_h, qPrintable(QString("max error %1 of max entry %2").arg(max_err).arg(max_h)));
     }
 
+    /// The states above have mesh edges cutting the pedestal rim and the sphere
+    /// between their end points, so the checks cover edge contact too.
+    void bent_states_exercise_edge_contact()
+    {
+        for (unsigned seed : {3u, 5u}) {
+            auto s = bent_disc(false, seed);
+            const double with_edges = s->potential_energy(s->x);
+            s->model().edge_contact = false;
+            const double vertices_only = s->potential_energy(s->x);
+            QVERIFY2(with_edges > vertices_only, qPrintable(QString("seed %1: no edge in contact").arg(seed)));
+        }
+    }
+
+    void projected_hessian_is_positive_semidefinite_data()
+    {
+        QTest::addColumn<double>("stiffening");
+        QTest::newRow("linear bending") << 0.0;
+        QTest::newRow("stiffening bending") << 0.02;
+    }
     void projected_hessian_is_positive_semidefinite()
     {
-        auto s = bent_disc(false, 7);
+        QFETCH(double, stiffening);
+        auto s = bent_disc(false, 7, stiffening);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/true);
         const Eigen::MatrixXd Hd = Eigen::MatrixXd(Eigen::MatrixXd(H.matrix()).selfadjointView<Eigen::Upper>());

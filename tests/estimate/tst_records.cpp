@@ -151,7 +151,11 @@ private slots:
     void modelVariants()
     {
         QCOMPARE(fit_variables(ModelVariant::Baseline).size(), std::size_t(3));
-        QVERIFY(fit_variables(ModelVariant::Full).size() > 3);
+        QCOMPARE(fit_variables(ModelVariant::Stiffening).size(), std::size_t(4));
+        QCOMPARE(fit_variables(ModelVariant::Stiffening).back().name, std::string("bend_stiffening_radius_m"));
+        QVERIFY(!fit_variables(ModelVariant::Stiffening).back().log_scale); // 0 = linear bending stays reachable
+        QVERIFY(fit_variables(ModelVariant::Full).size() > 4);
+        QCOMPARE(to_string(parse_model_variant("stiffening")), std::string("stiffening"));
         for (const auto& v : fit_variables(ModelVariant::Full))
             for (auto p : v.params) QVERIFY(cloth::spec(p).affects_statics); // never fit a damper
         QVERIFY_THROWS_EXCEPTION(ParameterError, parse_model_variant("nonsense"));

@@ -1,0 +1,125 @@
+// drape compare: simulate a preset on the set-up of measured records and
+// compare, channel by channel, without fitting anything. Used to check a
+// preset against records it was not fitted to, and to predict the signature
+// of a model change (docs/model-discrepancy.md).
+#include "command.hpp"
+
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/fabric_io.hpp"
+#include "engine/estimate/fit.hpp"
+#include "engine/estimate/objective.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+namespace drape::cli {
+namespace {
+
+const char* kUsage = R"(usage: drape compare RECORD_DIR [RECORD_DIR ...] --fabric FABRIC.json [options]
+
+Simulates the preset on each record's own set-up (specimen and disc diameters,
+areal density and thickness from the record) and compares it with the record,
+channel by channel, as `drape fit` does - but fits nothing. Use it to check a
+preset against records it was not fitted to, or to see what a model change does.
+
+  --fabric F            preset file (drapekit-fabric)
+  --grid N              nodes across a 300 mm specimen (default 25, scaled with the diameter)
+  --seeds S             perturbation seeds averaged (default 2)
+  --seed K              first perturbation seed (default 1)
+  --json                print the comparison as JSON on stdout
+  --quiet               no progress on stderr
+
+Prints per record: D, node count and hem (simulated, measured, difference),
+and per contour depth the mean radius and RMS fold amplitude differences
+(simulated - measured) in mm, and chi2 of the residual with the fit's noise model.)";
+
+int run(const std::vector<std::string>& argv)
+{
+    Args a(argv, {"--fabric", "--grid", "--seeds", "--seed"}, {"--json", "--quiet"});
+    if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
+    const auto fabric_arg = a.get("--fabric");
+    if (!fabric_arg) throw UsageError("--fabric is required");
+    const cloth::FabricPreset preset = cloth::load_fabric(*fabric_arg);
+    const auto* base = std::get_if<cloth::FabricParams>(&preset.fabric);
+    if (!base) throw UsageError("--fabric: " + *fabric_arg + " is a seed-19 preset; compare needs a drapekit-fabric preset");
+    const int grid300 = a.get_int("--grid", 25, 9, 200);
+    const int seeds = a.get_int("--seeds", 2, 1, 16);
+    const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
+    const bool json_out = a.has("--json"), quiet = a.has("--quiet") || json_out;
+    estimate::single_threaded_blas();
+    const estimate::NoiseModel noise;
+
+    nlohmann::json out = nlohmann::json::array();
+    bool all_converged = true;
+    for (const auto& dir : a.positionals()) {
+        const estimate::MeasuredDrape m = estimate::load_record(dir);
+        int grid = static_cast<int>(std::lround(grid300 * m.sample_diameter / 0.30));
+        if (grid % 2 == 0) ++grid;
+        const cloth::FabricParams p = estimate::params_for_record(*base, m);
+        std::vector<estimate::DrapeFeatures> fs;
+        for (int s = 0; s < seeds; ++s) {
+            const cloth::DrapeSetup setup = m.setup(grid, seed0 + static_cast<std::uint64_t>(s));
+            cloth::RestOptions ro;
+            if (!quiet) std::fprintf(stderr, "%s: seed %d/%d (grid %d)...\n", m.id.c_str(), s + 1, seeds, grid);
+            const cloth::DrapeResult r = cloth::simulate_drape(p, setup, ro, preset.model);
+            all_converged = all_converged && r.status.converged();
+            fs.push_back(estimate::drape_features(r, m));
+        }
+        std::vector<double> closed;
+        const estimate::DrapeFeatures sim = estimate::average_features(fs, &closed);
+        const estimate::DrapeFeatures meas = estimate::drape_features(m);
+        const auto terms = estimate::residual_terms(0, meas, sim, closed, noise);
+        nlohmann::json rec = {{"record", m.id},
+                              {"grid", grid},
+                              {"seeds", seeds},
+                              {"chi2", estimate::chi_square(terms)},
+                              {"terms", static_cast<int>(terms.size())}};
+        nlohmann::json depths = nlohmann::json::array();
+        for (const auto& t : terms) {
+            if (t.kind == "dc")
+                rec["drape_coefficient_percent"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
+            else if (t.kind == "nodes")
+                rec["node_count"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
+            else if (t.kind == "hem")
+                rec["hem_min_z_m"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
+        }
+        for (std::size_t d = 0; d < meas.contours.size() && d < sim.contours.size(); ++d) {
+            const auto& mc = meas.contours[d];
+            const auto& sc = sim.contours[d];
+            depths.push_back({{"depth_m", mc.depth_m},
+                              {"closed_fraction", d < closed.size() ? closed[d] : 0.0},
+                              {"mean_radius_error_m", sc.mean_radius_m - mc.mean_radius_m},
+                              {"fold_rms_error_m", sc.fold_rms_m - mc.fold_rms_m},
+                              {"cos2_error_m", sc.cos2_m - mc.cos2_m}});
+        }
+        rec["depths"] = depths;
+        out.push_back(rec);
+        if (!json_out) {
+            auto v = [&](const char* k, const char* f) { return rec.contains(k) ? rec[k][f].get<double>() : NAN; };
+            std::printf("%s  grid %d, %d seeds, chi2 %.1f over %zu terms\n", m.id.c_str(), grid, seeds, rec["chi2"].get<double>(),
+                        terms.size());
+            std::printf("  D      sim %5.1f %%  meas %5.1f %%  err %+5.1f\n", v("drape_coefficient_percent", "simulated"),
+                        v("drape_coefficient_percent", "measured"), v("drape_coefficient_percent", "error"));
+            std::printf("  nodes  sim %5.1f    meas %5.1f    err %+5.1f\n", v("node_count", "simulated"), v("node_count", "measured"),
+                        v("node_count", "error"));
+            if (rec.contains("hem_min_z_m"))
+                std::printf("  hem    sim %5.1f mm meas %5.1f mm err %+5.1f mm\n", 1e3 * v("hem_min_z_m", "simulated"),
+                            1e3 * v("hem_min_z_m", "measured"), 1e3 * v("hem_min_z_m", "error"));
+            std::printf("  depth [mm]  mean radius err [mm]  fold RMS err [mm]\n");
+            for (const auto& d : depths)
+                std::printf("  %6.0f      %+6.2f                %+6.2f\n", 1e3 * d["depth_m"].get<double>(),
+                            1e3 * d["mean_radius_error_m"].get<double>(), 1e3 * d["fold_rms_error_m"].get<double>());
+        }
+    }
+    if (json_out) std::cout << out.dump(2) << "\n";
+    return all_converged ? 0 : 4;
+}
+
+} // namespace
+
+DRAPE_COMMAND({"compare", "simulate a preset on records' set-ups and compare channel by channel (no fitting)", kUsage, run});
+
+} // namespace drape::cli

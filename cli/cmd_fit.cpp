@@ -30,6 +30,8 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
   --model M           baseline (seed paper: bending warp/weft + shear, frictionless disc; default)
                       | stiffening (+ stiffening bending, bend_stiffening_radius_m)
                       | full (stiffening + tensile stiffness warp/weft)
+  --recentre-contours measurement model: re-centre every contour stack (record and simulation)
+                      on its own axis, for a profiler or specimen off the pedestal axis
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 25)
@@ -49,7 +51,7 @@ extern "C" void on_sigint(int) { g_cancel.store(true); }
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels"},
-           {"--json", "--quiet", "--no-uncertainty"});
+           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
@@ -70,6 +72,7 @@ int run(const std::vector<std::string>& argv)
     fo.global_evaluations = a.get_int("--global", 0, 0, 100000);
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");
+    fo.recentre_contours = a.has("--recentre-contours");
     if (const auto s = a.get("--start")) {
         const cloth::FabricPreset sp = cloth::load_fabric(*s);
         if (const auto* p = std::get_if<cloth::FabricParams>(&sp.fabric)) fo.start = *p;

@@ -97,6 +97,11 @@ void for_each_edge_contact(const ClothSystem& s, const Positions& X, F&& f)
             ContactSample ca, cb;
             const bool qa = c->query(xa, 0.5 * L + off, ca), qb = c->query(xb, 0.5 * L + off, cb);
             if (!qa && !qb) continue;
+            // The distance is convex along the edge: its minimum is inside only
+            // if it falls leaving x_a and rises arriving at x_b.
+            if (!qa) c->query(xa, 1e300, ca);
+            if (!qb) c->query(xb, 1e300, cb);
+            if (ca.normal.dot(e) >= 0 || cb.normal.dot(e) <= 0) continue;
             auto dist = [&](double t) {
                 ContactSample cs;
                 c->query(xa + t * e, 1e300, cs);

@@ -336,8 +336,10 @@ void single_threaded_blas()
     if (auto f = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) f(1);
 }
 
-FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options)
+FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOptions& options)
 {
+    std::vector<MeasuredDrape> records = records_in;
+    for (auto& r : records) r.recentre_contours = r.recentre_contours || options.recentre_contours;
     if (records.empty()) throw ParameterError("fit: no records to fit");
     if (options.channels.empty()) throw ParameterError("fit: no channels to fit");
     if (options.grid < 9 || options.grid > 200) throw ParameterError("fit: grid = " + std::to_string(options.grid) + " is outside [9, 200]");
@@ -564,6 +566,7 @@ json fit_to_json(const FitResult& r)
     json recs = json::array();
     for (const auto& rf : r.records) recs.push_back({{"id", rf.measured.id}, {"source", rf.measured.source}});
     prov["records"] = recs;
+    prov["recentre_contours"] = r.options.recentre_contours;
     prov["model"] = to_string(r.options.model);
     prov["grid"] = r.options.grid;
     prov["seed"] = r.options.seed;
@@ -617,7 +620,9 @@ json fit_to_json(const FitResult& r)
                        {"measured_node_count", rf.measured_features.node_count},
                        {"fitted_node_count", rf.simulated_features.node_count},
                        {"node_error", rf.node_error},
-                       {"node_source", rf.measured.node_source}});
+                       {"node_source", rf.measured.node_source},
+                       {"contours_recentred", rf.measured.recentre_contours},
+                       {"profiler_axis_offset_m", {rf.measured_features.axis_offset_m.x(), rf.measured_features.axis_offset_m.y()}}});
     }
     fit["records"] = per;
     preset.extra["fit"] = fit;

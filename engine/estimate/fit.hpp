@@ -59,6 +59,9 @@ struct FitOptions {
     std::function<void(const FitProgress&)> progress;
     const std::atomic<bool>* cancel = nullptr;
     int parallel_seeds = 2;       ///< simulations run concurrently (threads)
+    /// Measurement-model component "profiler axis": re-centre the contour stacks
+    /// of records and simulations on their own axis (MeasuredDrape::recentre_contours).
+    bool recentre_contours = false;
 };
 
 /// Estimate of one parameter of the table.

@@ -282,12 +282,62 @@ ContourFeatures contour_features(const cloth::RadialProfile& p, double depth_m, 
     return f;
 }
 
+Eigen::Vector2d recentre_stack(std::vector<cloth::RadialProfile>& profiles)
+{
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    int n = 0;
+    for (const auto& p : profiles) {
+        if (!p.complete()) continue;
+        const cloth::Polygon2 poly = cloth::polygon_from_profile(p);
+        double a = 0;
+        Eigen::Vector2d c = Eigen::Vector2d::Zero();
+        for (std::size_t i = 0; i < poly.size(); ++i) {
+            const Eigen::Vector2d& p0 = poly[i];
+            const Eigen::Vector2d& p1 = poly[(i + 1) % poly.size()];
+            const double cr = p0.x() * p1.y() - p1.x() * p0.y();
+            a += cr;
+            c += cr * (p0 + p1);
+        }
+        if (std::abs(a) < 1e-12) continue;
+        sum += c / (3 * a);
+        ++n;
+    }
+    if (n == 0) return Eigen::Vector2d::Zero();
+    const Eigen::Vector2d shift = sum / n;
+    for (auto& p : profiles) {
+        if (!p.complete()) continue;
+        cloth::Polygon2 poly = cloth::polygon_from_profile(p);
+        for (auto& v : poly) v -= shift;
+        p = cloth::radial_profile(poly, p.size());
+    }
+    return shift;
+}
+
+namespace {
+/// Features of a contour stack at the given depths, re-centred when asked.
+std::vector<ContourFeatures> stack_features(std::vector<cloth::RadialProfile> profiles, const std::vector<double>& depths,
+                                            bool recentre, Eigen::Vector2d& offset)
+{
+    offset.setZero();
+    if (recentre) offset = recentre_stack(profiles);
+    std::vector<ContourFeatures> out;
+    for (std::size_t i = 0; i < profiles.size(); ++i) out.push_back(contour_features(profiles[i], depths[i]));
+    return out;
+}
+} // namespace
+
 DrapeFeatures drape_features(const MeasuredDrape& m)
 {
     DrapeFeatures f;
     f.drape_coefficient_percent = m.drape_coefficient_percent;
     f.hem_min_z = m.hem_min_z;
-    for (const auto& c : m.contours) f.contours.push_back(contour_features(c.profile, c.depth_m));
+    std::vector<cloth::RadialProfile> profiles;
+    std::vector<double> depths;
+    for (const auto& c : m.contours) {
+        profiles.push_back(c.profile);
+        depths.push_back(c.depth_m);
+    }
+    f.contours = stack_features(std::move(profiles), depths, m.recentre_contours, f.axis_offset_m);
     if (m.node_count >= 0) f.node_count = m.node_count;
     else if (!f.contours.empty()) f.node_count = f.contours.back().node_count;
     return f;
@@ -307,17 +357,18 @@ DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& l
             if (std::sin(r.hem.theta[i]) < 0 && std::abs(std::cos(r.hem.theta[i])) <= c) zmin = std::min(zmin, r.hem.z[i]);
         if (std::isfinite(zmin)) f.hem_min_z = zmin;
     }
+    // Slices at the record's depths; a depth the simulation lacks gets an empty
+    // (open) profile, whose features say "not closed".
+    std::vector<cloth::RadialProfile> profiles;
+    std::vector<double> depths;
     for (const auto& c : like.contours) {
         const cloth::Slice* s = nullptr;
         for (const auto& sl : r.slices)
             if (std::abs(sl.depth_m - c.depth_m) < 1e-9) s = &sl;
-        if (s) f.contours.push_back(contour_features(s->profile, c.depth_m));
-        else {
-            ContourFeatures missing;
-            missing.depth_m = c.depth_m;
-            f.contours.push_back(missing);
-        }
+        profiles.push_back(s ? s->profile : cloth::RadialProfile{});
+        depths.push_back(c.depth_m);
     }
+    f.contours = stack_features(std::move(profiles), depths, like.recentre_contours, f.axis_offset_m);
     if (like.node_count >= 0) {
         // Counted like the photo: the shadow outline with the photo's detector settings.
         const cloth::DrapeMetrics dm = cloth::drape_metrics(r.outline, like.sample_diameter / 2, like.disc_diameter / 2, like.node_metric_options);

@@ -55,6 +55,13 @@ struct MeasuredDrape {
     double photo_drape_coefficient_percent = std::numeric_limits<double>::quiet_NaN(); ///< D from the top photo [%]
     std::vector<std::string> notes;  ///< what the capture layer said (warnings, what it could not measure)
     std::vector<MeasuredContour> contours; ///< closed cuts, increasing depth
+    /// Measurement-model component "profiler axis" (issue 7): when set, the contour
+    /// stacks of the record and of every simulation are re-centred on their own
+    /// axis (the mean area centroid of the closed cuts) before features are taken,
+    /// so an offset of the profiler's (or the specimen's) axis from the pedestal
+    /// axis is estimated instead of read as fold shape. Off by default: a centred
+    /// stack keeps its harmonic 1, which is information about the drape.
+    bool recentre_contours = false;
     std::optional<PinholeCamera> top_camera; ///< calibration of the top photo, for overlays
     std::string top_photo;           ///< path of top.jpg ("" if none)
 
@@ -104,7 +111,13 @@ struct DrapeFeatures {
     double node_count = -1;   ///< mean over seeds for simulations
     double hem_min_z = std::numeric_limits<double>::quiet_NaN(); ///< [m]
     std::vector<ContourFeatures> contours;
+    /// Axis of the contour stack removed by MeasuredDrape::recentre_contours [m] (zero when not re-centred).
+    Eigen::Vector2d axis_offset_m = Eigen::Vector2d::Zero();
 };
+
+/// Shifts the closed profiles of a contour stack so that the mean area centroid
+/// of the closed ones is at the origin; returns the shift removed [m].
+Eigen::Vector2d recentre_stack(std::vector<cloth::RadialProfile>& profiles);
 
 /// Features of a measured record. The node count is the record's own if it
 /// states one; otherwise the crests of the deepest closed contour.

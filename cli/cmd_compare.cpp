@@ -29,6 +29,8 @@ preset against records it was not fitted to, or to see what a model change does.
   --grid N              nodes across a 300 mm specimen (default 25, scaled with the diameter)
   --seeds S             perturbation seeds averaged (default 2)
   --seed K              first perturbation seed (default 1)
+  --disc-grip           the specimen cannot slide on the disc top (large static friction)
+  --vertex-contact-only contact at mesh vertices only (the seed's; coarse elements cut the rim)
   --json                print the comparison as JSON on stdout
   --quiet               no progress on stderr
 
@@ -38,7 +40,7 @@ and per contour depth the mean radius and RMS fold amplitude differences
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--fabric", "--grid", "--seeds", "--seed"}, {"--json", "--quiet"});
+    Args a(argv, {"--fabric", "--grid", "--seeds", "--seed"}, {"--json", "--quiet", "--vertex-contact-only", "--disc-grip"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto fabric_arg = a.get("--fabric");
     if (!fabric_arg) throw UsageError("--fabric is required");
@@ -49,6 +51,8 @@ int run(const std::vector<std::string>& argv)
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     const bool json_out = a.has("--json"), quiet = a.has("--quiet") || json_out;
+    cloth::ModelOptions mopt = preset.model;
+    mopt.edge_contact = !a.has("--vertex-contact-only");
     estimate::single_threaded_blas();
     const estimate::NoiseModel noise;
 
@@ -61,10 +65,11 @@ int run(const std::vector<std::string>& argv)
         const cloth::FabricParams p = estimate::params_for_record(*base, m);
         std::vector<estimate::DrapeFeatures> fs;
         for (int s = 0; s < seeds; ++s) {
-            const cloth::DrapeSetup setup = m.setup(grid, seed0 + static_cast<std::uint64_t>(s));
+            cloth::DrapeSetup setup = m.setup(grid, seed0 + static_cast<std::uint64_t>(s));
+            setup.disc_grip = a.has("--disc-grip");
             cloth::RestOptions ro;
             if (!quiet) std::fprintf(stderr, "%s: seed %d/%d (grid %d)...\n", m.id.c_str(), s + 1, seeds, grid);
-            const cloth::DrapeResult r = cloth::simulate_drape(p, setup, ro, preset.model);
+            const cloth::DrapeResult r = cloth::simulate_drape(p, setup, ro, mopt);
             all_converged = all_converged && r.status.converged();
             fs.push_back(estimate::drape_features(r, m));
         }
@@ -96,6 +101,15 @@ int run(const std::vector<std::string>& argv)
                               {"cos2_error_m", sc.cos2_m - mc.cos2_m}});
         }
         rec["depths"] = depths;
+        double sr = 0, sf = 0;
+        for (const auto& d : depths) {
+            sr += std::pow(d["mean_radius_error_m"].get<double>(), 2);
+            sf += std::pow(d["fold_rms_error_m"].get<double>(), 2);
+        }
+        if (!depths.empty()) {
+            rec["mean_radius_rms_error_m"] = std::sqrt(sr / static_cast<double>(depths.size()));
+            rec["fold_rms_rms_error_m"] = std::sqrt(sf / static_cast<double>(depths.size()));
+        }
         out.push_back(rec);
         if (!json_out) {
             auto v = [&](const char* k, const char* f) { return rec.contains(k) ? rec[k][f].get<double>() : NAN; };
@@ -108,6 +122,9 @@ int run(const std::vector<std::string>& argv)
             if (rec.contains("hem_min_z_m"))
                 std::printf("  hem    sim %5.1f mm meas %5.1f mm err %+5.1f mm\n", 1e3 * v("hem_min_z_m", "simulated"),
                             1e3 * v("hem_min_z_m", "measured"), 1e3 * v("hem_min_z_m", "error"));
+            if (rec.contains("mean_radius_rms_error_m"))
+                std::printf("  contours: RMS over depths of the mean-radius error %.2f mm, of the fold-amplitude error %.2f mm\n",
+                            1e3 * rec["mean_radius_rms_error_m"].get<double>(), 1e3 * rec["fold_rms_rms_error_m"].get<double>());
             std::printf("  depth [mm]  mean radius err [mm]  fold RMS err [mm]\n");
             for (const auto& d : depths)
                 std::printf("  %6.0f      %+6.2f                %+6.2f\n", 1e3 * d["depth_m"].get<double>(),

@@ -32,6 +32,8 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
                       | full (stiffening + tensile stiffness warp/weft)
   --recentre-contours measurement model: re-centre every contour stack (record and simulation)
                       on its own axis, for a profiler or specimen off the pedestal axis
+  --vertex-contact-only  contact at mesh vertices only (the seed's; coarse elements then cut the
+                      pedestal rim): reproduces fits made before edge contact
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 25)
@@ -51,7 +53,7 @@ extern "C" void on_sigint(int) { g_cancel.store(true); }
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels"},
-           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours"});
+           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
@@ -73,6 +75,7 @@ int run(const std::vector<std::string>& argv)
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");
     fo.recentre_contours = a.has("--recentre-contours");
+    fo.model_options.edge_contact = !a.has("--vertex-contact-only");
     if (const auto s = a.get("--start")) {
         const cloth::FabricPreset sp = cloth::load_fabric(*s);
         if (const auto* p = std::get_if<cloth::FabricParams>(&sp.fabric)) fo.start = *p;

@@ -31,17 +31,19 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --out DIR             write summary.json, rest.obj, slices.csv, outline.csv
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr
+  --disc-grip           the specimen cannot slide on the disc top (large static friction)
+  --vertex-contact-only contact at mesh vertices only (the seed's): coarse elements cut the pedestal rim
   --trace               print every static-solver iteration on stderr)";
 
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--fabric", "--sample-diameter", "--disc-diameter", "--pedestal-height", "--grid", "--integrator", "--dt",
                   "--tolerance", "--max-time", "--seed", "--out", "--edge-radius", "--max-iterations"},
-           {"--json", "--quiet", "--trace"});
+           {"--json", "--quiet", "--trace", "--vertex-contact-only", "--disc-grip"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     const auto fabric_arg = a.get("--fabric");
     if (!fabric_arg) throw UsageError("--fabric is required");
-    const cloth::FabricPreset preset = cloth::load_fabric(*fabric_arg);
+    cloth::FabricPreset preset = cloth::load_fabric(*fabric_arg);
     cloth::DrapeSetup setup;
     setup.sample_diameter = a.get_length("--sample-diameter", 0.30);
     setup.disc_diameter = a.get_length("--disc-diameter", 0.15);
@@ -64,6 +66,8 @@ int run(const std::vector<std::string>& argv)
     if (!(ro.max_sim_time > 0)) throw UsageError("--max-time must be positive");
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     ro.trace = a.has("--trace");
+    preset.model.edge_contact = !a.has("--vertex-contact-only");
+    setup.disc_grip = a.has("--disc-grip");
     if (!quiet)
         ro.progress = [](const cloth::SolverStatus& st) {
             std::fprintf(stderr, "\r  %-8ld steps  residual %.2e  t=%.3fs  wall %.1fs   ", st.steps, st.residual, st.sim_time,

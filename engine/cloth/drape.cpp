@@ -169,6 +169,10 @@ std::unique_ptr<ClothSystem> make_drape_system(const FabricSpec& fabric, const D
         }
         const double weight = model.total_mass() * model.gravity.norm();
         model.anchors.push_back({centre, Eigen::Vector3d(mesh.X(centre, 0), mesh.X(centre, 1), 0.0), weight / 1e-4});
+        if (setup.disc_grip)
+            for (int i = 0; i < mesh.vertex_count(); ++i)
+                if (i != centre && std::hypot(mesh.X(i, 0), mesh.X(i, 1)) < setup.disc_diameter / 2)
+                    model.anchors.push_back({i, Eigen::Vector3d(mesh.X(i, 0), mesh.X(i, 1), 0.0), weight / 1e-4});
     }
     auto sys = std::make_unique<ClothSystem>(std::move(mesh), std::move(model));
     // Start flat, just above the pedestal top (offset by half the thickness).

@@ -27,6 +27,11 @@ struct DrapeSetup {
     /// beyond the spread of real repeats, large enough to pick a fold pattern.
     double perturbation = 1.0e-3;
     bool floor = true;
+    /// Full grip on the disc (the limit of large static friction): every vertex
+    /// laid on the disc top is tethered horizontally where it was laid. Off by
+    /// default: only the centre is held (the seed's disc is frictionless; see
+    /// HorizontalAnchor). A hypothesis tested in docs/model-discrepancy.md.
+    bool disc_grip = false;
     std::vector<double> slice_depths = {0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05}; ///< [m] below the pedestal top
     void validate() const;          ///< ParameterError on negative sizes, sample <= disc, grid < 5
 };

@@ -176,6 +176,11 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
             if (b == "quadratic") out.model.bending = BendingModel::Quadratic;
             else throw ParameterError(where + ": field 'model.bending' = \"" + b + "\" must be \"quadratic\" for continuum presets");
         }
+        if (m.contains("edge_contact")) {
+            if (!m["edge_contact"].is_boolean())
+                throw ParameterError(where + ": field 'model.edge_contact' = " + m["edge_contact"].dump() + " must be true or false");
+            out.model.edge_contact = m["edge_contact"].get<bool>();
+        }
         if (m.contains("contact_depth_m")) {
             out.model.contact_depth = number_field(m, "contact_depth_m", where, "model.");
             if (!(out.model.contact_depth > 0)) throw ParameterError(where + ": field 'model.contact_depth_m' must be positive");
@@ -199,7 +204,9 @@ json fabric_to_json(const FabricPreset& preset)
         json params = json::object();
         for (const auto& sp : param_table()) params[std::string(sp.key)] = p[sp.id];
         j["parameters"] = params;
-        j["model"] = {{"bending", bending_name(preset.model.bending)}, {"contact_depth_m", preset.model.contact_depth}};
+        j["model"] = {{"bending", bending_name(preset.model.bending)},
+                      {"contact_depth_m", preset.model.contact_depth},
+                      {"edge_contact", preset.model.edge_contact}};
     }
     for (const auto& [k, v] : preset.extra.items())
         if (!j.contains(k)) j[k] = v;

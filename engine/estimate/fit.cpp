@@ -101,7 +101,8 @@ public:
                 ro.progress = nullptr;
                 const cloth::Positions* start = nullptr;
                 if (warm && m_have_states) start = &m_states[r][s];
-                e.sims[r][s] = start ? cloth::simulate_drape_from(pr, setup, *start, ro) : cloth::simulate_drape(pr, setup, ro);
+                e.sims[r][s] = start ? cloth::simulate_drape_from(pr, setup, *start, ro, m_opt.model_options)
+                                      : cloth::simulate_drape(pr, setup, ro, m_opt.model_options);
             }
         };
         const auto t0 = Clock::now();
@@ -159,7 +160,7 @@ public:
                 ro.cancel = m_opt.cancel;
                 ro.progress = nullptr;
                 const auto t0 = Clock::now();
-                draws.push_back(drape_features(cloth::simulate_drape(params_for_record(p, m_recs[r]), setup, ro), m_recs[r]));
+                draws.push_back(drape_features(cloth::simulate_drape(params_for_record(p, m_recs[r]), setup, ro, m_opt.model_options), m_recs[r]));
                 m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
                 ++m_simulations;
             }
@@ -560,6 +561,7 @@ json fit_to_json(const FitResult& r)
 {
     cloth::FabricPreset preset;
     preset.fabric = r.params;
+    preset.model = r.options.model_options; // what the fit simulated with (edge contact)
     json prov;
     prov["tool"] = "drape fit";
     prov["date_utc"] = now_utc();
@@ -567,6 +569,7 @@ json fit_to_json(const FitResult& r)
     for (const auto& rf : r.records) recs.push_back({{"id", rf.measured.id}, {"source", rf.measured.source}});
     prov["records"] = recs;
     prov["recentre_contours"] = r.options.recentre_contours;
+    prov["edge_contact"] = r.options.model_options.edge_contact;
     prov["model"] = to_string(r.options.model);
     prov["grid"] = r.options.grid;
     prov["seed"] = r.options.seed;

@@ -62,6 +62,10 @@ struct FitOptions {
     /// Measurement-model component "profiler axis": re-centre the contour stacks
     /// of records and simulations on their own axis (MeasuredDrape::recentre_contours).
     bool recentre_contours = false;
+    /// Engine options of every simulation. edge_contact = false reproduces the
+    /// vertex-only contact of the seed (and of Drapekit before issue 7), whose
+    /// coarse elements cut the pedestal rim.
+    cloth::ModelOptions model_options;
 };
 
 /// Estimate of one parameter of the table.

@@ -71,7 +71,13 @@ double nice_step(double range, int target)
 std::string fmt(double v, double step)
 {
     char buf[32];
-    const int dec = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
+    // Enough decimals to print every multiple of the step exactly (2.5 -> 1 decimal).
+    int dec = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
+    while (dec < 6) {
+        const double s = step * std::pow(10.0, dec);
+        if (std::abs(s - std::round(s)) < 1e-6 * std::max(1.0, s)) break;
+        ++dec;
+    }
     std::snprintf(buf, sizeof buf, "%.*f", std::min(dec, 6), std::abs(v) < step * 1e-6 ? 0.0 : v);
     return buf;
 }

@@ -402,7 +402,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
     json terms = json::array();
     for (const auto& t : r.residuals)
         terms.push_back({{"record", t.record}, {"kind", t.kind}, {"depth_m", t.depth_m}, {"harmonic", t.harmonic}, {"simulated", t.simulated},
-                         {"measured", t.measured}, {"sigma", t.sigma}, {"whitened", t.whitened()}});
+                         {"measured", t.measured}, {"sigma", t.sigma}, {"whitened", t.whitened()}, {"fitted", t.fitted}});
     rep["residual_terms"] = terms;
     cloth::write_file_atomic((root / "report.json").string(), rep.dump(2) + "\n");
     cloth::write_file_atomic((root / "report.md").string(), md.str());

@@ -28,6 +28,11 @@ struct ResidualAnalysis {
     double node_error = 0;            ///< mean simulated - measured nodes
     std::vector<std::string> candidate_effects; ///< names, see docs/estimate.md
     std::vector<std::string> evidence;           ///< one sentence per candidate, same order
+    /// Matched-filter statistics: the whitened residual projected on the unit
+    /// signature of an effect, z = s.w / |s|. With noise alone |z| is at most
+    /// about N(0, 1) (the sigmas are noise bounds), so z > 3 is a structured
+    /// residual even when the total chi2 is not large. Keys: rim_wrapping.
+    std::vector<std::pair<std::string, double>> signature_z;
 };
 
 /// Analyses the residual terms of a fit with `fitted` coordinates.

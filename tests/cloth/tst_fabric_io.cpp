@@ -86,8 +86,10 @@ private slots:
         f.name = "wool worsted";
         f[Param::BendWarp] = 1.234567890123e-5;
         f[Param::Shear] = 17.25;
+        f[Param::BendStiffeningRadius] = 0.0125;
         FabricPreset p;
         p.fabric = f;
+        p.model.edge_contact = false;
         p.extra["provenance"] = {{"records", {"DL-A01"}}};
         QTemporaryDir d;
         const std::string path = d.filePath("f.json").toStdString();
@@ -96,6 +98,7 @@ private slots:
         const auto& g = std::get<FabricParams>(back.fabric);
         for (int i = 0; i < kParamCount; ++i) QCOMPARE(g.values[static_cast<std::size_t>(i)], f.values[static_cast<std::size_t>(i)]);
         QCOMPARE(g.name, f.name);
+        QCOMPARE(back.model.edge_contact, false);
         QCOMPARE(back.extra["provenance"]["records"][0].get<std::string>(), std::string("DL-A01"));
     }
 
@@ -127,6 +130,10 @@ private slots:
         QVERIFY2(e.contains("bend_warp_N_m") && e.contains("-1") && e.contains("outside"), qPrintable(e));
         e = error_of<drape::ParameterError>(write(d, "u.json", R"({"format":"drapekit-fabric","parameters":{"bend_wrap_N_m":1e-5}})"));
         QVERIFY2(e.contains("bend_wrap_N_m"), qPrintable(e));
+        e = error_of<drape::ParameterError>(write(d, "m.json", R"({"format":"drapekit-fabric","parameters":{},"model":{"edge_contact":"yes"}})"));
+        QVERIFY2(e.contains("m.json") && e.contains("model.edge_contact") && e.contains("yes"), qPrintable(e));
+        e = error_of<drape::ParameterError>(write(d, "n.json", R"({"format":"drapekit-fabric","parameters":{"bend_stiffening_radius_m":0.2}})"));
+        QVERIFY2(e.contains("bend_stiffening_radius_m") && e.contains("outside"), qPrintable(e));
         e = error_of<drape::ParameterError>(write(d, "f.json", R"({"format":"other"})"));
         QVERIFY2(e.contains("format"), qPrintable(e));
         e = error_of<drape::ParameterError>(write(d, "seed.json", R"({"format":"seed-19","w":30,"h":30,"u":30,"v":30,"x0":0,"y0":0,"z0":0,"ClothOverMass":0,"SstKu":1,"SstDu":1,"SstKv":1,"SstDv":1,"SshK":1,"SshD":1,"SflKu":1,"SflDu":1,"SflKv":1,"SflDv":1})"));

@@ -1,0 +1,233 @@
+// drape fit-summary: tables and plots across fit reports (several records,
+// several models), e.g. the before/after of docs/model-discrepancy.md.
+#include "command.hpp"
+
+#include "engine/cloth/error.hpp"
+#include "engine/cloth/fabric_io.hpp"
+#include "engine/estimate/objective.hpp"
+#include "engine/estimate/plot.hpp"
+#include "engine/estimate/residual.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+namespace drape::cli {
+namespace {
+
+const char* kUsage = R"(usage: drape fit-summary --out DIR LABEL=REPORT_DIR [LABEL=REPORT_DIR ...]
+
+Reads the report.json of `drape fit --report` folders, groups them by LABEL
+(e.g. before=..., after=...) and writes to DIR:
+  summary.md            per record and label: D and node count measured / fitted,
+                        chi2 / dof, the rim matched filter z, candidate effects
+  summary.json          the same numbers
+  dc_error.png          fitted - measured D per record, one bar per label
+  radius_error_LABEL.png, fold_error_LABEL.png
+                        contour mean radius / RMS fold amplitude, simulated - measured,
+                        against depth, one line per record
+The residual analysis is recomputed from each report's residual terms with
+this version's rules, so reports written by older versions compare like with like.)";
+
+struct Entry {
+    std::string label, dir, id;
+    double d_meas = NAN, d_fit = NAN, n_meas = NAN, n_fit = NAN;
+    double chi2 = 0;
+    int dof = 0;
+    double rim_z = 0;
+    bool exceeds = false;
+    std::vector<std::string> candidates;
+    std::vector<std::pair<double, double>> radius, fold; // (depth mm, error mm)
+    std::string model;
+    bool edge_contact = true;
+};
+
+Entry read_report(const std::string& label, const std::string& dir)
+{
+    const std::string path = (std::filesystem::path(dir) / "report.json").string();
+    std::ifstream in(path);
+    if (!in) throw FileError(path + ": cannot open (is " + dir + " a `drape fit --report` folder?)");
+    nlohmann::json j;
+    try {
+        in >> j;
+    } catch (const std::exception& e) {
+        throw FileError(path + ": not valid JSON (" + e.what() + ")");
+    }
+    if (!j.contains("residual_terms") || !j.contains("fit") || !j.contains("provenance"))
+        throw FileError(path + ": missing 'residual_terms', 'fit' or 'provenance' (not a fit report)");
+    Entry e;
+    e.label = label;
+    e.dir = dir;
+    const auto& prov = j["provenance"];
+    e.model = prov.value("model", "baseline");
+    e.edge_contact = prov.value("edge_contact", false); // reports before edge contact existed lack the key
+    std::vector<std::string> channels = prov.value("channels", std::vector<std::string>{"dc", "nodes", "hem", "contours"});
+    const auto& recs = j["fit"].value("records", nlohmann::json::array());
+    if (recs.size() != 1) throw FileError(path + ": fit-summary takes single-record fits (this one has " + std::to_string(recs.size()) + ")");
+    const auto& r = recs[0];
+    e.id = r.value("id", std::string("?"));
+    e.d_meas = r.value("measured_drape_coefficient_percent", NAN);
+    e.d_fit = r.value("fitted_drape_coefficient_percent", NAN);
+    e.n_meas = r.value("measured_node_count", NAN);
+    e.n_fit = r.value("fitted_node_count", NAN);
+    int fitted = 0;
+    for (const auto& p : j["fit"].value("parameters", nlohmann::json::array()))
+        if (p.value("role", "") == "fitted") ++fitted;
+    std::vector<estimate::ResidualTerm> terms;
+    for (const auto& t : j["residual_terms"]) {
+        estimate::ResidualTerm rt;
+        rt.record = t.value("record", 0);
+        rt.kind = t.value("kind", "");
+        rt.depth_m = t.value("depth_m", 0.0);
+        rt.harmonic = t.value("harmonic", 0);
+        rt.simulated = t.value("simulated", 0.0);
+        rt.measured = t.value("measured", 0.0);
+        rt.sigma = t.value("sigma", 1.0);
+        rt.smooth = rt.kind != "nodes";
+        rt.fitted = t.contains("fitted") ? t["fitted"].get<bool>()
+                                         : std::find(channels.begin(), channels.end(), estimate::channel_of(rt.kind)) != channels.end();
+        if (!(rt.sigma > 0)) throw FileError(path + ": residual term '" + rt.kind + "' has sigma " + std::to_string(rt.sigma));
+        if (rt.kind == "mean_radius") e.radius.push_back({rt.depth_m * 1e3, (rt.simulated - rt.measured) * 1e3});
+        if (rt.kind == "fold_rms") e.fold.push_back({rt.depth_m * 1e3, (rt.simulated - rt.measured) * 1e3});
+        terms.push_back(rt);
+    }
+    const estimate::ResidualAnalysis a = estimate::analyse_residual(terms, fitted);
+    e.chi2 = a.chi2;
+    e.dof = a.dof;
+    e.exceeds = a.exceeds_noise;
+    e.candidates = a.candidate_effects;
+    for (const auto& [k, z] : a.signature_z)
+        if (k == "rim_wrapping") e.rim_z = z;
+    return e;
+}
+
+int run(const std::vector<std::string>& argv)
+{
+    Args a(argv, {"--out"}, {});
+    const auto out = a.get("--out");
+    if (!out) throw UsageError("--out DIR is required");
+    if (a.positionals().empty()) throw UsageError("at least one LABEL=REPORT_DIR is required");
+    std::vector<Entry> entries;
+    std::vector<std::string> labels;
+    for (const auto& arg : a.positionals()) {
+        const auto eq = arg.find('=');
+        if (eq == std::string::npos || eq == 0) throw UsageError("'" + arg + "' is not LABEL=REPORT_DIR");
+        const std::string label = arg.substr(0, eq);
+        if (std::find(labels.begin(), labels.end(), label) == labels.end()) labels.push_back(label);
+        entries.push_back(read_report(label, arg.substr(eq + 1)));
+    }
+    std::filesystem::create_directories(*out);
+    std::vector<std::string> ids;
+    for (const auto& e : entries)
+        if (std::find(ids.begin(), ids.end(), e.id) == ids.end()) ids.push_back(e.id);
+    std::sort(ids.begin(), ids.end());
+
+    // Table.
+    std::ostringstream md;
+    md << "| record | fit | D meas. [%] | D fit [%] | D err | nodes meas. | nodes fit | chi2 / dof | rim z | beyond noise | candidate effects |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+    nlohmann::json js = nlohmann::json::array();
+    char buf[512];
+    for (const auto& id : ids)
+        for (const auto& l : labels)
+            for (const auto& e : entries) {
+                if (e.id != id || e.label != l) continue;
+                std::string cands;
+                for (const auto& c : e.candidates) cands += (cands.empty() ? "" : ", ") + c;
+                std::snprintf(buf, sizeof buf, "| %s | %s | %.1f | %.1f | %+.1f | %.0f | %.1f | %.0f / %d | %.1f | %s | %s |\n", id.c_str(), l.c_str(),
+                              e.d_meas, e.d_fit, e.d_fit - e.d_meas, e.n_meas, e.n_fit, e.chi2, e.dof, e.rim_z, e.exceeds ? "yes" : "no",
+                              cands.empty() ? "-" : cands.c_str());
+                md << buf;
+                js.push_back({{"record", id}, {"label", l}, {"model", e.model}, {"edge_contact", e.edge_contact}, {"dc_measured", e.d_meas},
+                              {"dc_fitted", e.d_fit}, {"nodes_measured", e.n_meas}, {"nodes_fitted", e.n_fit}, {"chi2", e.chi2}, {"dof", e.dof},
+                              {"rim_z", e.rim_z}, {"exceeds_noise", e.exceeds}, {"candidate_effects", e.candidates}});
+            }
+    // Aggregates per label.
+    md << "\n| fit | records | mean D err | RMS D err | records with \\|D err\\| <= 2 | records with \\|node err\\| <= 1 | mean chi2 / dof | beyond noise |\n"
+       << "|---|---|---|---|---|---|---|---|\n";
+    for (const auto& l : labels) {
+        int n = 0, dok = 0, nok = 0, beyond = 0;
+        double s = 0, ss = 0, cd = 0;
+        for (const auto& e : entries) {
+            if (e.label != l) continue;
+            const double d = e.d_fit - e.d_meas;
+            ++n;
+            s += d;
+            ss += d * d;
+            dok += std::abs(d) <= 2.0 ? 1 : 0;
+            nok += std::abs(e.n_fit - e.n_meas) <= 1.0 ? 1 : 0;
+            cd += e.chi2 / std::max(1, e.dof);
+            beyond += e.exceeds ? 1 : 0;
+        }
+        std::snprintf(buf, sizeof buf, "| %s | %d | %+.2f | %.2f | %d | %d | %.2f | %d |\n", l.c_str(), n, s / n, std::sqrt(ss / n), dok, nok, cd / n, beyond);
+        md << buf;
+    }
+    cloth::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());
+    cloth::write_file_atomic((std::filesystem::path(*out) / "summary.json").string(), js.dump(2) + "\n");
+
+    // D error per record (one row each), one marker per label.
+    {
+        estimate::Plot pl(820, 140 + 34 * static_cast<int>(ids.size()), "drape coefficient: fitted - measured", "D error [percentage points]", "");
+        std::vector<std::pair<double, std::string>> ticks;
+        const double dy = 0.6 / static_cast<double>(labels.size());
+        for (std::size_t i = 0; i < ids.size(); ++i) {
+            const double y0 = static_cast<double>(ids.size() - i);
+            ticks.push_back({y0, ids[i]});
+            for (std::size_t li = 0; li < labels.size(); ++li)
+                for (const auto& e : entries)
+                    if (e.id == ids[i] && e.label == labels[li]) {
+                        const double d = e.d_fit - e.d_meas, y = y0 + 0.3 - dy * (static_cast<double>(li) + 0.5);
+                        pl.interval(std::min(0.0, d), d, std::max(0.0, d), y, estimate::category(static_cast<int>(li)));
+                    }
+        }
+        for (std::size_t li = 0; li < labels.size(); ++li) pl.points({}, {}, estimate::category(static_cast<int>(li)), labels[li]);
+        pl.set_yticklabels(ticks);
+        pl.set_yrange(0.4, static_cast<double>(ids.size()) + 0.6);
+        double lo = -3, hi = 3;
+        for (const auto& e : entries) lo = std::min(lo, e.d_fit - e.d_meas - 0.5), hi = std::max(hi, e.d_fit - e.d_meas + 0.5);
+        pl.set_xrange(lo, hi);
+        pl.line({2.0, 2.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
+        pl.line({-2.0, -2.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
+        pl.line({0.0, 0.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {0, 0, 0}, "", 1);
+        std::string ls;
+        for (const auto& l : labels) ls += (ls.empty() ? "" : ", ") + l;
+        pl.set_caption("dashed: +-2 points (issue 4's target). Fits: " + ls);
+        pl.save((std::filesystem::path(*out) / "dc_error.png").string());
+    }
+    // Contour errors against depth, per label.
+    for (const auto& l : labels)
+        for (const bool radius : {true, false}) {
+            estimate::Plot pl(760, 460, std::string(radius ? "contour mean radius" : "RMS fold amplitude") + ": simulated - measured (" + l + ")",
+                              "depth below the pedestal top [mm]", "error [mm]");
+            int i = 0;
+            for (const auto& id : ids)
+                for (const auto& e : entries) {
+                    if (e.id != id || e.label != l) continue;
+                    std::vector<double> x, y;
+                    for (const auto& [d, v] : radius ? e.radius : e.fold) {
+                        x.push_back(d);
+                        y.push_back(v);
+                    }
+                    if (!x.empty()) pl.line(x, y, estimate::category(i), id);
+                    ++i;
+                }
+            pl.hline(0.0, {0, 0, 0}, false);
+            pl.set_yrange(-7, 7);
+            pl.save((std::filesystem::path(*out) / ((radius ? "radius_error_" : "fold_error_") + l + ".png")).string());
+        }
+    std::cout << md.str();
+    return 0;
+}
+
+} // namespace
+
+DRAPE_COMMAND({"fit-summary", "tables and plots across fit reports (records x models), e.g. before/after", kUsage, run});
+
+} // namespace drape::cli

@@ -1,0 +1,139 @@
+// Undeclared effects (issue 7): records made by the engine with an effect the
+// fitting model has switched off - the cloth wrapping the pedestal rim (edge
+// contact, the effect traced on set-a in docs/model-discrepancy.md) and a
+// profiler off the pedestal axis (measurement) - are fitted without declaring it. The residual report must flag
+// a discrepancy beyond noise and name the right signature; fitting with the
+// effect enabled must bring the residual down to the noise; a clean record must
+// not be flagged.
+#include "engine/estimate/fit.hpp"
+
+#include <QTest>
+
+#include <algorithm>
+#include <cmath>
+
+using namespace drape;
+using namespace drape::estimate;
+using cloth::Param;
+
+namespace {
+cloth::FabricParams truth()
+{
+    cloth::FabricParams p;
+    p[Param::BendWarp] = 1.5e-5;
+    p[Param::BendWeft] = 1.0e-5;
+    p[Param::Shear] = 20;
+    p[Param::AreaDensity] = 0.2;
+    return p;
+}
+
+constexpr int kGrid = 17;
+
+MeasuredDrape synthetic(const cloth::FabricParams& p, std::uint64_t seed)
+{
+    cloth::DrapeSetup s;
+    s.grid = kGrid;
+    s.seed = seed;
+    const cloth::DrapeResult r = cloth::simulate_drape(p, s);
+    return synthesize_record(r, s, p, 0.3e-3, seed + 100, "synthetic");
+}
+
+FitOptions options(ModelVariant m)
+{
+    FitOptions o;
+    o.model = m;
+    o.grid = kGrid;
+    o.seed = 1;
+    o.seeds_per_evaluation = 1;
+    o.scan_evaluations = 6;
+    o.global_evaluations = 8;
+    o.local_evaluations = 30;
+    o.spread_seeds = 3;
+    return o;
+}
+
+bool has(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
+
+void describe(const char* what, const FitResult& r)
+{
+    std::string effects;
+    for (const auto& e : r.residual.candidate_effects) effects += e + " ";
+    qInfo("%s: chi2 %.1f / dof %d, exceeds %d, D error %+.2f, candidates [%s]", what, r.chi2, r.dof, int(r.residual.exceeds_noise),
+          r.records[0].dc_error_percent, effects.c_str());
+    std::string kinds, radius, folds;
+    for (const auto& [k, v] : r.residual.kind_rms) kinds += k + " " + QString::number(v, 'f', 2).toStdString() + "  ";
+    for (const auto& t : r.residuals) {
+        if (t.kind == "mean_radius") radius += QString::number(t.whitened(), 'f', 1).toStdString() + " ";
+        if (t.kind == "fold_rms") folds += QString::number(t.whitened(), 'f', 1).toStdString() + " ";
+    }
+    qInfo("  whitened rms per kind: %s", kinds.c_str());
+    for (const auto& [k, z] : r.residual.signature_z) qInfo("  signature %s: z = %.2f", k.c_str(), z);
+    qInfo("  mean radius by depth (whitened): %s", radius.c_str());
+    qInfo("  fold rms by depth (whitened): %s", folds.c_str());
+}
+} // namespace
+
+class TestDiscrepancy : public QObject {
+    Q_OBJECT
+private slots:
+    void cleanRecordIsNotFlagged()
+    {
+        const FitResult r = fit_fabric({synthetic(truth(), 5)}, options(ModelVariant::Baseline));
+        describe("clean, baseline", r);
+        QVERIFY(!r.residual.exceeds_noise);
+        QVERIFY(r.residual.candidate_effects.empty());
+    }
+
+    void hiddenRimWrappingIsFlaggedAndExplained()
+    {
+        // The truth wraps the pedestal rim (edge contact); the fitting model has
+        // vertex contact only, so its coarse elements cut the rim - the residual
+        // traced on set-a (docs/model-discrepancy.md).
+        // Two seeds per evaluation (the CLI's default): with one, the drape-to-drape
+        // floors leave this signature at about 3 sigma on a single grid-17 drape.
+        const MeasuredDrape rec = synthetic(truth(), 5);
+        FitOptions o = options(ModelVariant::Baseline);
+        o.seeds_per_evaluation = 2;
+        o.model_options.edge_contact = false;
+        const FitResult base = fit_fabric({rec}, o);
+        describe("rim wrapping hidden, vertex contact only", base);
+        QVERIFY(base.residual.exceeds_noise);
+        QVERIFY(has(base.residual.candidate_effects, "rim_wrapping"));
+        o.model_options.edge_contact = true;
+        const FitResult with = fit_fabric({rec}, o);
+        describe("rim wrapping hidden, edge contact", with);
+        QVERIFY(!with.residual.exceeds_noise);
+        QVERIFY(with.residual.candidate_effects.empty());
+        QVERIFY(with.chi2 < base.chi2);
+    }
+
+    void hiddenProfilerOffsetIsFlaggedAndExplained()
+    {
+        MeasuredDrape rec = synthetic(truth(), 5);
+        for (auto& c : rec.contours) { // the profiler's axis 8 mm off the pedestal's, along +x
+            cloth::Polygon2 poly = cloth::polygon_from_profile(c.profile);
+            for (auto& v : poly) v.x() += 0.008;
+            c.profile = cloth::radial_profile(poly, c.profile.size());
+        }
+        const FitResult base = fit_fabric({rec}, options(ModelVariant::Baseline));
+        describe("off-centre profiler hidden, baseline", base);
+        QVERIFY(base.residual.exceeds_noise);
+        QVERIFY(has(base.residual.candidate_effects, "specimen_off_centre"));
+        FitOptions o = options(ModelVariant::Baseline);
+        o.recentre_contours = true;
+        const FitResult with = fit_fabric({rec}, o);
+        describe("off-centre profiler hidden, re-centred contours", with);
+        qInfo("estimated profiler axis offset: %.2f, %.2f mm", with.records[0].measured_features.axis_offset_m.x() * 1e3,
+              with.records[0].measured_features.axis_offset_m.y() * 1e3);
+        QVERIFY(!with.residual.exceeds_noise);
+        QVERIFY(std::abs(with.records[0].measured_features.axis_offset_m.x() - 0.008) < 0.002);
+    }
+};
+
+int main(int argc, char** argv)
+{
+    if (qEnvironmentVariableIsEmpty("QTEST_FUNCTION_TIMEOUT")) qputenv("QTEST_FUNCTION_TIMEOUT", "1800000");
+    TestDiscrepancy t;
+    return QTest::qExec(&t, argc, argv);
+}
+#include "tst_discrepancy.moc"

@@ -29,6 +29,7 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
   --json              print a JSON summary (preset, intervals, records, residual) on stdout
   --model M           baseline (seed paper: bending warp/weft + shear, frictionless disc; default)
                       | stiffening (+ stiffening bending, bend_stiffening_radius_m)
+                      | softening (+ yielding bending, bend_softening_radius_m)
                       | full (stiffening + tensile stiffness warp/weft)
   --recentre-contours measurement model: re-centre every contour stack (record and simulation)
                       on its own axis, for a profiler or specimen off the pedestal axis

@@ -5,7 +5,8 @@
 #
 # PART: fits (baseline before/after on all of set-a, ~40 min on 2 cores),
 #       heldout (fit on D + nodes, predict side view and contours; 3 records, ~15 min),
-#       signatures (hypotheses at the fitted presets, ~3 min), stiffening (~10 min).
+#       signatures (hypotheses at the fitted presets, ~3 min), stiffening (~10 min),
+#       summary (tables and plots of the fits: drape fit-summary).
 # Default: all parts. Needs build/bin/drape (bash scripts/test.sh builds it).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
@@ -14,7 +15,7 @@ data="${DRAPE_DATA:-$here/../shared/data/drape-lab/set-a}"
 out="${1:-$here/build/model-discrepancy}"
 shift || true
 parts=("$@")
-[ ${#parts[@]} -eq 0 ] && parts=(fits heldout signatures stiffening)
+[ ${#parts[@]} -eq 0 ] && parts=(fits heldout signatures stiffening summary)
 mkdir -p "$out"
 export OMP_NUM_THREADS=1
 ids=(DL-A01 DL-A02 DL-A03 DL-A04 DL-A05 DL-A06 DL-A07 DL-A08 DL-A09 DL-A10)
@@ -45,23 +46,39 @@ if want signatures; then
   for id in DL-A04 DL-A08; do
     f="$out/after-$id.json"
     [ -f "$f" ] || { echo "run the 'fits' part first ($f missing)" >&2; exit 1; }
-    "$drape" compare "$data/$id" --fabric "$f" --json --quiet > "$out/sig-$id-fitted.json"
-    "$drape" compare "$data/$id" --fabric "$f" --vertex-contact-only --json --quiet > "$out/sig-$id-vertex-contact.json"
-    "$drape" compare "$data/$id" --fabric "$f" --disc-grip --json --quiet > "$out/sig-$id-disc-grip.json"
+    "$drape" compare "$data/$id" --fabric "$f" --quiet > "$out/sig-$id-fitted.txt"
+    "$drape" compare "$data/$id" --fabric "$f" --vertex-contact-only --quiet > "$out/sig-$id-vertex-contact.txt"
+    "$drape" compare "$data/$id" --fabric "$f" --disc-grip --quiet > "$out/sig-$id-disc-grip.txt"
     python3 - "$f" "$out/stiff-$id.json" <<'EOF'
 import json, sys
 d = json.load(open(sys.argv[1])); d["parameters"]["bend_stiffening_radius_m"] = 0.01
 json.dump(d, open(sys.argv[2], "w"))
 EOF
-    "$drape" compare "$data/$id" --fabric "$out/stiff-$id.json" --json --quiet > "$out/sig-$id-stiffening-10mm.json"
-    "$drape" compare "$data/$id" --fabric "$f" --grid 41 --json --quiet > "$out/sig-$id-grid41.json"
+    "$drape" compare "$data/$id" --fabric "$out/stiff-$id.json" --quiet > "$out/sig-$id-stiffening-10mm.txt"
+    "$drape" compare "$data/$id" --fabric "$f" --grid 41 --quiet > "$out/sig-$id-grid41.txt"
+  done
+fi
+
+if want signatures; then
+  # How deep the baseline's mesh edges cut the pedestal rim, with and without edge contact.
+  for g in 25 49; do
+    for m in --vertex-contact-only ""; do
+      rm -rf "$out/rim-$g$m"
+      "$drape" simulate --fabric "$out/before-DL-A04.json" --grid $g $m --out "$out/rim-$g$m" --quiet > /dev/null
+      python3 "$here/scripts/rim_cut.py" "$out/rim-$g$m/rest.obj"
+    done
   done
 fi
 
 if want stiffening; then
   # The stiffening-bending model on the records where the baseline misses most.
   for id in DL-A05 DL-A10; do
-    "$drape" fit "$data/$id" --grid 25 --model stiffening --out "$out/stiffening-$id.json" --json > "$out/stiffening-$id.summary.json"
+    "$drape" fit "$data/$id" --grid 25 --model stiffening --out "$out/stiffening-$id.json" --report "$out/stiffening-$id" --json > "$out/stiffening-$id.summary.json"
   done
+fi
+if want summary; then
+  args=()
+  for id in "${ids[@]}"; do args+=("before=$out/before-$id" "after=$out/after-$id"); done
+  "$drape" fit-summary --out "$out/summary" "${args[@]}"
 fi
 echo "results in $out"

@@ -87,6 +87,7 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
     m.contact_offset = 0.5 * p[Param::Thickness];
     m.friction = p[Param::Friction];
     m.bend_stiffening = p[Param::BendStiffeningRadius] * p[Param::BendStiffeningRadius];
+    m.bend_softening = p[Param::BendSofteningRadius] * p[Param::BendSofteningRadius];
     add_common(m, mesh, opt.contact_depth);
     m.edge_contact = opt.edge_contact;
     const double Eu = p[Param::StretchWarp], Ev = p[Param::StretchWeft], G = p[Param::Shear];

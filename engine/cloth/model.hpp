@@ -47,7 +47,7 @@ struct ModelOptions {
     double contact_depth = 2e-6;
     /// Contact of mesh edges with curved colliders (pedestal rim, spheres), not only
     /// of vertices: without it a coarse element between a vertex on the disc and one
-    /// hanging below it cuts the corner of the pedestal (3.6 mm deep at grid 25), and
+    /// hanging below it cuts the corner of the pedestal (3.9 mm deep at grid 25), and
     /// the laser slices next to the disc come out too narrow. See docs/model-discrepancy.md.
     bool edge_contact = true;
 };
@@ -77,6 +77,10 @@ struct ClothModel {
     /// k (|d|^2 / 2 + bend_stiffening |d|^4 / 4), i.e. per unit area
     /// B kappa^2 / 2 + B r^2 kappa^4 / 4 and a moment B kappa (1 + r^2 kappa^2). 0 = linear.
     double bend_stiffening = 0;
+    /// Softening of every bending stencil [m^2] (rho^2 of Param::BendSofteningRadius):
+    /// energy k (sqrt(1 + rho^2 |d|^2) - 1) / rho^2 instead of k |d|^2 / 2, a moment
+    /// B kappa / sqrt(1 + rho^2 kappa^2) that saturates at B / rho. 0 = linear.
+    double bend_softening = 0;
     bool edge_contact = true;         ///< see ModelOptions::edge_contact
     Eigen::VectorXd contact_stiffness;///< [N/m] per vertex
     std::string description;

@@ -40,6 +40,10 @@ constexpr std::array<ParamSpec, kParamCount> kTable{{
     {Param::BendStiffeningRadius, "bend_stiffening_radius_m", "m", 0.0, 0.05, 0.0, false, true,
      "Nonlinear (stiffening) bending: the moment per unit width is B*kappa*(1 + (r*kappa)^2), so M/kappa doubles "
      "where the radius of curvature falls to r (0 = linear bending, as in the seed paper)."},
+    {Param::BendSofteningRadius, "bend_softening_radius_m", "m", 0.0, 0.05, 0.0, false, true,
+     "Yielding (softening) bending: the moment per unit width is B*kappa/sqrt(1 + (rho*kappa)^2), stiff at small "
+     "curvature and capped at B/rho in sharp folds, like the frictional bending of woven fabrics "
+     "(0 = linear bending, as in the seed paper)."},
 }};
 } // namespace
 

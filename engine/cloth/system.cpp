@@ -155,12 +155,13 @@ double ClothSystem::potential_energy(const Positions& X) const
         const double l = (X.row(sp.i) - X.row(sp.j)).norm();
         e += 0.5 * sp.k * (l - sp.rest) * (l - sp.rest);
     }
-    const double beta = m_model.bend_stiffening;
+    const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening;
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
         const double s2 = s.squaredNorm();
-        e += b.k * (0.5 * s2 + 0.25 * beta * s2 * s2);
+        const double base = rho2 > 0 ? (std::sqrt(1.0 + rho2 * s2) - 1.0) / rho2 : 0.5 * s2;
+        e += b.k * (base + 0.25 * beta * s2 * s2);
     }
     for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
     for (const auto& a : m_model.anchors) {
@@ -199,11 +200,12 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         f.row(sp.i) += fi.transpose();
         f.row(sp.j) -= fi.transpose();
     }
-    const double beta = m_model.bend_stiffening;
+    const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening;
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        const double c = b.k * (1.0 + beta * s.squaredNorm());
+        const double s2 = s.squaredNorm();
+        const double c = b.k * (1.0 / std::sqrt(1.0 + rho2 * s2) + beta * s2);
         for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (c * b.w[a] * s).transpose();
     }
     for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();
@@ -367,16 +369,19 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.j)], K);
         add_off(m_spring_blocks[s], -K);
     }
-    const double beta = m.bend_stiffening;
+    const double beta = m.bend_stiffening, rho2 = m.bend_softening;
     for (std::size_t s = 0; s < m.bends.size(); ++s) {
         const auto& b = m.bends[s];
-        // Hessian of k (|d|^2/2 + beta |d|^4/4) in d: k ((1 + beta |d|^2) I + 2 beta d d^T)
-        // (positive definite), plus the damping term; vertex blocks are w_p w_q times it.
+        // Energy k g(|d|^2) with g = (sqrt(1 + rho2 s) - 1)/rho2 + beta s^2/4 (g = s/2 when
+        // linear); force coefficient c(s) = 2 g'(s) = 1/q + beta s, q = sqrt(1 + rho2 s).
+        // Hessian in d: k (c I + 2 c'(s) d d^T) = k ((1/q + beta s) I + (2 beta - rho2/q^3) d d^T):
+        // positive definite (1/q^3 + 3 beta s along d). Vertex blocks are w_p w_q times it.
         Eigen::Matrix3d Kd = (b.k + damping_scale * b.d) * I;
-        if (beta > 0) {
+        if (beta > 0 || rho2 > 0) {
             Vec3 d = Vec3::Zero();
             for (int a = 0; a < b.n; ++a) d += b.w[a] * X.row(b.v[a]).transpose();
-            Kd += b.k * beta * (d.squaredNorm() * I + 2.0 * d * d.transpose());
+            const double s2 = d.squaredNorm(), q = std::sqrt(1.0 + rho2 * s2);
+            Kd += b.k * ((1.0 / q - 1.0 + beta * s2) * I + (2.0 * beta - rho2 / (q * q * q)) * d * d.transpose());
         }
         for (int p = 0; p < b.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(b.v[p])], b.w[p] * b.w[p] * Kd);
         int t = 0;

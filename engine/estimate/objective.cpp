@@ -13,8 +13,9 @@ ModelVariant parse_model_variant(const std::string& name)
 {
     if (name == "baseline") return ModelVariant::Baseline;
     if (name == "stiffening") return ModelVariant::Stiffening;
+    if (name == "softening") return ModelVariant::Softening;
     if (name == "full") return ModelVariant::Full;
-    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, full");
+    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, softening, full");
 }
 
 std::string to_string(ModelVariant v)
@@ -22,6 +23,7 @@ std::string to_string(ModelVariant v)
     switch (v) {
     case ModelVariant::Baseline: return "baseline";
     case ModelVariant::Stiffening: return "stiffening";
+    case ModelVariant::Softening: return "softening";
     case ModelVariant::Full: return "full";
     }
     return "baseline";
@@ -53,6 +55,12 @@ std::vector<FitVariable> fit_variables(ModelVariant v)
         // 0 reachable, which a log scale would not).
         const auto [l, h] = clamp(Param::BendStiffeningRadius, 0.0, 0.03);
         out.push_back({"bend_stiffening_radius_m", {Param::BendStiffeningRadius}, false, l, h});
+    }
+    if (v == ModelVariant::Softening) {
+        // Yielding bending: the radius below which the moment saturates at B / rho,
+        // linear from 0 (the seed's linear bending) to 30 mm.
+        const auto [l, h] = clamp(Param::BendSofteningRadius, 0.0, 0.03);
+        out.push_back({"bend_softening_radius_m", {Param::BendSofteningRadius}, false, l, h});
     }
     if (v == ModelVariant::Full) {
         add_log("stretch_warp_N_m", {Param::StretchWarp}, 30, 1e5);

@@ -15,11 +15,12 @@ namespace drape::estimate {
 ///  - baseline: the seed paper's model (linear springs, frictionless disc);
 ///    fits bend_warp, bend_weft and shear.
 ///  - stiffening: baseline + stiffening bending (bend_stiffening_radius_m, issue 7).
+///  - softening: baseline + yielding bending (bend_softening_radius_m, issue 7).
 ///  - full: stiffening + the tensile stiffnesses warp and weft.
 /// Disc friction is not fitted: the static solver finds rest states without it
 /// (a rest state with friction depends on the path to it).
-enum class ModelVariant { Baseline, Stiffening, Full };
-ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "stiffening" | "full"; ParameterError otherwise
+enum class ModelVariant { Baseline, Stiffening, Softening, Full };
+ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "stiffening" | "softening" | "full"; ParameterError otherwise
 std::string to_string(ModelVariant v);
 
 /// One fitted coordinate: a parameter (or a tied group, e.g. stretch warp and

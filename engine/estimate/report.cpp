@@ -382,6 +382,13 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
     md << "chi2 = " << num(a.chi2, "%.1f") << " for " << a.dof << " degrees of freedom (RMS whitened residual "
        << num(a.rms_whitened, "%.2f") << "; 1 = at the noise): the residual **" << (a.exceeds_noise ? "exceeds" : "is within")
        << "** the measurement noise. RMS contour residual " << num(a.rms_m * 1e3, "%.2f") << " mm.\n\n";
+    if (!a.exceeds_because.empty()) {
+        md << "Beyond noise by (each test at about 3 sigma of its own statistic):";
+        for (const auto& b : a.exceeds_because) md << "\n- " << b;
+        md << "\n\n";
+    }
+    for (const auto& [k, z] : a.signature_z)
+        md << "Matched filter `" << k << "`: z = " << num(z, "%.2f") << " (above 3: the residual has that effect's shape).\n\n";
     md << "| channel | whitened RMS |\n|---|---|\n";
     for (const auto& [k, v] : a.kind_rms) md << "| " << k << " | " << num(v, "%.2f") << " |\n";
     md << "\nDominant harmonics (whitened RMS > 2): ";

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <map>
 
 namespace drape::estimate {
@@ -54,9 +56,18 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
     // harmonic is (a structured residual is diluted in the total; each group
     // test is at ~3 sigma of its own chi-square, n + 4 sqrt(2 n)).
     auto group_exceeds = [](const Acc& g) { return g.n >= 3 && g.ss > g.n + 4.0 * std::sqrt(2.0 * g.n); };
-    a.exceeds_noise = a.chi2 > a.dof + 3.0 * std::sqrt(2.0 * a.dof);
-    for (const auto& [k, g] : kinds) a.exceeds_noise |= group_exceeds(g);
-    for (const auto& [k, g] : harm) a.exceeds_noise |= group_exceeds(g);
+    auto num = [](double v) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.1f", v);
+        return std::string(b);
+    };
+    if (a.chi2 > a.dof + 3.0 * std::sqrt(2.0 * a.dof))
+        a.exceeds_because.push_back("total: chi2 " + num(a.chi2) + " over " + std::to_string(a.dof) + " degrees of freedom");
+    for (const auto& [k, g] : kinds)
+        if (group_exceeds(g)) a.exceeds_because.push_back(k + ": chi2 " + num(g.ss) + " over " + std::to_string(g.n) + " terms");
+    for (const auto& [k, g] : harm)
+        if (group_exceeds(g)) a.exceeds_because.push_back("harmonic " + std::to_string(k) + ": chi2 " + num(g.ss) + " over " + std::to_string(g.n) + " terms");
+    a.exceeds_noise = !a.exceeds_because.empty();
     // Matched filter of the rim signature: the model's cloth leaves the disc
     // more abruptly than the specimen (e.g. coarse elements cutting the pedestal
     // rim, docs/model-discrepancy.md): its slices next to the disc are narrower
@@ -73,7 +84,10 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
         }
         const double z = ss > 0 ? sw / std::sqrt(ss) : 0.0;
         a.signature_z.push_back({"rim_wrapping", z});
-        a.exceeds_noise |= z > 3.0;
+        if (z > 3.0) {
+            a.exceeds_noise = true;
+            a.exceeds_because.push_back("rim signature: matched filter z " + num(z));
+        }
     }
     a.rms_m = n_m ? std::sqrt(ss_m / n_m) : 0.0;
     a.rms_whitened = all.rms();
@@ -175,6 +189,7 @@ nlohmann::json residual_to_json(const ResidualAnalysis& a)
     j["dc_error_percent"] = a.dc_error_percent;
     j["node_error"] = a.node_error;
     j["candidate_effects"] = a.candidate_effects;
+    j["exceeds_because"] = a.exceeds_because;
     nlohmann::json z = nlohmann::json::object();
     for (const auto& [name, v] : a.signature_z) z[name] = v;
     j["signature_z"] = z;

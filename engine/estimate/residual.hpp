@@ -33,6 +33,8 @@ struct ResidualAnalysis {
     /// about N(0, 1) (the sigmas are noise bounds), so z > 3 is a structured
     /// residual even when the total chi2 is not large. Keys: rim_wrapping.
     std::vector<std::pair<std::string, double>> signature_z;
+    /// Which test put the residual beyond noise (e.g. "harmonic 3: chi2 18.1 over 5 terms").
+    std::vector<std::string> exceeds_because;
 };
 
 /// Analyses the residual terms of a fit with `fitted` coordinates.

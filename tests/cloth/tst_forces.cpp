@@ -14,10 +14,11 @@ namespace {
 
 /// A small draped-looking state: the sheet bent over the pedestal edge so that
 /// springs are stretched and compressed, stencils bent and contacts active.
-std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed, double stiffening_radius = 0.0)
+std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed, double stiffening_radius = 0.0, double softening_radius = 0.0)
 {
     FabricParams p;
     p[Param::BendStiffeningRadius] = stiffening_radius;
+    p[Param::BendSofteningRadius] = softening_radius;
     p[Param::Shear] = 35.0;
     p[Param::BendWarp] = 2e-5;
     p[Param::BendWeft] = 0.7e-5;
@@ -52,17 +53,21 @@ private slots:
     {
         QTest::addColumn<bool>("triangles");
         QTest::addColumn<double>("stiffening");
-        QTest::newRow("grid") << false << 0.0;
-        QTest::newRow("triangle mesh") << true << 0.0;
-        // 20 mm: the quartic term is larger than the quadratic one in the sharp bends of this state.
-        QTest::newRow("grid, stiffening bending") << false << 0.02;
-        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02;
+        QTest::addColumn<double>("softening");
+        QTest::newRow("grid") << false << 0.0 << 0.0;
+        QTest::newRow("triangle mesh") << true << 0.0 << 0.0;
+        // 20 mm: the nonlinear terms dominate in the sharp bends of this state.
+        QTest::newRow("grid, stiffening bending") << false << 0.02 << 0.0;
+        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02 << 0.0;
+        QTest::newRow("grid, softening bending") << false << 0.0 << 0.02;
+        QTest::newRow("triangle mesh, both") << true << 0.01 << 0.02;
     }
     void forces_are_minus_energy_gradient()
     {
         QFETCH(bool, triangles);
         QFETCH(double, stiffening);
-        auto s = bent_disc(triangles, 3, stiffening);
+        QFETCH(double, softening);
+        auto s = bent_disc(triangles, 3, stiffening, softening);
         Positions f;
         s->conservative_forces(s->x, f);
         const double h = 1e-7;
@@ -85,7 +90,8 @@ private slots:
     {
         QFETCH(bool, triangles);
         QFETCH(double, stiffening);
-        auto s = bent_disc(triangles, 5, stiffening);
+        QFETCH(double, softening);
+        auto s = bent_disc(triangles, 5, stiffening, softening);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/false);
         const Eigen::MatrixXd Hu = Eigen::MatrixXd(H.matrix());
@@ -122,13 +128,16 @@ private slots:
     void projected_hessian_is_positive_semidefinite_data()
     {
         QTest::addColumn<double>("stiffening");
-        QTest::newRow("linear bending") << 0.0;
-        QTest::newRow("stiffening bending") << 0.02;
+        QTest::addColumn<double>("softening");
+        QTest::newRow("linear bending") << 0.0 << 0.0;
+        QTest::newRow("stiffening bending") << 0.02 << 0.0;
+        QTest::newRow("softening bending") << 0.0 << 0.02;
     }
     void projected_hessian_is_positive_semidefinite()
     {
         QFETCH(double, stiffening);
-        auto s = bent_disc(false, 7, stiffening);
+        QFETCH(double, softening);
+        auto s = bent_disc(false, 7, stiffening, softening);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/true);
         const Eigen::MatrixXd Hd = Eigen::MatrixXd(Eigen::MatrixXd(H.matrix()).selfadjointView<Eigen::Upper>());

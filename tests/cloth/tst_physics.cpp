@@ -193,24 +193,29 @@ private slots:
         }
     }
 
-    /// Stiffening bending (Param::BendStiffeningRadius r): a sheet rolled into a
-    /// cylinder of radius R stores B kappa^2 / 2 (1 + r^2 kappa^2 / 2) per unit
-    /// area (moment B kappa (1 + r^2 kappa^2)), so E(r) / E(0) = 1 + r^2 / (2 R^2),
-    /// for bending along either axis; r = 0 is the seed's linear bending.
+    /// Nonlinear bending. Stiffening (Param::BendStiffeningRadius r): a sheet rolled
+    /// into a cylinder of radius R stores B kappa^2 / 2 (1 + r^2 kappa^2 / 2) per unit
+    /// area (moment B kappa (1 + r^2 kappa^2)), so E(r) / E(0) = 1 + r^2 / (2 R^2).
+    /// Softening (Param::BendSofteningRadius rho): B (sqrt(1 + rho^2 kappa^2) - 1) / rho^2
+    /// (moment B kappa / sqrt(1 + rho^2 kappa^2)). Either axis; 0 = linear bending.
     void stiffening_bending_energy_follows_the_moment_law_data()
     {
         QTest::addColumn<int>("axis");
         QTest::addColumn<double>("R");
         QTest::addColumn<double>("r");
-        QTest::newRow("warp, R 50 mm, r 20 mm") << 0 << 0.05 << 0.02;
-        QTest::newRow("weft, R 30 mm, r 10 mm") << 1 << 0.03 << 0.01;
-        QTest::newRow("warp, R 20 mm, r 40 mm") << 0 << 0.02 << 0.04;
+        QTest::addColumn<bool>("softening");
+        QTest::newRow("stiffening, warp, R 50 mm, r 20 mm") << 0 << 0.05 << 0.02 << false;
+        QTest::newRow("stiffening, weft, R 30 mm, r 10 mm") << 1 << 0.03 << 0.01 << false;
+        QTest::newRow("stiffening, warp, R 20 mm, r 40 mm") << 0 << 0.02 << 0.04 << false;
+        QTest::newRow("softening, warp, R 20 mm, rho 20 mm") << 0 << 0.02 << 0.02 << true;
+        QTest::newRow("softening, weft, R 50 mm, rho 10 mm") << 1 << 0.05 << 0.01 << true;
     }
     void stiffening_bending_energy_follows_the_moment_law()
     {
         QFETCH(int, axis);
         QFETCH(double, R);
         QFETCH(double, r);
+        QFETCH(bool, softening);
         const ClothMesh mesh = make_rectangle(0.06, 0.06, 61, 61);
         auto rolled = [&](const ClothMesh& m) {
             Positions X = m.X;
@@ -223,7 +228,7 @@ private slots:
         };
         auto bending_energy = [&](double radius) {
             FabricParams p = undamped();
-            p[Param::BendStiffeningRadius] = radius;
+            p[softening ? Param::BendSofteningRadius : Param::BendStiffeningRadius] = radius;
             ClothModel model = make_model(mesh, p);
             model.gravity.setZero();
             model.springs.clear(); // rolling is isometric; keep the bending energy alone
@@ -232,7 +237,9 @@ private slots:
         };
         const double e0 = bending_energy(0.0), er = bending_energy(r);
         QVERIFY(e0 > 0);
-        const double expected = 1 + r * r / (2 * R * R);
+        // Softening: (sqrt(1 + rho^2 kappa^2) - 1) / rho^2 per (kappa^2 / 2).
+        const double x = r * r / (R * R);
+        const double expected = softening ? 2 * (std::sqrt(1 + x) - 1) / x : 1 + x / 2;
         QVERIFY2(std::abs(er / e0 - expected) < 2e-3 * expected,
                  qPrintable(QString("E(r)/E(0) = %1, expected %2").arg(er / e0).arg(expected)));
         // And the linear part is the continuum B kappa^2 / 2 per unit area (interior of the sheet).

@@ -156,6 +156,8 @@ private slots:
         QVERIFY(!fit_variables(ModelVariant::Stiffening).back().log_scale); // 0 = linear bending stays reachable
         QVERIFY(fit_variables(ModelVariant::Full).size() > 4);
         QCOMPARE(to_string(parse_model_variant("stiffening")), std::string("stiffening"));
+        QCOMPARE(fit_variables(ModelVariant::Softening).back().name, std::string("bend_softening_radius_m"));
+        QCOMPARE(to_string(parse_model_variant("softening")), std::string("softening"));
         for (const auto& v : fit_variables(ModelVariant::Full))
             for (auto p : v.params) QVERIFY(cloth::spec(p).affects_statics); // never fit a damper
         QVERIFY_THROWS_EXCEPTION(ParameterError, parse_model_variant("nonsense"));

@@ -73,7 +73,13 @@ fi
 if want stiffening; then
   # The stiffening-bending model on the records where the baseline misses most.
   for id in DL-A05 DL-A10; do
-    "$drape" fit "$data/$id" --grid 25 --model stiffening --out "$out/stiffening-$id.json" --report "$out/stiffening-$id" --json > "$out/stiffening-$id.summary.json"
+    for m in stiffening softening; do
+      "$drape" fit "$data/$id" --grid 25 --model $m --out "$out/$m-$id.json" --report "$out/$m-$id" --json > "$out/$m-$id.summary.json"
+    done
+  done
+  "$drape" fit "$data/DL-A04" --grid 25 --model softening --out "$out/softening-DL-A04.json" --json > "$out/softening-DL-A04.summary.json"
+  for m in stiffening softening; do # started from the baseline's optimum (the nested case radius = 0)
+    "$drape" fit "$data/DL-A05" --grid 25 --model $m --start "$out/after-DL-A05.json" --out "$out/nested-$m-DL-A05.json" --json > "$out/nested-$m-DL-A05.summary.json"
   done
 fi
 if want summary; then

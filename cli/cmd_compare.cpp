@@ -36,7 +36,8 @@ preset against records it was not fitted to, or to see what a model change does.
 
 Prints per record: D, node count and hem (simulated, measured, difference),
 and per contour depth the mean radius and RMS fold amplitude differences
-(simulated - measured) in mm, and chi2 of the residual with the fit's noise model.)";
+(simulated - measured) in mm, and chi2 of the residual with the default noise
+model (the fit's before its drape-to-drape calibration, so chi2 differs from a fit's).)";
 
 int run(const std::vector<std::string>& argv)
 {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -29,7 +30,7 @@ Reads the report.json of `drape fit --report` folders, groups them by LABEL
   summary.md            per record and label: D and node count measured / fitted,
                         chi2 / dof, the rim matched filter z, candidate effects
   summary.json          the same numbers
-  dc_error.png          fitted - measured D per record, one bar per label
+  dc_error.png          fitted - measured D per record, one marker per label
   radius_error_LABEL.png, fold_error_LABEL.png
                         contour mean radius / RMS fold amplitude, simulated - measured,
                         against depth, one line per record
@@ -120,6 +121,9 @@ int run(const std::vector<std::string>& argv)
         const auto eq = arg.find('=');
         if (eq == std::string::npos || eq == 0) throw UsageError("'" + arg + "' is not LABEL=REPORT_DIR");
         const std::string label = arg.substr(0, eq);
+        for (char c : label)
+            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_')
+                throw UsageError("label '" + label + "' may only hold letters, digits, '-' and '_' (it names output files)");
         if (std::find(labels.begin(), labels.end(), label) == labels.end()) labels.push_back(label);
         entries.push_back(read_report(label, arg.substr(eq + 1)));
     }

@@ -129,8 +129,13 @@ int run(const std::vector<std::string>& argv)
         if (r.residual.held_out_terms > 0)
             std::printf("held-out channels: %d terms, whitened RMS %.2f (fitted terms %.2f)\n", r.residual.held_out_terms,
                         r.residual.held_out_rms_whitened, r.residual.fitted_rms_whitened);
+        for (const auto& b : r.residual.exceeds_because) std::printf("  beyond noise by %s\n", b.c_str());
         for (std::size_t i = 0; i < r.residual.candidate_effects.size(); ++i)
             std::printf("  candidate effect: %s (%s)\n", r.residual.candidate_effects[i].c_str(), r.residual.evidence[i].c_str());
+        if (r.grid_bound)
+            std::printf("WARNING: grid-bound preset: a fitted bending length is below the mesh spacing of grid %d; "
+                        "fit with a finer --grid for a preset that carries over to other grids\n",
+                        fo.grid);
         std::printf("%d evaluations, %ld simulations at grid %d, %.2f s per simulation, %.1f s in all%s\n", r.evaluations, r.simulations,
                     fo.grid, r.seconds_per_simulation, r.wall_seconds, r.cancelled ? " (CANCELLED: best point so far)" : "");
         std::printf("preset written to %s\n", out->c_str());

@@ -512,6 +512,22 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
             else if (!std::isfinite(half)) e.note = "not constrained: the drape does not change with it";
             else if (wide) e.note = "not constrained: the 95 % interval spans more than " + std::string(v.log_scale ? "a decade" : "half the range");
             else if (at_bound) e.note = "not constrained: at the fit bound";
+            // A bending whose bending length (B / (rho_A g))^(1/3) is shorter than the
+            // mesh spacing is not resolved by the fit's grid: the coarse mesh's membrane
+            // stiffness does part of the bending's work, and the value does not carry
+            // over to another grid (docs/model-discrepancy.md, section 5).
+            if (sp.id == Param::BendWarp || sp.id == Param::BendWeft) {
+                const double rho_g = out.params[Param::AreaDensity] * 9.81;
+                const double c = std::cbrt(e.value / std::max(rho_g, 1e-12));
+                const double h = records.front().sample_diameter / std::max(1, options.grid - 1);
+                if (c < h) {
+                    char buf[200];
+                    std::snprintf(buf, sizeof buf, "bending length %.1f mm is below the fit's mesh spacing %.1f mm: grid-bound value", c * 1e3,
+                                  h * 1e3);
+                    e.note = e.note.empty() ? buf : e.note + "; " + buf;
+                    out.grid_bound = true;
+                }
+            }
         } else if (sp.id == Param::AreaDensity || sp.id == Param::Thickness) {
             e.role = "declared";
             e.note = "measured by the lab (meta.json), not fitted";
@@ -586,6 +602,7 @@ json fit_to_json(const FitResult& r)
     fit["seconds_per_simulation"] = r.seconds_per_simulation;
     fit["wall_seconds"] = r.wall_seconds;
     fit["cancelled"] = r.cancelled;
+    fit["grid_bound"] = r.grid_bound;
     json params = json::array();
     std::vector<std::string> not_identifiable;
     for (const auto& e : r.estimates) {

@@ -109,6 +109,9 @@ struct FitResult {
     double seconds_per_simulation = 0;
     double wall_seconds = 0;
     bool cancelled = false;
+    /// A fitted bending's bending length is below the fit's mesh spacing: the
+    /// preset is tied to the fit's grid (predictions keep the mesh density).
+    bool grid_bound = false;
     FitOptions options;
 };
 

@@ -311,6 +311,10 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
        << r.options.seeds_per_evaluation << " perturbation seeds per evaluation. " << r.evaluations << " evaluations, "
        << r.simulations << " simulations, " << num(r.seconds_per_simulation, "%.2f") << " s per simulation, "
        << num(r.wall_seconds, "%.0f") << " s in all" << (r.cancelled ? " (**cancelled**: best point so far)" : "") << ".\n\n";
+    if (r.grid_bound)
+        md << "**Grid-bound preset**: a fitted bending's bending length is below the mesh spacing of the fit's grid, so the "
+              "coarse mesh does part of the bending's work and the preset holds at this mesh density only (`drape predict` keeps "
+              "it); fit with a finer `--grid` for a preset that carries over (see the notes in the table).\n\n";
     if (!preset_path.empty()) md << "Preset: `" << preset_path << "`.\n\n";
     md << "## Parameters\n\n" << parameter_table_markdown(r) << "\n";
     parameter_plot(r, (root / "parameters.png").string());

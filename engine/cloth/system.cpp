@@ -205,7 +205,7 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
         const double s2 = s.squaredNorm();
-        const double c = b.k * (1.0 / std::sqrt(1.0 + rho2 * s2) + beta * s2);
+        const double c = b.k * ((rho2 > 0 ? 1.0 / std::sqrt(1.0 + rho2 * s2) : 1.0) + beta * s2);
         for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (c * b.w[a] * s).transpose();
     }
     for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();

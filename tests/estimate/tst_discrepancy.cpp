@@ -6,6 +6,7 @@
 // effect enabled must bring the residual down to the noise; a clean record must
 // not be flagged.
 #include "engine/estimate/fit.hpp"
+#include "synthetic.hpp"
 
 #include <QTest>
 
@@ -31,11 +32,7 @@ constexpr int kGrid = 17;
 
 MeasuredDrape synthetic(const cloth::FabricParams& p, std::uint64_t seed)
 {
-    cloth::DrapeSetup s;
-    s.grid = kGrid;
-    s.seed = seed;
-    const cloth::DrapeResult r = cloth::simulate_drape(p, s);
-    return synthesize_record(r, s, p, 0.3e-3, seed + 100, "synthetic");
+    return test::synthetic_record(p, test::drape_setup(0.30, 0.15, kGrid, seed));
 }
 
 FitOptions options(ModelVariant m)

@@ -4,6 +4,7 @@
 // same seed gives the same fit.
 #include "engine/cloth/error.hpp"
 #include "engine/estimate/fit.hpp"
+#include "synthetic.hpp"
 
 #include <QTest>
 
@@ -26,13 +27,7 @@ cloth::FabricParams truth()
 
 MeasuredDrape synthetic(const cloth::FabricParams& p, double D1, double D2, int grid, std::uint64_t seed)
 {
-    cloth::DrapeSetup s;
-    s.sample_diameter = D1;
-    s.disc_diameter = D2;
-    s.grid = grid;
-    s.seed = seed;
-    const cloth::DrapeResult r = cloth::simulate_drape(p, s);
-    return synthesize_record(r, s, p, 0.3e-3, seed + 100, "synthetic");
+    return test::synthetic_record(p, test::drape_setup(D1, D2, grid, seed));
 }
 
 const ParamEstimate& est(const FitResult& r, Param p)

@@ -4,6 +4,7 @@
 // and a record with an undeclared measurement effect (off-centre profiler).
 #include "engine/cloth/error.hpp"
 #include "engine/estimate/fit.hpp"
+#include "synthetic.hpp"
 
 #include <QTest>
 
@@ -29,18 +30,12 @@ cloth::FabricParams truth()
 
 cloth::DrapeSetup setup(double D1, double D2, std::uint64_t seed)
 {
-    cloth::DrapeSetup s;
-    s.sample_diameter = D1;
-    s.disc_diameter = D2;
-    s.grid = static_cast<int>(std::lround(kGrid * D1 / 0.30)) | 1;
-    s.seed = seed;
-    return s;
+    return test::drape_setup(D1, D2, static_cast<int>(std::lround(kGrid * D1 / 0.30)) | 1, seed);
 }
 
 MeasuredDrape synthetic(const cloth::FabricParams& p, double D1, double D2, std::uint64_t seed)
 {
-    const auto s = setup(D1, D2, seed);
-    return synthesize_record(cloth::simulate_drape(p, s), s, p, 0.3e-3, seed + 100, "synthetic-" + std::to_string(seed));
+    return test::synthetic_record(p, setup(D1, D2, seed), "synthetic-" + std::to_string(seed));
 }
 
 const ParamEstimate& est(const FitResult& r, Param p)

@@ -4,7 +4,8 @@
 // one after another) and, with --both, for two (the CLI default, two seeds in
 // parallel).
 //
-//   build/bin/bench_fit [RECORD_DIR] [--grid N] [--both]
+//   build/bin/bench_fit [RECORD_DIR] [--grid N] [--both] [--trace]
+// --trace prints one line per evaluation (stage, time) on stderr.
 // RECORD_DIR defaults to examples/DL-A04 (a copy of a set-a record).
 #include "engine/estimate/fit.hpp"
 
@@ -12,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,13 +23,14 @@ int main(int argc, char** argv)
 {
     std::string dir = DRAPE_SOURCE_DIR "/examples/DL-A04";
     int grid = 25;
-    bool both = false;
+    bool both = false, trace = false;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--grid") && i + 1 < argc) grid = std::atoi(argv[++i]);
         else if (!std::strcmp(argv[i], "--both")) both = true;
+        else if (!std::strcmp(argv[i], "--trace")) trace = true;
         else if (argv[i][0] != '-') dir = argv[i];
         else {
-            std::fprintf(stderr, "usage: bench_fit [RECORD_DIR] [--grid N] [--both]\n");
+            std::fprintf(stderr, "usage: bench_fit [RECORD_DIR] [--grid N] [--both] [--trace]\n");
             return 2;
         }
     }
@@ -41,6 +44,16 @@ int main(int argc, char** argv)
             estimate::FitOptions o;
             o.grid = grid;
             o.parallel_seeds = threads;
+            if (trace) { // one line per evaluation: where the time goes
+                auto last = std::make_shared<double>(0.0);
+                o.progress = [last](const estimate::FitProgress& p) {
+                    std::string at;
+                    for (double c : p.last_coords) at += " " + std::to_string(c).substr(0, 6);
+                    std::fprintf(stderr, "  %-11s eval %3d  sims %4ld (%ld not at rest)  %+7.2f s  t %7.1f s  best chi2 %.4g  at%s\n", p.stage.c_str(),
+                                 p.evaluation, p.simulations, p.unconverged, p.elapsed_s - *last, p.elapsed_s, p.best_chi2, at.c_str());
+                    *last = p.elapsed_s;
+                };
+            }
             const auto t0 = std::chrono::steady_clock::now();
             const estimate::FitResult r = estimate::fit_fabric({rec}, o);
             const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

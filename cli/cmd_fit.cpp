@@ -40,8 +40,10 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
   --grid N            nodes across the specimen in the fit's simulations (default 25)
   --seed K            optimizer and perturbation seed (default 1; same seed = same fit)
   --seeds S           perturbation seeds averaged per evaluation (default 2)
-  --global N          global-stage evaluations (default 6 per fitted parameter)
+  --global N          global-stage evaluations (default 4 per fitted parameter)
   --local N           local-stage evaluations (default 8 per fitted parameter + 8)
+  --cold-global       global stage from flat starts (default: from the best point's rest
+                      states, faster, but each seed keeps its fold pattern)
   --start FABRIC      start point / values of the parameters not fitted (a library preset)
   --name NAME         name of the preset (default: the first record's id)
   --no-uncertainty    skip the Jacobian (no intervals)
@@ -54,7 +56,7 @@ extern "C" void on_sigint(int) { g_cancel.store(true); }
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels"},
-           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only"});
+           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only", "--cold-global"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
@@ -75,6 +77,7 @@ int run(const std::vector<std::string>& argv)
     fo.global_evaluations = a.get_int("--global", 0, 0, 100000);
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");
+    fo.warm_global = !a.has("--cold-global");
     fo.recentre_contours = a.has("--recentre-contours");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
     if (const auto s = a.get("--start")) {

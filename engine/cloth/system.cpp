@@ -70,12 +70,172 @@ struct EdgeContact {
     Eigen::Matrix3d H;///< distance Hessian at p(t) [1/m]
     Vec3 e;           ///< x_b - x_a [m]
     double k;         ///< penalty stiffness [N/m]
+    Eigen::Matrix<double, 6, 1> g; ///< d/d(x_a, x_b) of phi'(t) = n . e
+    /// Fade w = S(da / eps) S(db / eps) on the excess depths da, db >= 0 of the
+    /// deepest point below the end points' distances, and what its derivatives need.
+    double w;
+    double da, db;    ///< [m]
+    double sa1, sa2, sb1, sb2; ///< S', S'' of each factor (per metre, per metre^2)
+    double sa, sb;    ///< the factors
+    Vec3 na, nb;      ///< normals at the end points
+    Eigen::Matrix3d Ha, Hb; ///< distance Hessians at the end points
 };
 
-/// Edge contact with curved convex colliders (pedestal, sphere): the signed
-/// distance is convex along a segment, so its minimum is found by golden
-/// section and polished by Newton. Minima at an end point are the vertex
-/// contact's; planes (distance linear along an edge) never have interior minima.
+/// The edge contact fades out as the edge's deepest point comes up to the depth
+/// of one of its end points (which the vertex contact then covers): the energy
+/// is k phi^2 w / 2 with w = S(da / eps) S(db / eps), S the C1 smoothstep, da and
+/// db how much deeper the deepest point is than each end. Both are C1 in the
+/// positions (Danskin), so the energy is C1 where the minimum leaves through an
+/// end point (without the fade it jumps by k phi^2 / 2 there, and a limp drape
+/// stalled on the pedestal rim for 1000 Newton iterations; a fade in t instead
+/// is only C0, because t jumps where the collider's curvature does).
+constexpr double kEdgeFadeDepth = 1e-4; // [m]
+inline double smoothstep(double u, double& ds, double& d2s)
+{
+    if (u >= 1) { ds = d2s = 0; return 1.0; }
+    if (u <= 0) { ds = d2s = 0; return 0.0; }
+    ds = 6 * u * (1 - u);
+    d2s = 6 - 12 * u;
+    return u * u * (3 - 2 * u);
+}
+
+/// Gradient / k of the edge contact energy k phi^2 w / 2 in (x_a, x_b), and
+/// (optionally) its Hessian / k. `exact` false: the Gauss-Newton part only
+/// (positive semidefinite), for the projected Hessian.
+inline void edge_gradients(const EdgeContact& c, Eigen::Matrix<double, 6, 1>& grad, Eigen::Matrix<double, 6, 6>* hess = nullptr,
+                           bool exact = true)
+{
+    using V6 = Eigen::Matrix<double, 6, 1>;
+    using M6 = Eigen::Matrix<double, 6, 6>;
+    V6 G, Ga, Gb;
+    G << (1 - c.t) * c.n, c.t * c.n;
+    Ga << c.na, Vec3::Zero();
+    Ga -= G;
+    Gb << Vec3::Zero(), c.nb;
+    Gb -= G;
+    const double wa = c.sa1 * c.sb, wb = c.sa * c.sb1; // dw/dda, dw/ddb
+    const V6 Gw = wa * Ga + wb * Gb;
+    grad = c.phi * c.w * G + 0.5 * c.phi * c.phi * Gw;
+    if (!hess) return;
+    M6& K = *hess;
+    K = c.w * G * G.transpose();
+    if (!exact) return;
+    // Hessian of phi (Danskin, t interior): [w_p w_q H] - g g^T / (e^T H e).
+    const double wt[2] = {1 - c.t, c.t};
+    M6 Hphi;
+    for (int p = 0; p < 2; ++p)
+        for (int q = 0; q < 2; ++q) Hphi.block<3, 3>(3 * p, 3 * q) = wt[p] * wt[q] * c.H;
+    const double gtt = c.e.dot(c.H * c.e);
+    if (gtt > 1e-9 * c.e.norm()) Hphi -= c.g * c.g.transpose() / gtt;
+    M6 Hda = -Hphi, Hdb = -Hphi;
+    Hda.block<3, 3>(0, 0) += c.Ha;
+    Hdb.block<3, 3>(3, 3) += c.Hb;
+    const M6 Hw = c.sa2 * c.sb * Ga * Ga.transpose() + c.sa1 * c.sb1 * (Ga * Gb.transpose() + Gb * Ga.transpose()) +
+                  c.sa * c.sb2 * Gb * Gb.transpose() + wa * Hda + wb * Hdb;
+    K += c.phi * c.w * Hphi + c.phi * (G * Gw.transpose() + Gw * G.transpose()) + 0.5 * c.phi * c.phi * Hw;
+}
+
+/// The deepest point of the segment x_a -> x_b in collider c, when it lies inside
+/// the segment (0 < t < 1) and inside the offset surface. Fills everything of
+/// EdgeContact except edge and k. The distance is convex along a segment for
+/// curved convex colliders (pedestal, sphere), so its minimum is found by
+/// golden section and polished by Newton. Minima at an end point are the
+/// vertex contact's; planes (distance linear along an edge) never have
+/// interior minima.
+bool edge_deepest_point(const Collider& c, const Vec3& xa, const Vec3& xb, double off, EdgeContact& out)
+{
+    const Vec3 e = xb - xa;
+    const double L = e.norm();
+    if (L <= 1e-12) return false;
+    // Every point of the edge is within L/2 of an end point.
+    ContactSample ca, cb;
+    const bool qa = c.query(xa, 0.5 * L + off, ca), qb = c.query(xb, 0.5 * L + off, cb);
+    if (!qa && !qb) return false;
+    // The distance is convex along the edge: its minimum is inside only
+    // if it falls leaving x_a and rises arriving at x_b.
+    if (!qa) c.query(xa, 1e300, ca);
+    if (!qb) c.query(xb, 1e300, cb);
+    if (ca.normal.dot(e) >= 0 || cb.normal.dot(e) <= 0) return false;
+    auto dist = [&](double t) {
+        ContactSample cs;
+        c.query(xa + t * e, 1e300, cs);
+        return cs.distance;
+    };
+    double lo = 0, hi = 1;
+    const double gr = 0.5 * (std::sqrt(5.0) - 1);
+    double t1 = hi - gr * (hi - lo), t2 = lo + gr * (hi - lo), d1 = dist(t1), d2 = dist(t2);
+    for (int it = 0; it < 40 && hi - lo > 1e-7; ++it) {
+        if (d1 < d2) {
+            hi = t2;
+            t2 = t1;
+            d2 = d1;
+            t1 = hi - gr * (hi - lo);
+            d1 = dist(t1);
+        } else {
+            lo = t1;
+            t1 = t2;
+            d1 = d2;
+            t2 = lo + gr * (hi - lo);
+            d2 = dist(t2);
+        }
+    }
+    double t = 0.5 * (lo + hi);
+    ContactSample cs;
+    Eigen::Matrix3d H;
+    // Newton on d/dt phi = n . e polishes a smooth minimum to full precision.
+    // Its steps stay within a few golden-section brackets: at a minimum on a
+    // seam of the distance (deep inside, where the nearest face changes) the
+    // curvature is ~0 and a Newton step would throw t to an end point.
+    const double reach = 4 * (hi - lo) + 1e-12;
+    const double t_gs = t;
+    for (int it = 0; it < 3; ++it) {
+        c.query(xa + t * e, 1e300, cs);
+        H = c.distance_hessian(xa + t * e);
+        const double gt = cs.normal.dot(e), gtt = e.dot(H * e);
+        if (!(gtt > 1e-12 * L)) break;
+        const double tn = t - gt / gtt;
+        if (!(std::abs(tn - t_gs) <= reach)) break;
+        t = tn;
+    }
+    if (t <= 0 || t >= 1) return false;
+    c.query(xa + t * e, 1e300, cs);
+    const double phi = cs.distance - off;
+    if (phi >= 0) return false;
+    H = c.distance_hessian(xa + t * e);
+    // No curvature along the edge at an interior minimum: the minimum sits on a
+    // seam of the collider's distance (deep inside, where the nearest face
+    // changes). It is still the edge's deepest point; dropping it would make
+    // the energy jump. The Hessian then omits the Danskin correction.
+    const double da = std::max(ca.distance - cs.distance, 0.0), db = std::max(cb.distance - cs.distance, 0.0);
+    const double eps = kEdgeFadeDepth;
+    double sa1, sa2, sb1, sb2;
+    const double sa = smoothstep(da / eps, sa1, sa2), sb = smoothstep(db / eps, sb1, sb2);
+    if (sa <= 0 || sb <= 0) return false;
+    const Vec3 He = H * e;
+    out.t = t;
+    out.phi = phi;
+    out.n = cs.normal;
+    out.H = H;
+    out.e = e;
+    out.g << (1 - t) * He - cs.normal, t * He + cs.normal;
+    out.w = sa * sb;
+    out.da = da;
+    out.db = db;
+    out.sa = sa;
+    out.sb = sb;
+    out.sa1 = sa1 / eps;
+    out.sa2 = sa2 / (eps * eps);
+    out.sb1 = sb1 / eps;
+    out.sb2 = sb2 / (eps * eps);
+    out.na = ca.normal;
+    out.nb = cb.normal;
+    out.Ha = c.distance_hessian(xa);
+    out.Hb = c.distance_hessian(xb);
+    return true;
+}
+
+/// Calls f(EdgeContact) for every mesh edge whose deepest point in a curved
+/// collider is inside the edge and in contact.
 template <class F>
 void for_each_edge_contact(const ClothSystem& s, const Positions& X, F&& f)
 {
@@ -89,64 +249,22 @@ void for_each_edge_contact(const ClothSystem& s, const Positions& X, F&& f)
         for (std::size_t ei = 0; ei < edges.size(); ++ei) {
             const int a = edges[ei][0], b = edges[ei][1];
             if (m.pinned[static_cast<std::size_t>(a)] && m.pinned[static_cast<std::size_t>(b)]) continue;
-            const Vec3 xa = X.row(a).transpose(), xb = X.row(b).transpose();
-            const Vec3 e = xb - xa;
-            const double L = e.norm();
-            if (L <= 1e-12) continue;
-            // Every point of the edge is within L/2 of an end point.
-            ContactSample ca, cb;
-            const bool qa = c->query(xa, 0.5 * L + off, ca), qb = c->query(xb, 0.5 * L + off, cb);
-            if (!qa && !qb) continue;
-            // The distance is convex along the edge: its minimum is inside only
-            // if it falls leaving x_a and rises arriving at x_b.
-            if (!qa) c->query(xa, 1e300, ca);
-            if (!qb) c->query(xb, 1e300, cb);
-            if (ca.normal.dot(e) >= 0 || cb.normal.dot(e) <= 0) continue;
-            auto dist = [&](double t) {
-                ContactSample cs;
-                c->query(xa + t * e, 1e300, cs);
-                return cs.distance;
-            };
-            double lo = 0, hi = 1;
-            const double g = 0.5 * (std::sqrt(5.0) - 1);
-            double t1 = hi - g * (hi - lo), t2 = lo + g * (hi - lo), d1 = dist(t1), d2 = dist(t2);
-            for (int it = 0; it < 40 && hi - lo > 1e-7; ++it) {
-                if (d1 < d2) {
-                    hi = t2;
-                    t2 = t1;
-                    d2 = d1;
-                    t1 = hi - g * (hi - lo);
-                    d1 = dist(t1);
-                } else {
-                    lo = t1;
-                    t1 = t2;
-                    d1 = d2;
-                    t2 = lo + g * (hi - lo);
-                    d2 = dist(t2);
-                }
-            }
-            double t = 0.5 * (lo + hi);
-            ContactSample cs;
-            Eigen::Matrix3d H;
-            for (int it = 0; it < 3; ++it) { // Newton on d/dt phi = n . e
-                c->query(xa + t * e, 1e300, cs);
-                H = c->distance_hessian(xa + t * e);
-                const double gt = cs.normal.dot(e), gtt = e.dot(H * e);
-                if (!(gtt > 1e-12 * L * L * (1.0 / L))) break;
-                t = std::clamp(t - gt / gtt, 0.0, 1.0);
-            }
-            if (t < 1e-4 || t > 1 - 1e-4) continue;
-            c->query(xa + t * e, 1e300, cs);
-            const double phi = cs.distance - off;
-            if (phi >= 0) continue;
-            H = c->distance_hessian(xa + t * e);
-            if (!(e.dot(H * e) > 1e-9 / L * L * L)) continue; // no curvature along the edge: no interior minimum
-            const double k = 0.5 * (m.contact_stiffness(a) + m.contact_stiffness(b));
-            f(EdgeContact{static_cast<int>(ei), t, phi, cs.normal, H, e, k});
+            EdgeContact ec;
+            if (!edge_deepest_point(*c, X.row(a).transpose(), X.row(b).transpose(), off, ec)) continue;
+            ec.edge = static_cast<int>(ei);
+            ec.k = 0.5 * (m.contact_stiffness(a) + m.contact_stiffness(b));
+            f(ec);
         }
     }
 }
 } // namespace
+
+std::vector<int> ClothSystem::edges_in_contact(const Positions& X) const
+{
+    std::vector<int> out;
+    for_each_edge_contact(*this, X, [&](const EdgeContact& c) { out.push_back(c.edge); });
+    return out;
+}
 
 double ClothSystem::potential_energy(const Positions& X) const
 {
@@ -169,7 +287,7 @@ double ClothSystem::potential_energy(const Positions& X) const
         e += 0.5 * a.k * (d.x() * d.x() + d.y() * d.y());
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3&, const Collider&) { e += 0.5 * m_model.contact_stiffness(i) * phi * phi; });
-    for_each_edge_contact(*this, X, [&](const EdgeContact& c) { e += 0.5 * c.k * c.phi * c.phi; });
+    for_each_edge_contact(*this, X, [&](const EdgeContact& c) { e += 0.5 * c.k * c.phi * c.phi * c.w; });
     return e;
 }
 
@@ -216,9 +334,13 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3& n, const Collider&) { f.row(i) -= (m_model.contact_stiffness(i) * phi * n).transpose(); });
     for_each_edge_contact(*this, X, [&](const EdgeContact& c) {
+        // E = k phi^2 w / 2: grad = k phi w grad(phi) + k phi^2 grad(w) / 2,
+        // grad(phi) = ((1-t) n, t n) (Danskin), grad(da) = (n_a, 0) - grad(phi).
         const auto& ed = m_edges[static_cast<std::size_t>(c.edge)];
-        f.row(ed[0]) -= ((1 - c.t) * c.k * c.phi * c.n).transpose();
-        f.row(ed[1]) -= (c.t * c.k * c.phi * c.n).transpose();
+        Eigen::Matrix<double, 6, 1> grad;
+        edge_gradients(c, grad);
+        f.row(ed[0]) -= (c.k * grad.head<3>()).transpose();
+        f.row(ed[1]) -= (c.k * grad.tail<3>()).transpose();
     });
 }
 
@@ -411,22 +533,12 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         // E = k phi^2 / 2 with phi(x_a, x_b) = min_t d((1-t) x_a + t x_b) - offset.
         // grad phi = ((1-t) n, t n); Hessian (Danskin, t interior) =
         // [w_p w_q H] - g g^T / (e^T H e), g = ((1-t) H e - n, t H e + n).
+        // E = k phi^2 w / 2 (see edge_gradients); the projected form keeps
+        // k w grad(phi) grad(phi)^T only.
         const auto& ed = m_s.edges()[static_cast<std::size_t>(c.edge)];
-        const double w[2] = {1 - c.t, c.t};
+        Eigen::Matrix<double, 6, 1> grad;
         Eigen::Matrix<double, 6, 6> K;
-        Eigen::Matrix<double, 6, 1> gp;
-        gp << w[0] * c.n, w[1] * c.n;
-        K = gp * gp.transpose();
-        if (!project) {
-            const Vec3 He = c.H * c.e;
-            Eigen::Matrix<double, 6, 1> g;
-            g << w[0] * He - c.n, w[1] * He + c.n;
-            Eigen::Matrix<double, 6, 6> Hp;
-            for (int p = 0; p < 2; ++p)
-                for (int q = 0; q < 2; ++q) Hp.block<3, 3>(3 * p, 3 * q) = w[p] * w[q] * c.H;
-            Hp -= g * g.transpose() / c.e.dot(He);
-            K += c.phi * Hp;
-        }
+        edge_gradients(c, grad, &K, !project);
         K *= c.k;
         add_diag(m_diag_blocks[static_cast<std::size_t>(ed[0])], K.block<3, 3>(0, 0));
         add_diag(m_diag_blocks[static_cast<std::size_t>(ed[1])], K.block<3, 3>(3, 3));

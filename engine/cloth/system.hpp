@@ -61,6 +61,9 @@ public:
 
     /// Unique edges of the mesh's faces (a < b): where edge contact is checked.
     const std::vector<std::array<int, 2>>& edges() const { return m_edges; }
+    /// Indices into edges() of the edges whose deepest point in a curved
+    /// collider is inside the edge and in contact (ModelOptions::edge_contact).
+    std::vector<int> edges_in_contact(const Positions& X) const;
 
 private:
     friend class HessianAssembler;

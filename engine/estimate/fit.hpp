@@ -26,12 +26,16 @@
 namespace drape::estimate {
 
 struct FitProgress {
-    std::string stage;      ///< "scan" | "global" | "local" | "spread" | "uncertainty" | "done"
+    std::string stage;      ///< "scan" | "global" | "local" | "mirror" | "spread" | "uncertainty" | "done"
     int evaluation = 0;     ///< objective evaluations so far (all stages)
     int planned = 0;        ///< upper bound on evaluations of the whole fit
     double best_chi2 = 0;   ///< best sum of squared whitened residuals so far
     long simulations = 0;
+    long unconverged = 0;   ///< simulations so far that did not come to rest
     double elapsed_s = 0;
+    /// Search coordinates of the last evaluation (log10 of the value for log-scaled
+    /// parameters, see FitVariable), in the order of fit_variables().
+    std::vector<double> last_coords;
 };
 
 struct FitOptions {
@@ -39,9 +43,12 @@ struct FitOptions {
     int grid = 25;                ///< nodes across the specimen in the fit's simulations
     std::uint64_t seed = 1;       ///< drives the optimizer's randomness and the perturbation seeds
     int seeds_per_evaluation = 2; ///< perturbation seeds averaged per evaluation (node-count bifurcation)
-    int scan_evaluations = 6;     ///< bisection of a common bending on D before the global stage (0 = none)
-    int global_evaluations = 0;   ///< CRS2 budget; 0 = 6 per fitted coordinate
+    int scan_evaluations = 6;     ///< at most, root search of a common bending on D before the global stage (0 = none)
+    int global_evaluations = 0;   ///< CRS2 budget; 0 = 4 per fitted coordinate
     int local_evaluations = 0;    ///< BOBYQA budget; 0 = 8 per coordinate + 8
+    /// Global stage starts each simulation from the best point's rest state
+    /// (faster; keeps each seed's fold pattern) instead of flat (cold).
+    bool warm_global = true;
     bool uncertainty = true;      ///< Jacobian, covariance, intervals
     /// Extra perturbation seeds simulated at the optimum to measure the
     /// drape-to-drape spread of every residual term; sigmas below it are raised

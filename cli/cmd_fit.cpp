@@ -60,6 +60,9 @@ int run(const std::vector<std::string>& argv)
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
+    // Fail now, not after minutes of fitting.
+    prepare_output_file(*out, "--out");
+    if (const auto rep = a.get("--report")) prepare_output_dir(*rep, "--report");
     estimate::FitOptions fo;
     try {
         fo.model = estimate::parse_model_variant(a.get_or("--model", "baseline"));

@@ -40,6 +40,13 @@ struct UsageError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+/// Before a long job: creates the parent folder of the output file `path` (given
+/// with `flag`) and checks that a file can be written there, so a fit does not
+/// run for minutes and then fail to save. Throws drape::FileError naming both.
+void prepare_output_file(const std::string& path, const std::string& flag);
+/// The same for an output folder (created if missing).
+void prepare_output_dir(const std::string& dir, const std::string& flag);
+
 struct Command {
     std::string name;
     std::string summary;

@@ -6,9 +6,44 @@
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <unistd.h>
 
 namespace drape::cli {
+
+namespace {
+/// `given` is what the user typed after `flag` (the file, or the folder itself).
+void check_output_dir(const std::string& dir, const std::string& flag, const std::string& given)
+{
+    namespace fs = std::filesystem;
+    const fs::path d = dir.empty() ? fs::path(".") : fs::path(dir);
+    std::error_code ec;
+    if (!fs::exists(d, ec)) {
+        fs::create_directories(d, ec);
+        if (ec) throw FileError(flag + " " + given + ": cannot create the folder " + d.string() + " (" + ec.message() + ")");
+    }
+    if (!fs::is_directory(d, ec)) throw FileError(flag + " " + given + ": " + d.string() + " is not a folder");
+    const fs::path probe = d / (".drape-write-test-" + std::to_string(::getpid()));
+    {
+        std::ofstream f(probe);
+        if (!f) throw FileError(flag + " " + given + ": cannot write in the folder " + d.string());
+    }
+    fs::remove(probe, ec);
+}
+} // namespace
+
+void prepare_output_dir(const std::string& dir, const std::string& flag) { check_output_dir(dir, flag, dir); }
+
+void prepare_output_file(const std::string& path, const std::string& flag)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::is_directory(fs::path(path), ec)) throw FileError(flag + " " + path + ": is a folder, not a file");
+    const fs::path parent = fs::path(path).parent_path();
+    check_output_dir(parent.empty() ? std::string(".") : parent.string(), flag, path);
+}
 
 std::map<std::string, Command>& registry()
 {

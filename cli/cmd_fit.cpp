@@ -44,6 +44,8 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
   --local N           local-stage evaluations (default 8 per fitted parameter + 8)
   --cold-global       global stage from flat starts (default: from the best point's rest
                       states, faster, but each seed keeps its fold pattern)
+  --cold-local        local stage from flat starts too (every simulation is a fresh drop,
+                      as the lab's and `drape predict`'s; slower)
   --start FABRIC      start point / values of the parameters not fitted (a library preset)
   --name NAME         name of the preset (default: the first record's id)
   --no-uncertainty    skip the Jacobian (no intervals)
@@ -56,7 +58,7 @@ extern "C" void on_sigint(int) { g_cancel.store(true); }
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels"},
-           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only", "--cold-global"});
+           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only", "--cold-global", "--cold-local"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
@@ -81,6 +83,7 @@ int run(const std::vector<std::string>& argv)
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");
     fo.warm_global = !a.has("--cold-global");
+    fo.warm_local = !a.has("--cold-local");
     fo.recentre_contours = a.has("--recentre-contours");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
     if (const auto s = a.get("--start")) {
@@ -130,6 +133,11 @@ int run(const std::vector<std::string>& argv)
                         rf.measured.id.c_str(), rf.measured_features.drape_coefficient_percent,
                         rf.simulated_features.drape_coefficient_percent, rf.dc_error_percent, rf.measured_features.node_count,
                         rf.simulated_features.node_count, rf.node_error);
+        for (const auto& rf : r.records)
+            if (rf.cold_seeds > 0)
+                std::printf("%-10s draped from flat (%d seeds): D %5.1f %% (error %+5.1f)   nodes %4.1f (error %+4.1f)\n", rf.measured.id.c_str(),
+                            rf.cold_seeds, rf.cold_features.drape_coefficient_percent, rf.cold_dc_error_percent, rf.cold_features.node_count,
+                            rf.cold_node_error);
         std::printf("\nchi2 %.1f for %d degrees of freedom; residual %s the measurement noise (contour RMS %.2f mm)\n", r.chi2, r.dof,
                     r.residual.exceeds_noise ? "EXCEEDS" : "is within", r.residual.rms_m * 1e3);
         if (r.residual.held_out_terms > 0)

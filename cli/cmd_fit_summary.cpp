@@ -40,6 +40,7 @@ this version's rules, so reports written by older versions compare like with lik
 struct Entry {
     std::string label, dir, id;
     double d_meas = NAN, d_fit = NAN, n_meas = NAN, n_fit = NAN;
+    double d_cold = NAN, n_cold = NAN; ///< the preset draped from flat (reports since the third session of 2026-11-22)
     double chi2 = 0;
     int dof = 0;
     double rim_z = 0;
@@ -78,6 +79,10 @@ Entry read_report(const std::string& label, const std::string& dir)
     e.d_fit = r.value("fitted_drape_coefficient_percent", NAN);
     e.n_meas = r.value("measured_node_count", NAN);
     e.n_fit = r.value("fitted_node_count", NAN);
+    if (r.contains("cold_drape_coefficient_percent") && r["cold_drape_coefficient_percent"].is_number()) {
+        e.d_cold = r["cold_drape_coefficient_percent"].get<double>();
+        e.n_cold = r.value("cold_node_count", NAN);
+    }
     int fitted = 0;
     for (const auto& p : j["fit"].value("parameters", nlohmann::json::array()))
         if (p.value("role", "") == "fitted") ++fitted;
@@ -135,8 +140,8 @@ int run(const std::vector<std::string>& argv)
 
     // Table.
     std::ostringstream md;
-    md << "| record | fit | D meas. [%] | D fit [%] | D err | nodes meas. | nodes fit | chi2 / dof | rim z | beyond noise | candidate effects |\n"
-       << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+    md << "| record | fit | D meas. [%] | D fit [%] | D err | nodes meas. | nodes fit | D err cold | nodes err cold | chi2 / dof | rim z | beyond noise | candidate effects |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     nlohmann::json js = nlohmann::json::array();
     char buf[512];
     for (const auto& id : ids)
@@ -145,19 +150,24 @@ int run(const std::vector<std::string>& argv)
                 if (e.id != id || e.label != l) continue;
                 std::string cands;
                 for (const auto& c : e.candidates) cands += (cands.empty() ? "" : ", ") + c;
-                std::snprintf(buf, sizeof buf, "| %s | %s | %.1f | %.1f | %+.1f | %.0f | %.1f | %.0f / %d | %.1f | %s | %s |\n", id.c_str(), l.c_str(),
-                              e.d_meas, e.d_fit, e.d_fit - e.d_meas, e.n_meas, e.n_fit, e.chi2, e.dof, e.rim_z, e.exceeds ? "yes" : "no",
-                              cands.empty() ? "-" : cands.c_str());
+                char cold_d[32] = "-", cold_n[32] = "-";
+                if (std::isfinite(e.d_cold)) std::snprintf(cold_d, sizeof cold_d, "%+.1f", e.d_cold - e.d_meas);
+                if (std::isfinite(e.n_cold)) std::snprintf(cold_n, sizeof cold_n, "%+.1f", e.n_cold - e.n_meas);
+                std::snprintf(buf, sizeof buf, "| %s | %s | %.1f | %.1f | %+.1f | %.0f | %.1f | %s | %s | %.0f / %d | %.1f | %s | %s |\n", id.c_str(),
+                              l.c_str(), e.d_meas, e.d_fit, e.d_fit - e.d_meas, e.n_meas, e.n_fit, cold_d, cold_n, e.chi2, e.dof, e.rim_z,
+                              e.exceeds ? "yes" : "no", cands.empty() ? "-" : cands.c_str());
                 md << buf;
                 js.push_back({{"record", id}, {"label", l}, {"model", e.model}, {"edge_contact", e.edge_contact}, {"dc_measured", e.d_meas},
-                              {"dc_fitted", e.d_fit}, {"nodes_measured", e.n_meas}, {"nodes_fitted", e.n_fit}, {"chi2", e.chi2}, {"dof", e.dof},
+                              {"dc_fitted", e.d_fit}, {"nodes_measured", e.n_meas}, {"nodes_fitted", e.n_fit},
+                              {"dc_cold", std::isfinite(e.d_cold) ? nlohmann::json(e.d_cold) : nlohmann::json(nullptr)},
+                              {"nodes_cold", std::isfinite(e.n_cold) ? nlohmann::json(e.n_cold) : nlohmann::json(nullptr)}, {"chi2", e.chi2}, {"dof", e.dof},
                               {"rim_z", e.rim_z}, {"exceeds_noise", e.exceeds}, {"candidate_effects", e.candidates}});
             }
     // Aggregates per label.
-    md << "\n| fit | records | mean D err | RMS D err | records with \\|D err\\| <= 2 | records with \\|node err\\| <= 1 | mean chi2 / dof | beyond noise |\n"
-       << "|---|---|---|---|---|---|---|---|\n";
+    md << "\n| fit | records | mean D err | RMS D err | records with \\|D err\\| <= 2 | records with \\|node err\\| <= 1 | both | both, draped from flat | mean chi2 / dof | beyond noise |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& l : labels) {
-        int n = 0, dok = 0, nok = 0, beyond = 0;
+        int n = 0, dok = 0, nok = 0, both = 0, both_cold = 0, have_cold = 0, beyond = 0;
         double s = 0, ss = 0, cd = 0;
         for (const auto& e : entries) {
             if (e.label != l) continue;
@@ -167,10 +177,18 @@ int run(const std::vector<std::string>& argv)
             ss += d * d;
             dok += std::abs(d) <= 2.0 ? 1 : 0;
             nok += std::abs(e.n_fit - e.n_meas) <= 1.0 ? 1 : 0;
+            both += (std::abs(d) <= 2.0 && std::abs(e.n_fit - e.n_meas) <= 1.0) ? 1 : 0;
+            if (std::isfinite(e.d_cold)) {
+                ++have_cold;
+                both_cold += (std::abs(e.d_cold - e.d_meas) <= 2.0 && std::abs(e.n_cold - e.n_meas) <= 1.0) ? 1 : 0;
+            }
             cd += e.chi2 / std::max(1, e.dof);
             beyond += e.exceeds ? 1 : 0;
         }
-        std::snprintf(buf, sizeof buf, "| %s | %d | %+.2f | %.2f | %d | %d | %.2f | %d |\n", l.c_str(), n, s / n, std::sqrt(ss / n), dok, nok, cd / n, beyond);
+        char bc[32] = "-";
+        if (have_cold) std::snprintf(bc, sizeof bc, "%d of %d", both_cold, have_cold);
+        std::snprintf(buf, sizeof buf, "| %s | %d | %+.2f | %.2f | %d | %d | %d | %s | %.2f | %d |\n", l.c_str(), n, s / n, std::sqrt(ss / n), dok, nok, both, bc,
+                      cd / n, beyond);
         md << buf;
     }
     cloth::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());

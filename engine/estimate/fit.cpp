@@ -160,8 +160,9 @@ public:
         const int S = std::max(1, m_opt.seeds_per_evaluation);
         const int R = static_cast<int>(m_recs.size());
         std::vector<std::vector<double>> values; // [term][draw]
+        m_cold.assign(R, {});
         for (int r = 0; r < R; ++r) {
-            std::vector<DrapeFeatures> draws;
+            std::vector<DrapeFeatures> draws, cold;
             for (const auto& sim : m_best.sims[r]) draws.push_back(drape_features(sim, m_recs[r]));
             for (int k = 0; k < extra; ++k) {
                 if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
@@ -171,8 +172,14 @@ public:
                 ro.progress = nullptr;
                 const auto t0 = Clock::now();
                 draws.push_back(drape_features(cloth::simulate_drape(params_for_record(p, m_recs[r]), setup, ro, m_opt.model_options), m_recs[r]));
+                cold.push_back(draws.back());
                 m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
                 ++m_simulations;
+            }
+            if (!cold.empty()) {
+                std::vector<double> closed;
+                m_cold[r] = average_features(cold, &closed);
+                m_cold_seeds = static_cast<int>(cold.size());
             }
             std::size_t base = 0;
             for (int q = 0; q < r; ++q)
@@ -244,6 +251,8 @@ public:
     int evaluations() const { return m_evaluations; }
     double sim_seconds() const { return m_sim_seconds; }
     long unconverged() const { return m_unconverged; }
+    const std::vector<DrapeFeatures>& cold_features() const { return m_cold; }
+    int cold_seeds() const { return m_cold_seeds; }
     int m_planned = 0;
 
 private:
@@ -256,6 +265,8 @@ private:
     std::vector<double> m_sigma_floor; ///< per residual term, from calibrate_spread
     bool m_spread_calibrated = false;
     Evaluation m_best, m_last;
+    std::vector<DrapeFeatures> m_cold; ///< per record: mean features of the spread stage's cold drapes
+    int m_cold_seeds = 0;
     Eigen::VectorXd m_last_x;
     std::vector<std::vector<cloth::Positions>> m_last_states; ///< [record][seed] of the last evaluation
     Eigen::VectorXd m_best_x;
@@ -466,7 +477,7 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
         cancelled = true;
     }
     if (!cancelled) run_stage(nlopt::GN_CRS2_LM, ev, vars, x, global, options.warm_global ? Start::Best : Start::Cold, "global", options.seed, cancelled, &box);
-    if (!cancelled) run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, Start::Best, "local", options.seed + 1, cancelled);
+    if (!cancelled) run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, options.warm_local ? Start::Best : Start::Cold, "local", options.seed + 1, cancelled);
     // Mirror check: D and the node count do not change when warp and weft swap;
     // only the signed cos 2theta of the contours tells which axis is stiffer, and
     // it is weak against the fold noise, so a local stage can end in the mirror
@@ -478,10 +489,11 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
         if (std::abs(xs[bend_vars[0]] - xs[bend_vars[1]]) > 0.05) {
             try {
                 const double before = ev.best().chi2;
-                const double mirrored = ev.objective(xs, Start::Best, "mirror");
+                const double mirrored = ev.objective(xs, options.warm_local ? Start::Best : Start::Cold, "mirror");
                 if (mirrored < before) {
                     x = xs;
-                    run_stage(nlopt::LN_BOBYQA, ev, vars, x, local / 2, Start::Best, "local", options.seed + 2, cancelled);
+                    run_stage(nlopt::LN_BOBYQA, ev, vars, x, local / 2, options.warm_local ? Start::Best : Start::Cold, "local", options.seed + 2,
+                              cancelled);
                 }
             } catch (const CancelledFit&) {
                 cancelled = true;
@@ -635,6 +647,12 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
         rf.setup = records[r].setup(options.grid, options.seed);
         rf.dc_error_percent = rf.simulated_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
         rf.node_error = rf.simulated_features.node_count - rf.measured_features.node_count;
+        if (r < ev.cold_features().size() && ev.cold_seeds() > 0) {
+            rf.cold_seeds = ev.cold_seeds();
+            rf.cold_features = ev.cold_features()[r];
+            rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+            rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
+        }
         out.records.push_back(std::move(rf));
     }
     out.residual = analyse_residual(out.residuals, n);
@@ -673,6 +691,7 @@ json fit_to_json(const FitResult& r)
     prov["seed"] = r.options.seed;
     prov["seeds_per_evaluation"] = r.options.seeds_per_evaluation;
     prov["global_stage_starts"] = r.options.warm_global ? "warm" : "cold";
+    prov["local_stage_starts"] = r.options.warm_local ? "warm" : "cold";
     prov["channels"] = r.options.channels;
     preset.extra["provenance"] = prov;
 
@@ -723,6 +742,11 @@ json fit_to_json(const FitResult& r)
                        {"measured_node_count", rf.measured_features.node_count},
                        {"fitted_node_count", rf.simulated_features.node_count},
                        {"node_error", rf.node_error},
+                       {"cold_seeds", rf.cold_seeds},
+                       {"cold_drape_coefficient_percent", rf.cold_seeds ? json(rf.cold_features.drape_coefficient_percent) : json(nullptr)},
+                       {"cold_node_count", rf.cold_seeds ? json(rf.cold_features.node_count) : json(nullptr)},
+                       {"cold_dc_error_percent", rf.cold_seeds ? json(rf.cold_dc_error_percent) : json(nullptr)},
+                       {"cold_node_error", rf.cold_seeds ? json(rf.cold_node_error) : json(nullptr)},
                        {"node_source", rf.measured.node_source},
                        {"contours_recentred", rf.measured.recentre_contours},
                        {"profiler_axis_offset_m", {rf.measured_features.axis_offset_m.x(), rf.measured_features.axis_offset_m.y()}}});

@@ -49,6 +49,9 @@ struct FitOptions {
     /// Global stage starts each simulation from the best point's rest state
     /// (faster; keeps each seed's fold pattern) instead of flat (cold).
     bool warm_global = true;
+    /// The same for the local stage and the mirror check (and the Jacobian of
+    /// the uncertainty stage, which always starts warm from the optimum).
+    bool warm_local = true;
     bool uncertainty = true;      ///< Jacobian, covariance, intervals
     /// Extra perturbation seeds simulated at the optimum to measure the
     /// drape-to-drape spread of every residual term; sigmas below it are raised
@@ -97,6 +100,13 @@ struct RecordFit {
     cloth::DrapeSetup setup;          ///< of the first seed
     double dc_error_percent = 0;      ///< simulated - measured D
     double node_error = 0;            ///< simulated (seed mean) - measured
+    /// The preset draped from flat (the spread stage's extra seeds), as `drape
+    /// predict` / `compare` and the widget drape it: the fit's own simulations
+    /// are warm-started and can keep another fold pattern. 0 seeds = not run.
+    int cold_seeds = 0;
+    DrapeFeatures cold_features;
+    double cold_dc_error_percent = 0;
+    double cold_node_error = 0;
 };
 
 struct FitResult {

@@ -344,6 +344,17 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
            << num(rf.node_error, "%+.1f") << " |\n";
     md << "\nMeasured node counts: " << (r.records.empty() ? "" : r.records.front().measured.node_source)
        << "; fitted: the same detector on the simulated drape (mean over the seeds).\n\n";
+    if (!r.records.empty() && r.records.front().cold_seeds > 0) {
+        md << "The fit's simulations start from the rest state of the best point so far (warm). Draped from flat, as `drape predict`, "
+              "`drape compare` and the widget drape it (mean of "
+           << r.records.front().cold_seeds << " perturbation seeds), the preset gives:\n\n"
+           << "| record | D cold [%] | D error cold | nodes cold | node error cold |\n|---|---|---|---|---|\n";
+        for (const auto& rf : r.records)
+            md << "| " << rf.measured.id << " | " << num(rf.cold_features.drape_coefficient_percent, "%.1f") << " | "
+               << num(rf.cold_dc_error_percent, "%+.1f") << " | " << num(rf.cold_features.node_count, "%.1f") << " | "
+               << num(rf.cold_node_error, "%+.1f") << " |\n";
+        md << "\n";
+    }
 
     json recs = json::array();
     for (int i = 0; i < static_cast<int>(r.records.size()); ++i) {

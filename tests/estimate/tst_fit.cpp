@@ -56,6 +56,12 @@ private slots:
         const FitResult r = fit_fabric({rec}, o);
         QVERIFY(!r.cancelled);
         QVERIFY(r.simulations > 0 && r.seconds_per_simulation > 0);
+        // The preset draped from flat (the spread stage's seeds) is reported
+        // beside the fit's warm-started drapes.
+        QCOMPARE(r.records[0].cold_seeds, o.spread_seeds);
+        QVERIFY(std::isfinite(r.records[0].cold_dc_error_percent) && r.records[0].cold_features.drape_coefficient_percent > 0);
+        QVERIFY(std::abs(r.records[0].cold_dc_error_percent - (r.records[0].cold_features.drape_coefficient_percent -
+                                                               r.records[0].measured_features.drape_coefficient_percent)) < 1e-12);
         // What one small-grid drape constrains is the overall bending (the
         // mean of log10 warp and weft bending): it is inside its 95 % interval
         // from the fit's covariance. (The warp/weft split of one drape is not

@@ -47,10 +47,12 @@ int main(int argc, char** argv)
             if (trace) { // one line per evaluation: where the time goes
                 auto last = std::make_shared<double>(0.0);
                 o.progress = [last](const estimate::FitProgress& p) {
-                    std::string at;
-                    for (double c : p.last_coords) at += " " + std::to_string(c).substr(0, 6);
+                    char at[256] = "";
+                    std::size_t used = 0;
+                    for (double c : p.last_coords)
+                        if (used < sizeof at) used += static_cast<std::size_t>(std::snprintf(at + used, sizeof at - used, " %.3f", c));
                     std::fprintf(stderr, "  %-11s eval %3d  sims %4ld (%ld not at rest)  %+7.2f s  t %7.1f s  best chi2 %.4g  at%s\n", p.stage.c_str(),
-                                 p.evaluation, p.simulations, p.unconverged, p.elapsed_s - *last, p.elapsed_s, p.best_chi2, at.c_str());
+                                 p.evaluation, p.simulations, p.unconverged, p.elapsed_s - *last, p.elapsed_s, p.best_chi2, at);
                     *last = p.elapsed_s;
                 };
             }

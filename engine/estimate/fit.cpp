@@ -3,6 +3,7 @@
 #include "engine/cloth/error.hpp"
 #include "engine/cloth/fabric_io.hpp"
 #include "engine/cloth/units.hpp"
+#include "root.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <nlopt.hpp>
@@ -452,22 +453,10 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
                 c = cn;
                 e = en;
             }
-            // Regula falsi with the Illinois modification inside the bracket.
-            int side = 0;
-            while (bracketed && std::abs(best_err) > tol && used < options.scan_evaluations) {
-                double cm = lo - elo * (hi - lo) / (ehi - elo);
-                cm = std::clamp(cm, lo + 0.05 * (hi - lo), hi - 0.05 * (hi - lo));
-                const double em = dc_error(cm);
-                if (em > 0) {
-                    hi = cm, ehi = em;
-                    if (side == 1) elo *= 0.5;
-                    side = 1;
-                } else {
-                    lo = cm, elo = em;
-                    if (side == -1) ehi *= 0.5;
-                    side = -1;
-                }
-            }
+            // Regula falsi with the Illinois modification inside the bracket
+            // (dc_error keeps the best point).
+            if (bracketed && std::abs(best_err) > tol)
+                illinois_root(dc_error, lo, elo, hi, ehi, tol, options.scan_evaluations - used);
             for (int i : bend_vars) {
                 x[i] = best_c;
                 box[i] = {std::max(vars[i].lower, best_c - 0.7), std::min(vars[i].upper, best_c + 0.7)};

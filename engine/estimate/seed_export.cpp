@@ -1,5 +1,7 @@
 #include "seed_export.hpp"
 
+#include "root.hpp"
+
 #include "engine/cloth/error.hpp"
 
 #include <algorithm>
@@ -86,21 +88,9 @@ SeedExport export_seed(const cloth::FabricParams& p, const cloth::DrapeSetup& se
     double elo = err(lo), ehi = err(hi);
     double best = std::abs(elo) < std::abs(ehi) ? lo : hi, best_e = std::abs(elo) < std::abs(ehi) ? elo : ehi;
     if (elo < 0 && ehi > 0) {
-        int side = 0;
-        for (int it = 0; it < 12 && std::abs(best_e) > tol; ++it) {
-            double c = lo - elo * (hi - lo) / (ehi - elo);
-            c = std::clamp(c, lo + 0.05 * (hi - lo), hi - 0.05 * (hi - lo));
-            const double e = err(c);
+        if (std::abs(best_e) > tol) {
+            const auto [c, e] = illinois_root(err, lo, elo, hi, ehi, tol, 12);
             if (std::abs(e) < std::abs(best_e)) best = c, best_e = e;
-            if (e > 0) {
-                hi = c, ehi = e;
-                if (side == 1) elo *= 0.5;
-                side = 1;
-            } else {
-                lo = c, elo = e;
-                if (side == -1) ehi *= 0.5;
-                side = -1;
-            }
         }
     } else {
         out.note = elo >= 0 ? "the preset drapes below the seed model's floor on this grid (flexion 1e-3 N/m already gives a higher D)"

@@ -73,12 +73,12 @@ struct EdgeContact {
     Eigen::Matrix<double, 6, 1> g; ///< d/d(x_a, x_b) of phi'(t) = n . e
     /// Fade w = S(da / eps) S(db / eps) on the excess depths da, db >= 0 of the
     /// deepest point below the end points' distances, and what its derivatives need.
-    double w;
-    double da, db;    ///< [m]
+    double sa, sb;    ///< the factors S(da / eps), S(db / eps)
     double sa1, sa2, sb1, sb2; ///< S', S'' of each factor (per metre, per metre^2)
-    double sa, sb;    ///< the factors
     Vec3 na, nb;      ///< normals at the end points
-    Eigen::Matrix3d Ha, Hb; ///< distance Hessians at the end points
+    const Collider* collider; ///< for the end points' distance Hessians (exact Hessian only)
+    Vec3 xa, xb;      ///< the end points [m]
+    double w() const { return sa * sb; }
 };
 
 /// The edge contact fades out as the edge's deepest point comes up to the depth
@@ -115,24 +115,31 @@ inline void edge_gradients(const EdgeContact& c, Eigen::Matrix<double, 6, 1>& gr
     Gb -= G;
     const double wa = c.sa1 * c.sb, wb = c.sa * c.sb1; // dw/dda, dw/ddb
     const V6 Gw = wa * Ga + wb * Gb;
-    grad = c.phi * c.w * G + 0.5 * c.phi * c.phi * Gw;
+    const double w = c.w();
+    grad = c.phi * w * G + 0.5 * c.phi * c.phi * Gw;
     if (!hess) return;
     M6& K = *hess;
-    K = c.w * G * G.transpose();
+    K = w * G * G.transpose();
     if (!exact) return;
     // Hessian of phi (Danskin, t interior): [w_p w_q H] - g g^T / (e^T H e).
+    // No curvature along the edge at an interior minimum: the minimum sits on a
+    // seam of the collider's distance (deep inside, where the nearest face
+    // changes); the Danskin correction is then left out.
     const double wt[2] = {1 - c.t, c.t};
     M6 Hphi;
     for (int p = 0; p < 2; ++p)
         for (int q = 0; q < 2; ++q) Hphi.block<3, 3>(3 * p, 3 * q) = wt[p] * wt[q] * c.H;
     const double gtt = c.e.dot(c.H * c.e);
     if (gtt > 1e-9 * c.e.norm()) Hphi -= c.g * c.g.transpose() / gtt;
-    M6 Hda = -Hphi, Hdb = -Hphi;
-    Hda.block<3, 3>(0, 0) += c.Ha;
-    Hdb.block<3, 3>(3, 3) += c.Hb;
-    const M6 Hw = c.sa2 * c.sb * Ga * Ga.transpose() + c.sa1 * c.sb1 * (Ga * Gb.transpose() + Gb * Ga.transpose()) +
-                  c.sa * c.sb2 * Gb * Gb.transpose() + wa * Hda + wb * Hdb;
-    K += c.phi * c.w * Hphi + c.phi * (G * Gw.transpose() + Gw * G.transpose()) + 0.5 * c.phi * c.phi * Hw;
+    M6 Hw = c.sa2 * c.sb * Ga * Ga.transpose() + c.sa1 * c.sb1 * (Ga * Gb.transpose() + Gb * Ga.transpose()) +
+            c.sa * c.sb2 * Gb * Gb.transpose();
+    if (wa != 0 || wb != 0) { // in the fade zone: Hess(da) = [H_a 0; 0 0] - Hess(phi), Hess(db) likewise
+        M6 Hda = -Hphi, Hdb = -Hphi;
+        Hda.block<3, 3>(0, 0) += c.collider->distance_hessian(c.xa);
+        Hdb.block<3, 3>(3, 3) += c.collider->distance_hessian(c.xb);
+        Hw += wa * Hda + wb * Hdb;
+    }
+    K += c.phi * w * Hphi + c.phi * (G * Gw.transpose() + Gw * G.transpose()) + 0.5 * c.phi * c.phi * Hw;
 }
 
 /// The deepest point of the segment x_a -> x_b in collider c, when it lies inside
@@ -201,11 +208,9 @@ bool edge_deepest_point(const Collider& c, const Vec3& xa, const Vec3& xb, doubl
     c.query(xa + t * e, 1e300, cs);
     const double phi = cs.distance - off;
     if (phi >= 0) return false;
+    // A minimum on a seam of the distance (no curvature along the edge) is kept:
+    // it is still the edge's deepest point, and dropping it made the energy jump.
     H = c.distance_hessian(xa + t * e);
-    // No curvature along the edge at an interior minimum: the minimum sits on a
-    // seam of the collider's distance (deep inside, where the nearest face
-    // changes). It is still the edge's deepest point; dropping it would make
-    // the energy jump. The Hessian then omits the Danskin correction.
     const double da = std::max(ca.distance - cs.distance, 0.0), db = std::max(cb.distance - cs.distance, 0.0);
     const double eps = kEdgeFadeDepth;
     double sa1, sa2, sb1, sb2;
@@ -218,9 +223,6 @@ bool edge_deepest_point(const Collider& c, const Vec3& xa, const Vec3& xb, doubl
     out.H = H;
     out.e = e;
     out.g << (1 - t) * He - cs.normal, t * He + cs.normal;
-    out.w = sa * sb;
-    out.da = da;
-    out.db = db;
     out.sa = sa;
     out.sb = sb;
     out.sa1 = sa1 / eps;
@@ -229,8 +231,9 @@ bool edge_deepest_point(const Collider& c, const Vec3& xa, const Vec3& xb, doubl
     out.sb2 = sb2 / (eps * eps);
     out.na = ca.normal;
     out.nb = cb.normal;
-    out.Ha = c.distance_hessian(xa);
-    out.Hb = c.distance_hessian(xb);
+    out.collider = &c;
+    out.xa = xa;
+    out.xb = xb;
     return true;
 }
 
@@ -287,7 +290,7 @@ double ClothSystem::potential_energy(const Positions& X) const
         e += 0.5 * a.k * (d.x() * d.x() + d.y() * d.y());
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3&, const Collider&) { e += 0.5 * m_model.contact_stiffness(i) * phi * phi; });
-    for_each_edge_contact(*this, X, [&](const EdgeContact& c) { e += 0.5 * c.k * c.phi * c.phi * c.w; });
+    for_each_edge_contact(*this, X, [&](const EdgeContact& c) { e += 0.5 * c.k * c.phi * c.phi * c.w(); });
     return e;
 }
 
@@ -530,11 +533,8 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         add_diag(m_diag_blocks[static_cast<std::size_t>(i)], m.contact_stiffness(i) * K);
     });
     for_each_edge_contact(m_s, X, [&](const EdgeContact& c) {
-        // E = k phi^2 / 2 with phi(x_a, x_b) = min_t d((1-t) x_a + t x_b) - offset.
-        // grad phi = ((1-t) n, t n); Hessian (Danskin, t interior) =
-        // [w_p w_q H] - g g^T / (e^T H e), g = ((1-t) H e - n, t H e + n).
-        // E = k phi^2 w / 2 (see edge_gradients); the projected form keeps
-        // k w grad(phi) grad(phi)^T only.
+        // E = k phi^2 w / 2 with phi(x_a, x_b) = min_t d((1-t) x_a + t x_b) - offset
+        // (see edge_gradients); the projected form keeps k w grad(phi) grad(phi)^T only.
         const auto& ed = m_s.edges()[static_cast<std::size_t>(c.edge)];
         Eigen::Matrix<double, 6, 1> grad;
         Eigen::Matrix<double, 6, 6> K;

@@ -44,7 +44,7 @@ struct Evaluation {
 
 struct CancelledFit {};
 
-enum class Start { Cold, Best, Last };
+enum class Start { Cold, Best };
 
 /// Runs the simulations of one parameter point and scores them.
 class Evaluator {
@@ -74,10 +74,9 @@ public:
         return p;
     }
 
-    /// Where each simulation starts: flat and perturbed by its seed (Cold),
-    /// from its seed's rest state at the best point so far (Best), or at the
-    /// previous evaluation (Last). Warm starts keep each seed's fold pattern
-    /// unless the parameters make it unstable.
+    /// Where each simulation starts: flat and perturbed by its seed (Cold), or
+    /// from its seed's rest state at the best point so far (Best). Warm starts
+    /// keep each seed's fold pattern unless the parameters make it unstable.
     Evaluation evaluate(const Eigen::VectorXd& x, Start from)
     {
         if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
@@ -107,7 +106,6 @@ public:
                 ro.progress = nullptr;
                 const cloth::Positions* start = nullptr;
                 if (from == Start::Best && m_have_states) start = &m_states[r][s];
-                if (from == Start::Last && !m_last_states.empty()) start = &m_last_states[r][s];
                 e.sims[r][s] = start ? cloth::simulate_drape_from(pr, setup, *start, ro, m_opt.model_options)
                                       : cloth::simulate_drape(pr, setup, ro, m_opt.model_options);
             }
@@ -142,9 +140,6 @@ public:
         ++m_evaluations;
         m_last = e;
         m_last_x = x;
-        m_last_states.assign(e.sims.size(), {});
-        for (std::size_t r = 0; r < e.sims.size(); ++r)
-            for (const auto& sim : e.sims[r]) m_last_states[r].push_back(sim.x);
         return e;
     }
     const Evaluation& last() const { return m_last; }
@@ -269,7 +264,6 @@ private:
     std::vector<DrapeFeatures> m_cold; ///< per record: mean features of the spread stage's cold drapes
     int m_cold_seeds = 0;
     Eigen::VectorXd m_last_x;
-    std::vector<std::vector<cloth::Positions>> m_last_states; ///< [record][seed] of the last evaluation
     Eigen::VectorXd m_best_x;
     std::vector<std::vector<cloth::Positions>> m_states;
     bool m_have_states = false;
@@ -465,8 +459,10 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
     } catch (const CancelledFit&) {
         cancelled = true;
     }
-    if (!cancelled) run_stage(nlopt::GN_CRS2_LM, ev, vars, x, global, options.warm_global ? Start::Best : Start::Cold, "global", options.seed, cancelled, &box);
-    if (!cancelled) run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, options.warm_local ? Start::Best : Start::Cold, "local", options.seed + 1, cancelled);
+    const Start global_start = options.warm_global ? Start::Best : Start::Cold;
+    const Start local_start = options.warm_local ? Start::Best : Start::Cold;
+    if (!cancelled) run_stage(nlopt::GN_CRS2_LM, ev, vars, x, global, global_start, "global", options.seed, cancelled, &box);
+    if (!cancelled) run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, local_start, "local", options.seed + 1, cancelled);
     // Mirror check: D and the node count do not change when warp and weft swap;
     // only the signed cos 2theta of the contours tells which axis is stiffer, and
     // it is weak against the fold noise, so a local stage can end in the mirror
@@ -478,11 +474,10 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
         if (std::abs(xs[bend_vars[0]] - xs[bend_vars[1]]) > 0.05) {
             try {
                 const double before = ev.best().chi2;
-                const double mirrored = ev.objective(xs, options.warm_local ? Start::Best : Start::Cold, "mirror");
+                const double mirrored = ev.objective(xs, local_start, "mirror");
                 if (mirrored < before) {
                     x = xs;
-                    run_stage(nlopt::LN_BOBYQA, ev, vars, x, local / 2, options.warm_local ? Start::Best : Start::Cold, "local", options.seed + 2,
-                              cancelled);
+                    run_stage(nlopt::LN_BOBYQA, ev, vars, x, local / 2, local_start, "local", options.seed + 2, cancelled);
                 }
             } catch (const CancelledFit&) {
                 cancelled = true;

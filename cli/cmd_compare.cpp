@@ -29,6 +29,9 @@ preset against records it was not fitted to, or to see what a model change does.
   --grid N              nodes across a 300 mm specimen (default 25, scaled with the diameter)
   --seeds S             perturbation seeds averaged (default 2)
   --seed K              first perturbation seed (default 1)
+  --branch B            where the drapes start: random (default; the seeded mix of modes, as
+                        `drape predict`) or measured (an n-fold lift, n = the record's node count,
+                        as `drape fit` drapes)
   --disc-grip           the specimen cannot slide on the disc top (large static friction)
   --vertex-contact-only contact at mesh vertices only (the seed's; coarse elements cut the rim)
   --json                print the comparison as JSON on stdout
@@ -41,7 +44,7 @@ model (the fit's before its drape-to-drape calibration, so chi2 differs from a f
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--fabric", "--grid", "--seeds", "--seed"}, {"--json", "--quiet", "--vertex-contact-only", "--disc-grip"});
+    Args a(argv, {"--fabric", "--grid", "--seeds", "--seed", "--branch"}, {"--json", "--quiet", "--vertex-contact-only", "--disc-grip"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto fabric_arg = a.get("--fabric");
     if (!fabric_arg) throw UsageError("--fabric is required");
@@ -52,6 +55,7 @@ int run(const std::vector<std::string>& argv)
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     const bool json_out = a.has("--json"), quiet = a.has("--quiet") || json_out;
+    const estimate::FoldBranch branch = estimate::parse_fold_branch(a.get_or("--branch", "random"));
     cloth::ModelOptions mopt = preset.model;
     mopt.edge_contact = !a.has("--vertex-contact-only");
     estimate::single_threaded_blas();
@@ -64,9 +68,12 @@ int run(const std::vector<std::string>& argv)
         int grid = static_cast<int>(std::lround(grid300 * m.sample_diameter / 0.30));
         if (grid % 2 == 0) ++grid;
         const cloth::FabricParams p = estimate::params_for_record(*base, m);
+        const estimate::DrapeFeatures meas = estimate::drape_features(m);
         std::vector<estimate::DrapeFeatures> fs;
+        int folds = 0;
         for (int s = 0; s < seeds; ++s) {
             cloth::DrapeSetup setup = m.setup(grid, seed0 + static_cast<std::uint64_t>(s));
+            if (branch == estimate::FoldBranch::Measured) setup = estimate::on_fold_branch(setup, meas.node_count, estimate::kBranchLift, &folds);
             setup.disc_grip = a.has("--disc-grip");
             cloth::RestOptions ro;
             if (!quiet) std::fprintf(stderr, "%s: seed %d/%d (grid %d)...\n", m.id.c_str(), s + 1, seeds, grid);
@@ -76,11 +83,11 @@ int run(const std::vector<std::string>& argv)
         }
         std::vector<double> closed;
         const estimate::DrapeFeatures sim = estimate::average_features(fs, &closed);
-        const estimate::DrapeFeatures meas = estimate::drape_features(m);
         const auto terms = estimate::residual_terms(0, meas, sim, closed, noise);
         nlohmann::json rec = {{"record", m.id},
                               {"grid", grid},
                               {"seeds", seeds},
+                              {"fold_branch", folds > 0 ? nlohmann::json(folds) : nlohmann::json(nullptr)},
                               {"chi2", estimate::chi_square(terms)},
                               {"terms", static_cast<int>(terms.size())}};
         nlohmann::json depths = nlohmann::json::array();
@@ -114,8 +121,9 @@ int run(const std::vector<std::string>& argv)
         out.push_back(rec);
         if (!json_out) {
             auto v = [&](const char* k, const char* f) { return rec.contains(k) ? rec[k][f].get<double>() : NAN; };
-            std::printf("%s  grid %d, %d seeds, chi2 %.1f over %zu terms\n", m.id.c_str(), grid, seeds, rec["chi2"].get<double>(),
-                        terms.size());
+            std::printf("%s  grid %d, %d seeds%s, chi2 %.1f over %zu terms\n", m.id.c_str(), grid, seeds,
+                        folds > 0 ? (", started on the measured " + std::to_string(folds) + "-fold branch").c_str() : "",
+                        rec["chi2"].get<double>(), terms.size());
             std::printf("  D      sim %5.1f %%  meas %5.1f %%  err %+5.1f\n", v("drape_coefficient_percent", "simulated"),
                         v("drape_coefficient_percent", "measured"), v("drape_coefficient_percent", "error"));
             std::printf("  nodes  sim %5.1f    meas %5.1f    err %+5.1f\n", v("node_count", "simulated"), v("node_count", "measured"),

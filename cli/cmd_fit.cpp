@@ -38,10 +38,14 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 25)
+  --refine-grid N     when the optimum is grid-bound (a fitted bending length below the mesh
+                      spacing), fit again on grid N from it (default 41; 0 = never)
   --seed K            optimizer and perturbation seed (default 1; same seed = same fit)
   --seeds S           perturbation seeds averaged per evaluation (default 2)
   --global N          global-stage evaluations (default 4 per fitted parameter)
   --local N           local-stage evaluations (default 8 per fitted parameter + 8)
+  --branch B          where cold drapes start: measured (default; on the record's measured fold
+                      count, an n-fold lift of the flat sheet) or random (the seeded mix of modes)
   --cold-global       global stage from flat starts (default: from the best point's rest
                       states, faster, but each seed keeps its fold pattern)
   --cold-local        local stage from flat starts too (every simulation is a fresh drop,
@@ -57,7 +61,7 @@ extern "C" void on_sigint(int) { g_cancel.store(true); }
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only", "--cold-global", "--cold-local"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
@@ -77,12 +81,16 @@ int run(const std::vector<std::string>& argv)
         throw UsageError(std::string("--") + e.what());
     }
     fo.grid = a.get_int("--grid", 25, 9, 200);
+    fo.refine_grid = a.get_int("--refine-grid", fo.grid < 41 ? 41 : 0, 0, 200);
+    if (fo.refine_grid != 0 && fo.refine_grid <= fo.grid)
+        throw UsageError("--refine-grid " + std::to_string(fo.refine_grid) + " must be above --grid " + std::to_string(fo.grid) + " (or 0)");
     fo.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     fo.seeds_per_evaluation = a.get_int("--seeds", 2, 1, 16);
     fo.global_evaluations = a.get_int("--global", 0, 0, 100000);
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");
     fo.warm_global = !a.has("--cold-global");
+    if (const auto b = a.get("--branch")) fo.branch = estimate::parse_fold_branch(*b);
     fo.warm_local = !a.has("--cold-local");
     fo.recentre_contours = a.has("--recentre-contours");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
@@ -146,12 +154,14 @@ int run(const std::vector<std::string>& argv)
         for (const auto& b : r.residual.exceeds_because) std::printf("  beyond noise by %s\n", b.c_str());
         for (std::size_t i = 0; i < r.residual.candidate_effects.size(); ++i)
             std::printf("  candidate effect: %s (%s)\n", r.residual.candidate_effects[i].c_str(), r.residual.evidence[i].c_str());
+        if (r.refinement.from_grid > 0) std::printf("grid refinement: %s\n", r.refinement.reason.c_str());
         if (r.grid_bound)
             std::printf("WARNING: grid-bound preset: a fitted bending length is below the mesh spacing of grid %d; "
                         "fit with a finer --grid for a preset that carries over to other grids\n",
-                        fo.grid);
-        std::printf("%d evaluations, %ld simulations at grid %d, %.2f s per simulation, %.1f s in all%s\n", r.evaluations, r.simulations,
-                    fo.grid, r.seconds_per_simulation, r.wall_seconds, r.cancelled ? " (CANCELLED: best point so far)" : "");
+                        r.options.grid);
+        std::printf("%d evaluations, %ld simulations (final grid %d), %.2f s per simulation, %.1f s in all%s\n", r.evaluations,
+                    r.simulations, r.options.grid, r.seconds_per_simulation, r.wall_seconds,
+                    r.cancelled ? " (CANCELLED: best point so far)" : "");
         std::printf("preset written to %s\n", out->c_str());
         if (!files.empty()) std::printf("report: %zu files in %s\n", files.size(), a.get("--report")->c_str());
     }

@@ -25,12 +25,13 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
   --grid N              nodes across the specimen (default: the fit's grid scaled to the new
                         diameter when the preset carries provenance, else 31)
   --seed K              perturbation seed (default 1)
+  --folds N             start on an N-fold branch (a 5 mm N-fold lift; default: the seeded mix)
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr)";
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--fabric", "--sample-diameter", "--disc-diameter", "--pedestal-height", "--grid", "--seed", "--areal-density"},
+    Args a(argv, {"--fabric", "--sample-diameter", "--disc-diameter", "--pedestal-height", "--grid", "--seed", "--areal-density", "--folds"},
            {"--json", "--quiet"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     const auto fabric_arg = a.get("--fabric");
@@ -53,6 +54,7 @@ int run(const std::vector<std::string>& argv)
     }
     setup.grid = a.get_int("--grid", grid, 5, 1000);
     setup.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
+    if (a.has("--folds")) setup = estimate::on_fold_branch(setup, a.get_int("--folds", 0, 2, 16));
     if (a.has("--areal-density")) {
         auto* p = std::get_if<cloth::FabricParams>(&preset.fabric);
         if (!p) throw UsageError("--areal-density needs a drapekit-fabric preset");

@@ -1,6 +1,8 @@
 // drape simulate: drape a fabric preset over the drapemeter and measure it.
 #include "command.hpp"
 
+#include "engine/estimate/measured.hpp"
+
 #include "engine/cloth/drape_io.hpp"
 #include "engine/cloth/error.hpp"
 #include "engine/cloth/fabric_io.hpp"
@@ -28,6 +30,9 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --max-time S          give up after S seconds of simulated time (dynamic; default 60)
   --max-iterations N    static solver: Newton iterations per level (default 1000)
   --seed K              perturbation seed (default 1)
+  --folds N             start on an N-fold branch (an N-fold lift of 5 mm, N in 2..16; default: the
+                        seeded mix of modes 2..16, 1 mm)
+  --perturbation L      largest lift of the flat start's perturbation (at most 50mm)
   --out DIR             write summary.json, rest.obj, slices.csv, outline.csv
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr
@@ -38,7 +43,7 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--fabric", "--sample-diameter", "--disc-diameter", "--pedestal-height", "--grid", "--integrator", "--dt",
-                  "--tolerance", "--max-time", "--seed", "--out", "--edge-radius", "--max-iterations"},
+                  "--tolerance", "--max-time", "--seed", "--out", "--edge-radius", "--max-iterations", "--folds", "--perturbation"},
            {"--json", "--quiet", "--trace", "--vertex-contact-only", "--disc-grip"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     const auto fabric_arg = a.get("--fabric");
@@ -51,6 +56,8 @@ int run(const std::vector<std::string>& argv)
     setup.grid = a.get_int("--grid", 60, 5, 1000);
     setup.edge_radius = a.get_length("--edge-radius", setup.edge_radius);
     setup.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
+    if (a.has("--folds")) setup = estimate::on_fold_branch(setup, a.get_int("--folds", 0, 2, 16));
+    setup.perturbation = a.get_length("--perturbation", setup.perturbation);
     cloth::RestOptions ro;
     try {
         ro.integrator = cloth::parse_integrator(a.get_or("--integrator", "static"));

@@ -29,6 +29,8 @@ void DrapeSetup::validate() const
     if (grid < 5 || grid > 1000) throw ParameterError("grid = " + std::to_string(grid) + " must be in [5, 1000]");
     if (!(perturbation >= 0) || perturbation > 0.05)
         throw ParameterError("perturbation = " + format_double(perturbation) + " m must be in [0, 0.05]");
+    if (fold_mode != 0 && (fold_mode < 2 || fold_mode > 16))
+        throw ParameterError("fold mode = " + std::to_string(fold_mode) + " must be 0 (seeded mix) or a fold count in [2, 16]");
     for (double d : slice_depths)
         if (!(d > 0) || !std::isfinite(d)) throw ParameterError("slice depth " + format_double(d) + " m must be positive");
 }
@@ -58,6 +60,11 @@ void perturb(Positions& X, const DrapeSetup& setup)
         const double t = std::max(0.0, r - R2) / (R1 - R2);
         double s = 0;
         for (int k = 2; k <= 16; ++k) s += a[k] * std::cos(k * th + ph[k]);
+        if (setup.fold_mode >= 2) {
+            // One dominant mode: the mix is normalised to at most 1 (sum of a_k
+            // below 15), then a tenth of it rides on the n-fold cosine.
+            s = std::cos(setup.fold_mode * th + ph[setup.fold_mode]) + 0.1 * s / 15.0;
+        }
         lift(i) = s * t * t;
         mx = std::max(mx, std::abs(lift(i)));
     }

@@ -26,6 +26,12 @@ struct DrapeSetup {
     /// random phases, all from `seed`. Small enough not to change a converged D
     /// beyond the spread of real repeats, large enough to pick a fold pattern.
     double perturbation = 1.0e-3;
+    /// 0: the seeded mix above. n >= 2: start on an n-fold branch - the lift is
+    /// cos(n theta + phi) (r/R1)^2 with a seeded phase phi, plus the seeded mix at
+    /// a tenth of the amplitude so the n-fold symmetry is not exact. Whether the
+    /// sheet keeps n folds is then up to the fabric: an unstable branch buckles
+    /// into another count on the way to rest.
+    int fold_mode = 0;
     bool floor = true;
     /// Full grip on the disc (the limit of large static friction): every vertex
     /// laid on the disc top is tethered horizontally where it was laid. Off by
@@ -33,7 +39,7 @@ struct DrapeSetup {
     /// HorizontalAnchor). A hypothesis tested in docs/model-discrepancy.md.
     bool disc_grip = false;
     std::vector<double> slice_depths = {0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05}; ///< [m] below the pedestal top
-    void validate() const;          ///< ParameterError on negative sizes, sample <= disc, grid < 5
+    void validate() const;          ///< ParameterError on negative sizes, sample <= disc, grid < 5, fold_mode 1 or > 16
 };
 
 using FabricSpec = std::variant<FabricParams, SeedParams>;

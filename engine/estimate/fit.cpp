@@ -31,6 +31,15 @@ cloth::FabricParams params_for_record(const cloth::FabricParams& base, const Mea
     return p;
 }
 
+std::string to_string(FoldBranch b) { return b == FoldBranch::Measured ? "measured" : "random"; }
+
+FoldBranch parse_fold_branch(const std::string& name)
+{
+    if (name == "measured") return FoldBranch::Measured;
+    if (name == "random") return FoldBranch::Random;
+    throw ParameterError("branch: '" + name + "' is not one of measured, random");
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -66,6 +75,21 @@ public:
         for (const auto& r : recs) m_meas.push_back(drape_features(r));
     }
 
+    /// Set-up of record r's simulation with perturbation seed `seed`: on the
+    /// record's measured fold branch (FitOptions::branch) or from the random mix.
+    cloth::DrapeSetup setup_for(int r, std::uint64_t seed, bool on_branch) const
+    {
+        const cloth::DrapeSetup s = m_recs[r].setup(m_opt.grid, seed);
+        return on_branch && branch_of(r) > 0 ? on_fold_branch(s, m_meas[r].node_count, m_opt.branch_lift_m) : s;
+    }
+    /// The fold count record r's cold drapes start with (0: random mix).
+    int branch_of(int r) const
+    {
+        int n = 0;
+        if (m_opt.branch == FoldBranch::Measured) on_fold_branch({}, m_meas[r].node_count, m_opt.branch_lift_m, &n);
+        return n;
+    }
+
     cloth::FabricParams params_at(const Eigen::VectorXd& x) const
     {
         cloth::FabricParams p = m_base;
@@ -99,7 +123,7 @@ public:
                     j = next++;
                 }
                 const auto [r, s] = jobs[j];
-                const cloth::DrapeSetup setup = m_recs[r].setup(m_opt.grid, m_opt.seed + static_cast<std::uint64_t>(s));
+                const cloth::DrapeSetup setup = setup_for(r, m_opt.seed + static_cast<std::uint64_t>(s), true);
                 const cloth::FabricParams pr = params_for_record(p, m_recs[r]);
                 cloth::RestOptions ro = m_opt.rest;
                 ro.cancel = m_opt.cancel;
@@ -160,18 +184,29 @@ public:
         for (int r = 0; r < R; ++r) {
             std::vector<DrapeFeatures> draws, cold;
             for (const auto& sim : m_best.sims[r]) draws.push_back(drape_features(sim, m_recs[r]));
-            for (int k = 0; k < extra; ++k) {
+            auto drape_cold = [&](std::uint64_t seed, bool on_branch) {
                 if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
-                const cloth::DrapeSetup setup = m_recs[r].setup(m_opt.grid, m_opt.seed + 1000 + static_cast<std::uint64_t>(k));
                 cloth::RestOptions ro = m_opt.rest;
                 ro.cancel = m_opt.cancel;
                 ro.progress = nullptr;
                 const auto t0 = Clock::now();
-                draws.push_back(drape_features(cloth::simulate_drape(params_for_record(p, m_recs[r]), setup, ro, m_opt.model_options), m_recs[r]));
-                cold.push_back(draws.back());
+                DrapeFeatures f = drape_features(
+                    cloth::simulate_drape(params_for_record(p, m_recs[r]), setup_for(r, seed, on_branch), ro, m_opt.model_options),
+                    m_recs[r]);
                 m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
                 ++m_simulations;
-            }
+                return f;
+            };
+            // The spread is measured on the fit's branch (the record and the fit's
+            // drapes share its fold count); `cold_*` report the preset draped from
+            // the random mix, as `drape predict` does - the same drapes when the
+            // fit itself starts from the random mix.
+            for (int k = 0; k < extra; ++k) draws.push_back(drape_cold(m_opt.seed + 1000 + static_cast<std::uint64_t>(k), true));
+            if (branch_of(r) == 0)
+                cold.assign(draws.end() - extra, draws.end());
+            else
+                for (int k = 0; k < m_opt.random_start_seeds; ++k)
+                    cold.push_back(drape_cold(m_opt.seed + 1000 + static_cast<std::uint64_t>(k), false));
             if (!cold.empty()) {
                 std::vector<double> closed;
                 m_cold[r] = average_features(cold, &closed);
@@ -357,7 +392,65 @@ void single_threaded_blas()
     if (auto f = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) f(1);
 }
 
-FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOptions& options)
+namespace {
+FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOptions& options);
+} // namespace
+
+FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options)
+{
+    if (options.refine_grid != 0 && (options.refine_grid <= options.grid || options.refine_grid > 200))
+        throw ParameterError("fit: refine grid = " + std::to_string(options.refine_grid) + " must be 0 (off) or above the grid " +
+                             std::to_string(options.grid) + " and at most 200");
+    FitResult coarse = fit_at_grid(records, options);
+    if (!coarse.grid_bound || options.refine_grid == 0 || coarse.cancelled) return coarse;
+    // The coarse optimum's bending is shorter than the mesh spacing: the mesh did
+    // part of the bending's work, so the preset would not carry over. Fit again on
+    // the finer grid, from the coarse values (the scan re-finds the bending's decade).
+    FitOptions fine = options;
+    fine.grid = options.refine_grid;
+    fine.start = coarse.params;
+    if (options.progress)
+        fine.progress = [&options](const FitProgress& p) {
+            FitProgress q = p;
+            q.stage = "refine " + p.stage;
+            options.progress(q);
+        };
+    FitResult out = fit_at_grid(records, fine);
+    FitResult::Refinement ref;
+    ref.from_grid = options.grid;
+    ref.to_grid = fine.grid;
+    ref.coarse_chi2 = coarse.chi2;
+    ref.coarse_dof = coarse.dof;
+    ref.fine_chi2 = out.chi2;
+    ref.fine_dof = out.dof;
+    // The finer mesh is the more faithful model, so its fit replaces the coarse
+    // one - unless it leaves a residual beyond the noise where the coarse one did
+    // not (the finer search got lost, or the record's fit leaned on the coarse
+    // mesh): then the coarse preset is kept, grid-bound and saying so.
+    ref.adopted = out.cancelled || !out.residual.exceeds_noise || coarse.residual.exceeds_noise;
+    char buf[300];
+    if (ref.adopted)
+        std::snprintf(buf, sizeof buf, "the grid-%d optimum was grid-bound; refitted at grid %d (chi2 %.1f / %d there, %.1f / %d at grid %d)",
+                      ref.from_grid, ref.to_grid, ref.fine_chi2, ref.fine_dof, ref.coarse_chi2, ref.coarse_dof, ref.from_grid);
+    else
+        std::snprintf(buf, sizeof buf,
+                      "the grid-%d optimum was grid-bound, but the refit at grid %d left a residual beyond the noise (chi2 %.1f / %d) "
+                      "where grid %d did not (%.1f / %d): kept the grid-%d preset, which holds at that mesh density only",
+                      ref.from_grid, ref.to_grid, ref.fine_chi2, ref.fine_dof, ref.from_grid, ref.coarse_chi2, ref.coarse_dof, ref.from_grid);
+    ref.reason = buf;
+    FitResult& kept = ref.adopted ? out : coarse;
+    const FitResult& other = ref.adopted ? coarse : out;
+    kept.options.refine_grid = options.refine_grid;
+    kept.options.progress = nullptr;
+    kept.wall_seconds += other.wall_seconds;
+    kept.evaluations += other.evaluations;
+    kept.simulations += other.simulations;
+    kept.refinement = ref;
+    return kept;
+}
+
+namespace {
+FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOptions& options)
 {
     std::vector<MeasuredDrape> records = records_in;
     for (auto& r : records) r.recentre_contours = r.recentre_contours || options.recentre_contours;
@@ -628,7 +721,8 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
         rf.measured_features = meas[r];
         rf.simulated_features = best.features[r];
         rf.simulations = best.sims[r];
-        rf.setup = records[r].setup(options.grid, options.seed);
+        rf.setup = ev.setup_for(static_cast<int>(r), options.seed, true);
+        rf.branch_folds = ev.branch_of(static_cast<int>(r));
         rf.dc_error_percent = rf.simulated_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
         rf.node_error = rf.simulated_features.node_count - rf.measured_features.node_count;
         if (r < ev.cold_features().size() && ev.cold_seeds() > 0) {
@@ -657,6 +751,8 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records_in, const FitOpti
     return out;
 }
 
+} // namespace
+
 json fit_to_json(const FitResult& r)
 {
     cloth::FabricPreset preset;
@@ -677,6 +773,8 @@ json fit_to_json(const FitResult& r)
     prov["global_stage_starts"] = r.options.warm_global ? "warm" : "cold";
     prov["local_stage_starts"] = r.options.warm_local ? "warm" : "cold";
     prov["channels"] = r.options.channels;
+    prov["fold_branch"] = to_string(r.options.branch);
+    if (r.options.branch == FoldBranch::Measured) prov["fold_branch_lift_m"] = r.options.branch_lift_m;
     preset.extra["provenance"] = prov;
 
     json fit;
@@ -689,6 +787,11 @@ json fit_to_json(const FitResult& r)
     fit["wall_seconds"] = r.wall_seconds;
     fit["cancelled"] = r.cancelled;
     fit["grid_bound"] = r.grid_bound;
+    if (r.refinement.from_grid > 0)
+        fit["refinement"] = {{"from_grid", r.refinement.from_grid}, {"to_grid", r.refinement.to_grid},
+                             {"adopted", r.refinement.adopted},   {"coarse_chi2", r.refinement.coarse_chi2},
+                             {"coarse_dof", r.refinement.coarse_dof}, {"fine_chi2", r.refinement.fine_chi2},
+                             {"fine_dof", r.refinement.fine_dof}, {"reason", r.refinement.reason}};
     json params = json::array();
     std::vector<std::string> not_identifiable;
     for (const auto& e : r.estimates) {
@@ -726,6 +829,7 @@ json fit_to_json(const FitResult& r)
                        {"measured_node_count", rf.measured_features.node_count},
                        {"fitted_node_count", rf.simulated_features.node_count},
                        {"node_error", rf.node_error},
+                       {"fold_branch", rf.branch_folds > 0 ? json(rf.branch_folds) : json(nullptr)},
                        {"cold_seeds", rf.cold_seeds},
                        {"cold_drape_coefficient_percent", rf.cold_seeds ? json(rf.cold_features.drape_coefficient_percent) : json(nullptr)},
                        {"cold_node_count", rf.cold_seeds ? json(rf.cold_features.node_count) : json(nullptr)},

@@ -38,6 +38,22 @@ struct FitProgress {
     std::vector<double> last_coords;
 };
 
+/// Where a fit's cold simulations start (the node-count bifurcation).
+enum class FoldBranch {
+    /// On the record's measured branch: the flat sheet is lifted by an n-fold
+    /// cosine (n = the record's measured node count, DrapeSetup::fold_mode), so
+    /// D and the contours are compared between drapes with the same number of
+    /// folds; whether the branch holds at the candidate parameters is the
+    /// node-count term. Records without a node count start as `Random`.
+    Measured,
+    /// From the seeded random mix of modes (`drape predict`'s start): the fold
+    /// count is whatever the perturbation seeds pick.
+    Random,
+};
+
+std::string to_string(FoldBranch b);
+FoldBranch parse_fold_branch(const std::string& name); ///< "measured" | "random"; ParameterError otherwise
+
 struct FitOptions {
     ModelVariant model = ModelVariant::Baseline;
     int grid = 25;                ///< nodes across the specimen in the fit's simulations
@@ -57,6 +73,19 @@ struct FitOptions {
     /// drape-to-drape spread of every residual term; sigmas below it are raised
     /// to it before the intervals are computed (0 = keep the default floors).
     int spread_seeds = 4;
+    FoldBranch branch = FoldBranch::Measured;
+    /// When the optimum is grid-bound (a fitted bending length below the mesh
+    /// spacing), fit again on this finer grid from the coarse values; 0 = off
+    /// (the library's default; `drape fit` refines to 41 unless --refine-grid 0).
+    int refine_grid = 0;
+    /// Largest lift of the n-fold start [m] (Measured branch). The static
+    /// solver's path from flat is not the sheet's fall: a 1 mm lift (the random
+    /// mix's) is lost on the way and the count comes out as from a random start;
+    /// 20 mm is far outside the linear range and folds break up. See docs/estimate.md.
+    double branch_lift_m = kBranchLift;
+    /// Measured branch: perturbation seeds draped from the random mix at the
+    /// optimum, reported as `cold_*` (what `drape predict` shows).
+    int random_start_seeds = 2;
     NoiseModel noise;
     /// Channels in the objective (dc, nodes, hem, contours); the others are
     /// held out: computed, reported and analysed as predictions, not fitted.
@@ -98,11 +127,14 @@ struct RecordFit {
     DrapeFeatures simulated_features; ///< seed-averaged
     std::vector<cloth::DrapeResult> simulations; ///< one per seed, at the optimum
     cloth::DrapeSetup setup;          ///< of the first seed
+    int branch_folds = 0;             ///< fold count the cold drapes started with (FoldBranch::Measured); 0 = random mix
     double dc_error_percent = 0;      ///< simulated - measured D
     double node_error = 0;            ///< simulated (seed mean) - measured
-    /// The preset draped from flat (the spread stage's extra seeds), as `drape
-    /// predict` / `compare` and the widget drape it: the fit's own simulations
-    /// are warm-started and can keep another fold pattern. 0 seeds = not run.
+    /// The preset draped from flat with the random mix of modes, as `drape
+    /// predict` / `compare` and the widget drape it (FitOptions::random_start_seeds,
+    /// or the spread stage's seeds when the fit starts from the random mix): the
+    /// fit's own drapes start on the measured branch or warm and can hold another
+    /// fold count. 0 seeds = not run.
     int cold_seeds = 0;
     DrapeFeatures cold_features;
     double cold_dc_error_percent = 0;
@@ -129,6 +161,14 @@ struct FitResult {
     /// A fitted bending's bending length is below the fit's mesh spacing: the
     /// preset is tied to the fit's grid (predictions keep the mesh density).
     bool grid_bound = false;
+    /// What FitOptions::refine_grid did (from_grid = 0: no refit was tried).
+    struct Refinement {
+        int from_grid = 0, to_grid = 0;
+        bool adopted = false;       ///< this result is the refit; else it is the grid-bound coarse fit
+        double coarse_chi2 = 0, fine_chi2 = 0;
+        int coarse_dof = 0, fine_dof = 0;
+        std::string reason;         ///< one sentence: why the refit was or was not adopted
+    } refinement;
     FitOptions options;
 };
 

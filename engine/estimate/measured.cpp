@@ -42,6 +42,18 @@ cloth::DrapeSetup MeasuredDrape::setup(int grid, std::uint64_t seed) const
     return s;
 }
 
+cloth::DrapeSetup on_fold_branch(cloth::DrapeSetup s, double node_count, double lift_m, int* folds)
+{
+    const long n = std::isfinite(node_count) ? std::lround(node_count) : 0;
+    const bool use = n >= 2 && n <= 16;
+    if (use) {
+        s.fold_mode = static_cast<int>(n);
+        s.perturbation = lift_m;
+    }
+    if (folds) *folds = use ? static_cast<int>(n) : 0;
+    return s;
+}
+
 std::vector<double> MeasuredDrape::depths() const
 {
     std::vector<double> d;

@@ -70,6 +70,18 @@ struct MeasuredDrape {
     std::vector<double> depths() const;
 };
 
+/// Default lift of an n-fold start [m] (DrapeSetup::fold_mode): the static
+/// solver's path from flat loses a 1-3 mm lift on some seeds (the count then
+/// comes out as from the random mix); 8 mm and more leave the linear range
+/// (folds split or merge); 5 mm kept the branch on set-a presets
+/// (docs/estimate.md, "Fold branch").
+inline constexpr double kBranchLift = 5e-3;
+
+/// `s` started on the fold branch of a measured node count: fold_mode = the
+/// rounded count and the perturbation = `lift_m`, when the count is in 2..16;
+/// otherwise `s` unchanged (the random mix). Returns the fold count used in `folds`.
+cloth::DrapeSetup on_fold_branch(cloth::DrapeSetup s, double node_count, double lift_m = kBranchLift, int* folds = nullptr);
+
 /// Reads a lab record folder (meta.json + contours.csv, format of
 /// shared/data/drape-lab/README.md; mm -> m, g/m^2 -> kg/m^2). Throws
 /// FileError / ParameterError naming the file, field and value.

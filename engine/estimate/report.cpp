@@ -311,6 +311,9 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
        << r.options.seeds_per_evaluation << " perturbation seeds per evaluation. " << r.evaluations << " evaluations, "
        << r.simulations << " simulations, " << num(r.seconds_per_simulation, "%.2f") << " s per simulation, "
        << num(r.wall_seconds, "%.0f") << " s in all" << (r.cancelled ? " (**cancelled**: best point so far)" : "") << ".\n\n";
+    if (r.refinement.from_grid > 0)
+        md << "**Grid refinement**: " << r.refinement.reason
+           << ". The evaluation and time counts above include both fits.\n\n";
     if (r.grid_bound)
         md << "**Grid-bound preset**: a fitted bending's bending length is below the mesh spacing of the fit's grid, so the "
               "coarse mesh does part of the bending's work and the preset holds at this mesh density only (`drape predict` keeps "
@@ -343,11 +346,22 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
            << " | " << num(rf.measured_features.node_count, "%.0f") << " | " << num(rf.simulated_features.node_count, "%.1f") << " | "
            << num(rf.node_error, "%+.1f") << " |\n";
     md << "\nMeasured node counts: " << (r.records.empty() ? "" : r.records.front().measured.node_source)
-       << "; fitted: the same detector on the simulated drape (mean over the seeds).\n\n";
+       << "; fitted: the same detector on the simulated drape (mean over the seeds).";
+    bool on_branch = false;
+    for (const auto& rf : r.records) on_branch = on_branch || rf.branch_folds > 0;
+    if (on_branch)
+        md << " The fit's cold drapes start on each record's measured fold branch (an n-fold lift of "
+           << num(r.options.branch_lift_m * 1e3, "%.0f")
+           << " mm, n = the measured node count; `--branch measured`), so D and the contours are compared between drapes with the "
+              "record's number of folds; the node error says whether that branch holds at the fitted parameters.";
+    md << "\n\n";
     if (!r.records.empty() && r.records.front().cold_seeds > 0) {
-        md << "The fit's simulations start from the rest state of the best point so far (warm). Draped from flat, as `drape predict`, "
-              "`drape compare` and the widget drape it (mean of "
-           << r.records.front().cold_seeds << " perturbation seeds), the preset gives:\n\n"
+        md << "The fit's simulations start from the rest state of the best point so far (warm)"
+           << (on_branch ? " or on the measured fold branch" : "")
+           << ". Draped from flat with the random mix of modes, as `drape predict`, `drape compare` and the widget drape it (mean of "
+           << r.records.front().cold_seeds << " perturbation seeds), the preset gives"
+           << (on_branch ? " (the fold count a random start picks can differ from the record's: a bifurcation, not a misfit)" : "")
+           << ":\n\n"
            << "| record | D cold [%] | D error cold | nodes cold | node error cold |\n|---|---|---|---|---|\n";
         for (const auto& rf : r.records)
             md << "| " << rf.measured.id << " | " << num(rf.cold_features.drape_coefficient_percent, "%.1f") << " | "

@@ -89,6 +89,25 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
             a.exceeds_because.push_back("rim signature: matched filter z " + num(z));
         }
     }
+    // Matched filter of an off-centre stack: every depth's |c1| larger than the
+    // model's (a shift moves every cut alike). The depths' drape-to-drape floors
+    // are scaled by sqrt(depths) because one drape is cut at every depth, so
+    // their RMS understates a shift seen at all depths by that factor; the
+    // projection on the unit signature (-1 on each |c1|) does not.
+    {
+        double sw = 0, ss = 0;
+        for (const auto& t : terms)
+            if (t.kind == "harmonic" && t.harmonic == 1) {
+                sw -= t.whitened();
+                ss += 1.0;
+            }
+        const double z = ss > 0 ? sw / std::sqrt(ss) : 0.0;
+        a.signature_z.push_back({"specimen_off_centre", z});
+        if (z > 3.0) {
+            a.exceeds_noise = true;
+            a.exceeds_because.push_back("off-centre signature (|c1| at every depth): matched filter z " + num(z));
+        }
+    }
     a.rms_m = n_m ? std::sqrt(ss_m / n_m) : 0.0;
     a.rms_whitened = all.rms();
     a.fitted_rms_whitened = fitted_acc.rms();
@@ -124,9 +143,10 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
         a.evidence.push_back("the model's D is too low while its node count and its slices next to the disc match: friction on the "
                              "disc (the specimen does not slide inwards as it drapes) raises D that way");
     }
-    if (harm.count(1) && harm[1].rms() > 2.0) {
+    if ((harm.count(1) && harm[1].rms() > 2.0) || a.signature_z[1].second > 3.0) {
         a.candidate_effects.push_back("specimen_off_centre");
-        a.evidence.push_back("harmonic 1 (a shift of the contour) is beyond noise: the specimen or the profiler axis is off the pedestal axis");
+        a.evidence.push_back("harmonic 1 (a shift of the contour) is beyond noise (matched filter z = " + num(a.signature_z[1].second) +
+                             "): the specimen or the profiler axis is off the pedestal axis");
     }
     if ((kind("cos2").rms() > 2.0) || (kind("cos4").rms() > 2.0)) {
         a.candidate_effects.push_back("in_plane_anisotropy");

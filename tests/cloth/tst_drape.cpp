@@ -99,6 +99,32 @@ private slots:
         QVERIFY(std::abs(warm.metrics.drape_coefficient_percent - cold.metrics.drape_coefficient_percent) < 5);
     }
 
+    void fold_mode_starts_on_the_requested_branch()
+    {
+        // The default fabric at grid 25 drapes from the random mix with 8-9 folds; a
+        // 6-fold lift of 5 mm puts it on its (stable) 6-fold branch, with a lower D
+        // (fewer, deeper folds). Seeds only move the phase and the small mix.
+        FabricParams p;
+        p[Param::Shear] = 100;
+        DrapeSetup s = small(25, 1);
+        s.perturbation = 5e-3;
+        const DrapeResult random = simulate_drape(p, s);
+        QVERIFY(random.status.converged());
+        QVERIFY2(random.metrics.node_count >= 8, qPrintable(QString::number(random.metrics.node_count)));
+        for (std::uint64_t seed : {1, 2}) {
+            s.seed = seed;
+            s.fold_mode = 6;
+            const DrapeResult six = simulate_drape(p, s);
+            QVERIFY2(six.status.converged(), six.status.message.c_str());
+            QCOMPARE(six.metrics.node_count, 6);
+            QVERIFY(six.metrics.drape_coefficient_percent < random.metrics.drape_coefficient_percent);
+        }
+        for (int bad : {1, -3, 17}) {
+            s.fold_mode = bad;
+            QVERIFY_THROWS_EXCEPTION(drape::ParameterError, s.validate());
+        }
+    }
+
     void bad_setups_are_refused()
     {
         DrapeSetup s = small();

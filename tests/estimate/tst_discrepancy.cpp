@@ -57,16 +57,21 @@ void describe(const char* what, const FitResult& r)
     for (const auto& e : r.residual.candidate_effects) effects += e + " ";
     qInfo("%s: chi2 %.1f / dof %d, exceeds %d, D error %+.2f, candidates [%s]", what, r.chi2, r.dof, int(r.residual.exceeds_noise),
           r.records[0].dc_error_percent, effects.c_str());
-    std::string kinds, radius, folds;
+    std::string kinds, radius, folds, h1;
     for (const auto& [k, v] : r.residual.kind_rms) kinds += k + " " + QString::number(v, 'f', 2).toStdString() + "  ";
     for (const auto& t : r.residuals) {
         if (t.kind == "mean_radius") radius += QString::number(t.whitened(), 'f', 1).toStdString() + " ";
         if (t.kind == "fold_rms") folds += QString::number(t.whitened(), 'f', 1).toStdString() + " ";
+        if (t.kind == "harmonic" && t.harmonic == 1)
+            h1 += QString("%1/%2 mm (sigma %3) ").arg(t.simulated * 1e3, 0, 'f', 1).arg(t.measured * 1e3, 0, 'f', 1).arg(t.sigma * 1e3, 0, 'f', 1).toStdString();
     }
     qInfo("  whitened rms per kind: %s", kinds.c_str());
     for (const auto& [k, z] : r.residual.signature_z) qInfo("  signature %s: z = %.2f", k.c_str(), z);
     qInfo("  mean radius by depth (whitened): %s", radius.c_str());
     qInfo("  fold rms by depth (whitened): %s", folds.c_str());
+    qInfo("  |c1| by depth, simulated/measured: %s", h1.c_str());
+    qInfo("  nodes measured %.1f, fitted %.1f (branch %d)", r.records[0].measured_features.node_count,
+          r.records[0].simulated_features.node_count, r.records[0].branch_folds);
 }
 } // namespace
 

@@ -56,9 +56,11 @@ private slots:
         const FitResult r = fit_fabric({rec}, o);
         QVERIFY(!r.cancelled);
         QVERIFY(r.simulations > 0 && r.seconds_per_simulation > 0);
-        // The preset draped from flat (the spread stage's seeds) is reported
-        // beside the fit's warm-started drapes.
-        QCOMPARE(r.records[0].cold_seeds, o.spread_seeds);
+        // The fit's cold drapes start on the record's measured fold branch; the
+        // preset draped from the random mix (as `drape predict`) is reported beside.
+        QCOMPARE(r.records[0].branch_folds, static_cast<int>(std::lround(r.records[0].measured_features.node_count)));
+        QCOMPARE(r.records[0].setup.fold_mode, r.records[0].branch_folds);
+        QCOMPARE(r.records[0].cold_seeds, o.random_start_seeds);
         QVERIFY(std::isfinite(r.records[0].cold_dc_error_percent) && r.records[0].cold_features.drape_coefficient_percent > 0);
         QVERIFY(std::abs(r.records[0].cold_dc_error_percent - (r.records[0].cold_features.drape_coefficient_percent -
                                                                r.records[0].measured_features.drape_coefficient_percent)) < 1e-12);
@@ -147,6 +149,49 @@ private slots:
         QVERIFY(r.cancelled);
         QVERIFY(r.evaluations >= 3 && r.evaluations <= 4);
         QVERIFY(std::isfinite(r.chi2));
+    }
+
+    void gridBoundFitIsRefined()
+    {
+        // Grid 13 has 25 mm between nodes; the truth's bending lengths
+        // ((B / rho_A g)^(1/3)) are 16-22 mm, so the coarse optimum is grid-bound
+        // and the fit is repeated on the finer grid from it.
+        const MeasuredDrape rec = synthetic(truth(), 0.30, 0.15, 17, 5);
+        FitOptions o;
+        o.grid = 13;
+        o.refine_grid = 17;
+        o.seeds_per_evaluation = 1;
+        o.scan_evaluations = 3;
+        o.global_evaluations = 3;
+        o.local_evaluations = 3;
+        o.spread_seeds = 0;
+        o.uncertainty = false;
+        std::vector<std::string> stages;
+        o.progress = [&](const FitProgress& p) {
+            if (stages.empty() || stages.back() != p.stage) stages.push_back(p.stage);
+        };
+        const FitResult r = fit_fabric({rec}, o);
+        QCOMPARE(r.refinement.from_grid, 13);
+        QCOMPARE(r.refinement.to_grid, 17);
+        QVERIFY(r.refinement.coarse_chi2 > 0 && r.refinement.fine_chi2 > 0 && !r.refinement.reason.empty());
+        qInfo("%s", r.refinement.reason.c_str());
+        // The refit is adopted unless it is beyond the noise where the coarse fit was
+        // not; the record was made at grid 17, so the refit explains it.
+        QVERIFY(r.refinement.adopted);
+        const int kept_grid = 17;
+        QCOMPARE(r.options.grid, kept_grid);
+        QCOMPARE(r.records[0].setup.grid, kept_grid);
+        QVERIFY(std::find(stages.begin(), stages.end(), "refine scan") != stages.end());
+        const auto j = fit_to_json(r);
+        QCOMPARE(j["fit"]["refinement"]["from_grid"].get<int>(), 13);
+        QCOMPARE(j["fit"]["refinement"]["adopted"].get<bool>(), r.refinement.adopted);
+        QCOMPARE(j["provenance"]["grid"].get<int>(), kept_grid);
+        // Off (0) means no refit; a refine grid at or below the grid is refused.
+        o.refine_grid = 0;
+        o.progress = nullptr;
+        QCOMPARE(fit_fabric({rec}, o).refinement.from_grid, 0);
+        o.refine_grid = 13;
+        QVERIFY_THROWS_EXCEPTION(ParameterError, fit_fabric({rec}, o));
     }
 
     void badInputThrows()

@@ -55,7 +55,12 @@ int run(const std::vector<std::string>& argv)
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     const bool json_out = a.has("--json"), quiet = a.has("--quiet") || json_out;
-    const estimate::FoldBranch branch = estimate::parse_fold_branch(a.get_or("--branch", "random"));
+    estimate::FoldBranch branch = estimate::FoldBranch::Random;
+    try {
+        branch = estimate::parse_fold_branch(a.get_or("--branch", "random"));
+    } catch (const Error& e) {
+        throw UsageError(std::string("--") + e.what());
+    }
     cloth::ModelOptions mopt = preset.model;
     mopt.edge_contact = !a.has("--vertex-contact-only");
     estimate::single_threaded_blas();

@@ -90,7 +90,11 @@ int run(const std::vector<std::string>& argv)
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");
     fo.warm_global = !a.has("--cold-global");
-    if (const auto b = a.get("--branch")) fo.branch = estimate::parse_fold_branch(*b);
+    try {
+        if (const auto b = a.get("--branch")) fo.branch = estimate::parse_fold_branch(*b);
+    } catch (const Error& e) {
+        throw UsageError(std::string("--") + e.what());
+    }
     fo.warm_local = !a.has("--cold-local");
     fo.recentre_contours = a.has("--recentre-contours");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");

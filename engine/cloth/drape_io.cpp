@@ -69,6 +69,8 @@ json drape_summary_json(const DrapeResult& r, const DrapeSetup& setup, Integrato
     j["disc_diameter_m"] = setup.disc_diameter;
     j["grid"] = setup.grid;
     j["seed"] = setup.seed;
+    j["perturbation_m"] = setup.perturbation;
+    j["fold_mode"] = setup.fold_mode; // 0: the seeded mix of modes; n: started on the n-fold branch
     j["vertices"] = r.x.rows();
     return j;
 }

@@ -181,6 +181,7 @@ public:
         const int R = static_cast<int>(m_recs.size());
         std::vector<std::vector<double>> values; // [term][draw]
         m_cold.assign(R, {});
+        m_cold_seeds.assign(R, 0);
         for (int r = 0; r < R; ++r) {
             std::vector<DrapeFeatures> draws, cold;
             for (const auto& sim : m_best.sims[r]) draws.push_back(drape_features(sim, m_recs[r]));
@@ -210,7 +211,7 @@ public:
             if (!cold.empty()) {
                 std::vector<double> closed;
                 m_cold[r] = average_features(cold, &closed);
-                m_cold_seeds = static_cast<int>(cold.size());
+                m_cold_seeds[r] = static_cast<int>(cold.size());
             }
             std::size_t base = 0;
             for (int q = 0; q < r; ++q)
@@ -283,7 +284,7 @@ public:
     double sim_seconds() const { return m_sim_seconds; }
     long unconverged() const { return m_unconverged; }
     const std::vector<DrapeFeatures>& cold_features() const { return m_cold; }
-    int cold_seeds() const { return m_cold_seeds; }
+    int cold_seeds(std::size_t r) const { return r < m_cold_seeds.size() ? m_cold_seeds[r] : 0; }
     int m_planned = 0;
 
 private:
@@ -297,7 +298,7 @@ private:
     bool m_spread_calibrated = false;
     Evaluation m_best, m_last;
     std::vector<DrapeFeatures> m_cold; ///< per record: mean features of the spread stage's cold drapes
-    int m_cold_seeds = 0;
+    std::vector<int> m_cold_seeds; ///< per record: drapes behind m_cold (0 = none)
     Eigen::VectorXd m_last_x;
     Eigen::VectorXd m_best_x;
     std::vector<std::vector<cloth::Positions>> m_states;
@@ -427,9 +428,12 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     // one - unless it leaves a residual beyond the noise where the coarse one did
     // not (the finer search got lost, or the record's fit leaned on the coarse
     // mesh): then the coarse preset is kept, grid-bound and saying so.
-    ref.adopted = out.cancelled || !out.residual.exceeds_noise || coarse.residual.exceeds_noise;
+    ref.adopted = !out.cancelled && (!out.residual.exceeds_noise || coarse.residual.exceeds_noise);
     char buf[300];
-    if (ref.adopted)
+    if (out.cancelled)
+        std::snprintf(buf, sizeof buf, "the grid-%d optimum was grid-bound; its refit at grid %d was cancelled, so the grid-%d preset is kept",
+                      ref.from_grid, ref.to_grid, ref.from_grid);
+    else if (ref.adopted)
         std::snprintf(buf, sizeof buf, "the grid-%d optimum was grid-bound; refitted at grid %d (chi2 %.1f / %d there, %.1f / %d at grid %d)",
                       ref.from_grid, ref.to_grid, ref.fine_chi2, ref.fine_dof, ref.coarse_chi2, ref.coarse_dof, ref.from_grid);
     else
@@ -442,9 +446,12 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     const FitResult& other = ref.adopted ? coarse : out;
     kept.options.refine_grid = options.refine_grid;
     kept.options.progress = nullptr;
+    const double sim_seconds = kept.seconds_per_simulation * kept.simulations + other.seconds_per_simulation * other.simulations;
     kept.wall_seconds += other.wall_seconds;
     kept.evaluations += other.evaluations;
     kept.simulations += other.simulations;
+    kept.seconds_per_simulation = kept.simulations ? sim_seconds / kept.simulations : 0.0;
+    kept.cancelled = kept.cancelled || out.cancelled; // a cancelled refit keeps the coarse fit, but the run was stopped
     kept.refinement = ref;
     return kept;
 }
@@ -457,6 +464,10 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     if (records.empty()) throw ParameterError("fit: no records to fit");
     if (options.channels.empty()) throw ParameterError("fit: no channels to fit");
     if (options.grid < 9 || options.grid > 200) throw ParameterError("fit: grid = " + std::to_string(options.grid) + " is outside [9, 200]");
+    if (!(options.branch_lift_m > 0) || options.branch_lift_m > 0.05)
+        throw ParameterError("fit: branch lift = " + std::to_string(options.branch_lift_m) + " m is outside (0, 0.05]");
+    if (options.random_start_seeds < 0 || options.random_start_seeds > 16)
+        throw ParameterError("fit: random_start_seeds = " + std::to_string(options.random_start_seeds) + " is outside [0, 16]");
     if (options.seeds_per_evaluation < 1 || options.seeds_per_evaluation > 16)
         throw ParameterError("fit: seeds_per_evaluation = " + std::to_string(options.seeds_per_evaluation) + " is outside [1, 16]");
     for (const auto& r : records)
@@ -725,8 +736,8 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         rf.branch_folds = ev.branch_of(static_cast<int>(r));
         rf.dc_error_percent = rf.simulated_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
         rf.node_error = rf.simulated_features.node_count - rf.measured_features.node_count;
-        if (r < ev.cold_features().size() && ev.cold_seeds() > 0) {
-            rf.cold_seeds = ev.cold_seeds();
+        if (r < ev.cold_features().size() && ev.cold_seeds(r) > 0) {
+            rf.cold_seeds = ev.cold_seeds(r);
             rf.cold_features = ev.cold_features()[r];
             rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
             rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;

@@ -31,7 +31,8 @@ struct ResidualAnalysis {
     /// Matched-filter statistics: the whitened residual projected on the unit
     /// signature of an effect, z = s.w / |s|. With noise alone |z| is at most
     /// about N(0, 1) (the sigmas are noise bounds), so z > 3 is a structured
-    /// residual even when the total chi2 is not large. Keys: rim_wrapping.
+    /// residual even when the total chi2 is not large. Keys, in this order:
+    /// rim_wrapping, specimen_off_centre (|c1| at every depth).
     std::vector<std::pair<std::string, double>> signature_z;
     /// Which test put the residual beyond noise (e.g. "harmonic 3: chi2 18.1 over 5 terms").
     std::vector<std::string> exceeds_because;

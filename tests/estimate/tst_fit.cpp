@@ -186,6 +186,20 @@ private slots:
         QCOMPARE(j["fit"]["refinement"]["from_grid"].get<int>(), 13);
         QCOMPARE(j["fit"]["refinement"]["adopted"].get<bool>(), r.refinement.adopted);
         QCOMPARE(j["provenance"]["grid"].get<int>(), kept_grid);
+        // Cancelled during the refit: the finished coarse fit is kept (not an empty
+        // partial refit), marked cancelled.
+        std::atomic<bool> cancel{false};
+        o.cancel = &cancel;
+        o.progress = [&](const FitProgress& p) {
+            if (p.stage.rfind("refine", 0) == 0) cancel = true;
+        };
+        const FitResult c = fit_fabric({rec}, o);
+        QVERIFY(c.cancelled);
+        QVERIFY(!c.refinement.adopted);
+        QCOMPARE(c.options.grid, 13);
+        QCOMPARE(c.records.size(), std::size_t(1));
+        QVERIFY(!c.estimates.empty() && c.chi2 > 0);
+        o.cancel = nullptr;
         // Off (0) means no refit; a refine grid at or below the grid is refused.
         o.refine_grid = 0;
         o.progress = nullptr;

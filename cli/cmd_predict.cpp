@@ -54,7 +54,7 @@ int run(const std::vector<std::string>& argv)
     }
     setup.grid = a.get_int("--grid", grid, 5, 1000);
     setup.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
-    if (a.has("--folds")) setup = estimate::on_fold_branch(setup, a.get_int("--folds", 0, 2, 16));
+    if (a.has("--folds")) setup = cloth::on_fold_branch(setup, a.get_int("--folds", 0, 2, 16));
     if (a.has("--areal-density")) {
         auto* p = std::get_if<cloth::FabricParams>(&preset.fabric);
         if (!p) throw UsageError("--areal-density needs a drapekit-fabric preset");

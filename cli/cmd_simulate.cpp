@@ -1,8 +1,6 @@
 // drape simulate: drape a fabric preset over the drapemeter and measure it.
 #include "command.hpp"
 
-#include "engine/estimate/measured.hpp"
-
 #include "engine/cloth/drape_io.hpp"
 #include "engine/cloth/error.hpp"
 #include "engine/cloth/fabric_io.hpp"
@@ -56,7 +54,7 @@ int run(const std::vector<std::string>& argv)
     setup.grid = a.get_int("--grid", 60, 5, 1000);
     setup.edge_radius = a.get_length("--edge-radius", setup.edge_radius);
     setup.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
-    if (a.has("--folds")) setup = estimate::on_fold_branch(setup, a.get_int("--folds", 0, 2, 16));
+    if (a.has("--folds")) setup = cloth::on_fold_branch(setup, a.get_int("--folds", 0, 2, 16));
     setup.perturbation = a.get_length("--perturbation", setup.perturbation);
     cloth::RestOptions ro;
     try {

@@ -46,10 +46,7 @@ cloth::DrapeSetup on_fold_branch(cloth::DrapeSetup s, double node_count, double 
 {
     const long n = std::isfinite(node_count) ? std::lround(node_count) : 0;
     const bool use = n >= 2 && n <= 16;
-    if (use) {
-        s.fold_mode = static_cast<int>(n);
-        s.perturbation = lift_m;
-    }
+    if (use) s = cloth::on_fold_branch(s, static_cast<int>(n), lift_m);
     if (folds) *folds = use ? static_cast<int>(n) : 0;
     return s;
 }

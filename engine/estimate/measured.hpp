@@ -70,12 +70,8 @@ struct MeasuredDrape {
     std::vector<double> depths() const;
 };
 
-/// Default lift of an n-fold start [m] (DrapeSetup::fold_mode): the static
-/// solver's path from flat loses a 1-3 mm lift on some seeds (the count then
-/// comes out as from the random mix); 8 mm and more leave the linear range
-/// (folds split or merge); 5 mm kept the branch on set-a presets
-/// (docs/estimate.md, "Fold branch").
-inline constexpr double kBranchLift = 5e-3;
+/// Default lift of an n-fold start [m] (cloth::kFoldBranchLift).
+inline constexpr double kBranchLift = cloth::kFoldBranchLift;
 
 /// `s` started on the fold branch of a measured node count: fold_mode = the
 /// rounded count and the perturbation = `lift_m`, when the count is in 2..16;

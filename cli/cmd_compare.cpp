@@ -75,10 +75,10 @@ int run(const std::vector<std::string>& argv)
         const cloth::FabricParams p = estimate::params_for_record(*base, m);
         const estimate::DrapeFeatures meas = estimate::drape_features(m);
         std::vector<estimate::DrapeFeatures> fs;
-        int folds = 0;
+        const int folds = branch == estimate::FoldBranch::Measured ? estimate::measured_fold_branch(meas.node_count) : 0;
         for (int s = 0; s < seeds; ++s) {
             cloth::DrapeSetup setup = m.setup(grid, seed0 + static_cast<std::uint64_t>(s));
-            if (branch == estimate::FoldBranch::Measured) setup = estimate::on_fold_branch(setup, meas.node_count, estimate::kBranchLift, &folds);
+            if (folds > 0) setup = cloth::on_fold_branch(setup, folds);
             setup.disc_grip = a.has("--disc-grip");
             cloth::RestOptions ro;
             if (!quiet) std::fprintf(stderr, "%s: seed %d/%d (grid %d)...\n", m.id.c_str(), s + 1, seeds, grid);

@@ -80,15 +80,11 @@ public:
     cloth::DrapeSetup setup_for(int r, std::uint64_t seed, bool on_branch) const
     {
         const cloth::DrapeSetup s = m_recs[r].setup(m_opt.grid, seed);
-        return on_branch && branch_of(r) > 0 ? on_fold_branch(s, m_meas[r].node_count, m_opt.branch_lift_m) : s;
+        const int n = on_branch ? branch_of(r) : 0;
+        return n > 0 ? cloth::on_fold_branch(s, n, m_opt.branch_lift_m) : s;
     }
     /// The fold count record r's cold drapes start with (0: random mix).
-    int branch_of(int r) const
-    {
-        int n = 0;
-        if (m_opt.branch == FoldBranch::Measured) on_fold_branch({}, m_meas[r].node_count, m_opt.branch_lift_m, &n);
-        return n;
-    }
+    int branch_of(int r) const { return m_opt.branch == FoldBranch::Measured ? measured_fold_branch(m_meas[r].node_count) : 0; }
 
     cloth::FabricParams params_at(const Eigen::VectorXd& x) const
     {

@@ -82,7 +82,7 @@ struct FitOptions {
     /// solver's path from flat is not the sheet's fall: a 1 mm lift (the random
     /// mix's) is lost on the way and the count comes out as from a random start;
     /// 20 mm is far outside the linear range and folds break up. See docs/estimate.md.
-    double branch_lift_m = kBranchLift;
+    double branch_lift_m = cloth::kFoldBranchLift;
     /// Measured branch: perturbation seeds draped from the random mix at the
     /// optimum, reported as `cold_*` (what `drape predict` shows).
     int random_start_seeds = 2;

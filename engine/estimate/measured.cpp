@@ -42,13 +42,10 @@ cloth::DrapeSetup MeasuredDrape::setup(int grid, std::uint64_t seed) const
     return s;
 }
 
-cloth::DrapeSetup on_fold_branch(cloth::DrapeSetup s, double node_count, double lift_m, int* folds)
+int measured_fold_branch(double node_count)
 {
     const long n = std::isfinite(node_count) ? std::lround(node_count) : 0;
-    const bool use = n >= 2 && n <= 16;
-    if (use) s = cloth::on_fold_branch(s, static_cast<int>(n), lift_m);
-    if (folds) *folds = use ? static_cast<int>(n) : 0;
-    return s;
+    return n >= 2 && n <= 16 ? static_cast<int>(n) : 0;
 }
 
 std::vector<double> MeasuredDrape::depths() const

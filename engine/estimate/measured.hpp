@@ -70,13 +70,9 @@ struct MeasuredDrape {
     std::vector<double> depths() const;
 };
 
-/// Default lift of an n-fold start [m] (cloth::kFoldBranchLift).
-inline constexpr double kBranchLift = cloth::kFoldBranchLift;
-
-/// `s` started on the fold branch of a measured node count: fold_mode = the
-/// rounded count and the perturbation = `lift_m`, when the count is in 2..16;
-/// otherwise `s` unchanged (the random mix). Returns the fold count used in `folds`.
-cloth::DrapeSetup on_fold_branch(cloth::DrapeSetup s, double node_count, double lift_m = kBranchLift, int* folds = nullptr);
+/// The fold branch a measured node count names for cloth::on_fold_branch: the
+/// rounded count when it is in 2..16, else 0 (start from the random mix).
+int measured_fold_branch(double node_count);
 
 /// Reads a lab record folder (meta.json + contours.csv, format of
 /// shared/data/drape-lab/README.md; mm -> m, g/m^2 -> kg/m^2). Throws

@@ -68,46 +68,40 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
     for (const auto& [k, g] : harm)
         if (group_exceeds(g)) a.exceeds_because.push_back("harmonic " + std::to_string(k) + ": chi2 " + num(g.ss) + " over " + std::to_string(g.n) + " terms");
     a.exceeds_noise = !a.exceeds_because.empty();
-    // Matched filter of the rim signature: the model's cloth leaves the disc
-    // more abruptly than the specimen (e.g. coarse elements cutting the pedestal
-    // rim, docs/model-discrepancy.md): its slices next to the disc are narrower
-    // while its D is larger. Weights: +1 on D, -1 / (1 + depth / 10 mm) on the
-    // mean radius of each slice (the cut narrows the shallow slices most).
-    {
+    // Matched filters: the whitened residual projected on the unit signature s
+    // of an effect, z = s.w / |s|; z > 3 is beyond noise.
+    auto matched_filter = [&](const char* name, const char* what, auto weight) {
         double sw = 0, ss = 0;
         for (const auto& t : terms) {
-            double s = 0;
-            if (t.kind == "dc") s = 1.0;
-            else if (t.kind == "mean_radius") s = -1.0 / (1.0 + t.depth_m / 0.010);
+            const double s = weight(t);
             sw += s * t.whitened();
             ss += s * s;
         }
         const double z = ss > 0 ? sw / std::sqrt(ss) : 0.0;
-        a.signature_z.push_back({"rim_wrapping", z});
+        a.signature_z.push_back({name, z});
         if (z > 3.0) {
             a.exceeds_noise = true;
-            a.exceeds_because.push_back("rim signature: matched filter z " + num(z));
+            a.exceeds_because.push_back(std::string(what) + ": matched filter z " + num(z));
         }
-    }
-    // Matched filter of an off-centre stack: every depth's |c1| larger than the
-    // model's (a shift moves every cut alike). The depths' drape-to-drape floors
-    // are scaled by sqrt(depths) because one drape is cut at every depth, so
-    // their RMS understates a shift seen at all depths by that factor; the
-    // projection on the unit signature (-1 on each |c1|) does not.
-    {
-        double sw = 0, ss = 0;
-        for (const auto& t : terms)
-            if (t.kind == "harmonic" && t.harmonic == 1) {
-                sw -= t.whitened();
-                ss += 1.0;
-            }
-        const double z = ss > 0 ? sw / std::sqrt(ss) : 0.0;
-        a.signature_z.push_back({"specimen_off_centre", z});
-        if (z > 3.0) {
-            a.exceeds_noise = true;
-            a.exceeds_because.push_back("off-centre signature (|c1| at every depth): matched filter z " + num(z));
-        }
-    }
+        return z;
+    };
+    // Rim: the model's cloth leaves the disc more abruptly than the specimen
+    // (e.g. coarse elements cutting the pedestal rim, docs/model-discrepancy.md):
+    // its slices next to the disc are narrower while its D is larger. Weights: +1
+    // on D, -1 / (1 + depth / 10 mm) on the mean radius of each slice (the cut
+    // narrows the shallow slices most).
+    const double rim_z = matched_filter("rim_wrapping", "rim signature", [](const ResidualTerm& t) {
+        if (t.kind == "dc") return 1.0;
+        if (t.kind == "mean_radius") return -1.0 / (1.0 + t.depth_m / 0.010);
+        return 0.0;
+    });
+    // Off-centre stack: every depth's |c1| larger than the model's (a shift moves
+    // every cut alike). The depths' drape-to-drape floors are scaled by
+    // sqrt(depths) because one drape is cut at every depth, so their RMS
+    // understates a shift seen at all depths by that factor; the projection on
+    // the unit signature (-1 on each |c1|) does not.
+    const double off_centre_z = matched_filter("specimen_off_centre", "off-centre signature (|c1| at every depth)",
+                                               [](const ResidualTerm& t) { return t.kind == "harmonic" && t.harmonic == 1 ? -1.0 : 0.0; });
     a.rms_m = n_m ? std::sqrt(ss_m / n_m) : 0.0;
     a.rms_whitened = all.rms();
     a.fitted_rms_whitened = fitted_acc.rms();
@@ -143,9 +137,9 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
         a.evidence.push_back("the model's D is too low while its node count and its slices next to the disc match: friction on the "
                              "disc (the specimen does not slide inwards as it drapes) raises D that way");
     }
-    if ((harm.count(1) && harm[1].rms() > 2.0) || a.signature_z[1].second > 3.0) {
+    if ((harm.count(1) && harm[1].rms() > 2.0) || off_centre_z > 3.0) {
         a.candidate_effects.push_back("specimen_off_centre");
-        a.evidence.push_back("harmonic 1 (a shift of the contour) is beyond noise (matched filter z = " + num(a.signature_z[1].second) +
+        a.evidence.push_back("harmonic 1 (a shift of the contour) is beyond noise (matched filter z = " + num(off_centre_z) +
                              "): the specimen or the profiler axis is off the pedestal axis");
     }
     if ((kind("cos2").rms() > 2.0) || (kind("cos4").rms() > 2.0)) {
@@ -166,10 +160,10 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
     // The contours near the disc on one side of the model while D is on the
     // other: the model's cloth leaves the disc more abruptly (or gradually) than
     // the specimen.
-    if (a.signature_z.front().second > 3.0) {
+    if (rim_z > 3.0) {
         a.candidate_effects.push_back("rim_wrapping");
         a.evidence.push_back("the model's slices next to the disc are narrower than measured while its D is larger (matched filter z = " +
-                             std::to_string(a.signature_z.front().second).substr(0, 4) +
+                             std::to_string(rim_z).substr(0, 4) +
                              "): its cloth leaves the disc more abruptly than the specimen - mesh edges cutting the pedestal rim "
                              "(vertex-only contact on a coarse mesh), or a specimen that wraps the edge more gradually "
                              "(thicker, stiffer at high curvature, a rounder edge)");

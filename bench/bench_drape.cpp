@@ -5,6 +5,7 @@
 //
 //   build/bin/bench_drape [--quick] [--rk4-wall-limit S] [--tolerance R]
 #include "engine/cloth/drape.hpp"
+#include "engine/fabric/seed_format.hpp"
 
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -113,7 +114,7 @@ int main(int argc, char** argv)
     // Dampers do not change a rest state; the seed's dashpots (7 N*s/m on a 0.02 g
     // particle) would force RK4 to 3e-7 s steps, so RK4 runs the same springs with
     // light dashpots plus air damping (as tests/cloth/tst_drape_slow does).
-    auto rk4_case = [&](const FabricSpec& fabric, DrapeSetup setup) {
+    auto rk4_case = [&](const Material& fabric, DrapeSetup setup) {
         return in_child([=] {
             auto sys = make_drape_system(fabric, setup);
             sys->model().air_damping = 8.0;
@@ -134,7 +135,7 @@ int main(int argc, char** argv)
             return r;
         });
     };
-    auto static_cases = [&](const FabricSpec& fabric, const FabricSpec& changed, DrapeSetup setup, Row& cold, Row& warm) {
+    auto static_cases = [&](const Material& fabric, const Material& changed, DrapeSetup setup, Row& cold, Row& warm) {
         RestOptions ro;
         ro.integrator = Integrator::Static;
         ro.residual = tol;
@@ -150,16 +151,20 @@ int main(int argc, char** argv)
     // 1. The seed's set-up: Table 1 on its 30 x 30 grid.
     {
         DrapeSetup setup;
+        using drape::fabric::SeedParams;
+        auto material = [](const SeedParams& s) {
+            return Material(drape::fabric::continuum_from_seed(s), drape::fabric::grid_springs(s));
+        };
         SeedParams light = SeedParams::table1();
         light.sst_du = light.sst_dv = light.ssh_d = light.sfl_du = light.sfl_dv = 2e-3;
         SeedParams changed = SeedParams::table1();
         changed.sfl_ku *= 1.1;
         changed.sfl_kv *= 1.1;
         Row cold, warm;
-        static_cases(SeedParams::table1(), changed, setup, cold, warm);
+        static_cases(material(SeedParams::table1()), material(changed), setup, cold, warm);
         print("seed 30x30, static, cold", cold);
         print("seed 30x30, static, warm (+10 % flexion)", warm);
-        const Row rk = rk4_case(light, setup);
+        const Row rk = rk4_case(material(light), setup);
         print("seed 30x30, RK4 (seed's integrator)", rk);
         std::printf("|  ratio RK4 / static: cold %.1fx, warm %.1fx (wall time) |\n\n", rk.wall / cold.wall, rk.wall / warm.wall);
     }

@@ -2,10 +2,12 @@
 // compare, channel by channel, without fitting anything. Used to check a
 // preset against records it was not fitted to, and to predict the signature
 // of a model change (docs/model-discrepancy.md).
-#include "command.hpp"
+#include "cli/command.hpp"
+#include "cli/setup.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/core/error.hpp"
+#include "engine/fabric/preset.hpp"
+#include "engine/cloth/blas_threads.hpp"
 #include "engine/estimate/fit.hpp"
 #include "engine/estimate/objective.hpp"
 
@@ -26,6 +28,7 @@ channel by channel, as `drape fit` does - but fits nothing. Use it to check a
 preset against records it was not fitted to, or to see what a model change does.
 
   --fabric F            preset file (drapekit-fabric)
+  --set KEY=VALUE       override one parameter (a key of the parameter table; repeatable)
   --grid N              nodes across a 300 mm specimen (default 25, scaled with the diameter)
   --seeds S             perturbation seeds averaged (default 2)
   --seed K              first perturbation seed (default 1)
@@ -44,13 +47,13 @@ model (the fit's before its drape-to-drape calibration, so chi2 differs from a f
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--fabric", "--grid", "--seeds", "--seed", "--branch"}, {"--json", "--quiet", "--vertex-contact-only", "--disc-grip"});
+    Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed) + std::set<std::string>{"--seeds", "--branch"},
+           setup_switches(kDiscGrip) + std::set<std::string>{"--json", "--quiet", "--vertex-contact-only"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
-    const auto fabric_arg = a.get("--fabric");
-    if (!fabric_arg) throw UsageError("--fabric is required");
-    const cloth::FabricPreset preset = cloth::load_fabric(*fabric_arg);
-    const auto* base = std::get_if<cloth::FabricParams>(&preset.fabric);
-    if (!base) throw UsageError("--fabric: " + *fabric_arg + " is a seed-19 preset; compare needs a drapekit-fabric preset");
+    const fabric::FabricPreset preset = load_fabric_flags(a);
+    if (preset.is_seed())
+        throw UsageError("--fabric: " + *a.get("--fabric") + " is a seed-19 preset; compare needs a drapekit-fabric preset");
+    const cloth::FabricParams* base = &preset.params;
     const int grid300 = a.get_int("--grid", 25, 9, 200);
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
@@ -63,7 +66,7 @@ int run(const std::vector<std::string>& argv)
     }
     cloth::ModelOptions mopt = preset.model;
     mopt.edge_contact = !a.has("--vertex-contact-only");
-    estimate::single_threaded_blas();
+    cloth::single_threaded_blas();
     const estimate::NoiseModel noise;
 
     nlohmann::json out = nlohmann::json::array();

@@ -1,9 +1,11 @@
 // drape export-seed: a drapekit-fabric preset as the seed paper's 19 grid constants.
-#include "command.hpp"
+#include "cli/command.hpp"
+#include "cli/setup.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
-#include "engine/estimate/fit.hpp"
+#include "engine/core/error.hpp"
+#include "engine/fabric/preset.hpp"
+#include "engine/cloth/blas_threads.hpp"
+#include "engine/core/io.hpp"
 #include "engine/estimate/seed_export.hpp"
 
 #include <nlohmann/json.hpp>
@@ -23,6 +25,7 @@ that the seed model drapes to the preset's drape coefficient on the same set-up
 and grid (several simulations; the result says how close it came).
 
   --fabric F            drapekit-fabric preset (e.g. from drape fit)
+  --set KEY=VALUE       override one parameter (a key of the parameter table; repeatable)
   --out FILE            seed-19 JSON to write
   --grid N              nodes across the specimen, i.e. N - 1 seed patches (default: the
                         fit's grid from the preset's provenance, else 31 = the seed's 30)
@@ -35,33 +38,29 @@ Exit code 3 (file still written) when the seed model cannot reach the preset's D
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--fabric", "--out", "--grid", "--sample-diameter", "--disc-diameter", "--seeds"}, {"--json", "--quiet"});
+    Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSampleDiameter | kDiscDiameter) + std::set<std::string>{"--out", "--seeds"},
+           {"--json", "--quiet"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
-    const auto fabric_arg = a.get("--fabric");
-    if (!fabric_arg) throw UsageError("--fabric is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out SEED.json is required");
     prepare_output_file(*out, "--out");
-    const cloth::FabricPreset preset = cloth::load_fabric(*fabric_arg);
-    const auto* p = std::get_if<cloth::FabricParams>(&preset.fabric);
-    if (!p) throw UsageError("--fabric " + *fabric_arg + " is already a seed-19 preset");
-    int grid = 31;
-    if (preset.extra.contains("provenance") && preset.extra["provenance"].contains("grid") && preset.extra["provenance"]["grid"].is_number_integer())
-        grid = preset.extra["provenance"]["grid"].get<int>();
-    cloth::DrapeSetup setup;
-    setup.grid = a.get_int("--grid", grid, 5, 401);
-    setup.sample_diameter = a.get_length("--sample-diameter", 0.30);
-    setup.disc_diameter = a.get_length("--disc-diameter", 0.15);
-    setup.validate();
+    const fabric::FabricPreset preset = load_fabric_flags(a);
+    const std::string fabric_arg = *a.get("--fabric");
+    if (preset.is_seed()) throw UsageError("--fabric " + fabric_arg + " is already a seed-19 preset");
+    const cloth::FabricParams* p = &preset.params;
+    cloth::DrapeSetup defaults;
+    defaults.grid = preset.provenance && preset.provenance->grid > 0 ? preset.provenance->grid : 31;
+    const cloth::DrapeSetup setup = parse_setup(a, defaults);
+    if (setup.grid > 401) throw UsageError("--grid: " + std::to_string(setup.grid) + " is outside [5, 401]");
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
-    estimate::single_threaded_blas();
+    cloth::single_threaded_blas();
     const estimate::SeedExport e = estimate::export_seed(*p, setup, preset.model, seeds, 0.5, [&](const std::string& s) {
         if (!quiet) std::fprintf(stderr, "  %s\n", s.c_str());
     });
-    nlohmann::json j = cloth::seed_to_json(e.seed);
-    j["name"] = p->name.empty() ? std::string("exported") : p->name;
-    j["exported_from"] = {{"preset", *fabric_arg},
+    nlohmann::json j = fabric::seed_to_json(e.seed);
+    j["name"] = preset.name.empty() ? std::string("exported") : preset.name;
+    j["exported_from"] = {{"preset", fabric_arg},
                           {"grid", setup.grid},
                           {"sample_diameter_m", setup.sample_diameter},
                           {"disc_diameter_m", setup.disc_diameter},
@@ -71,7 +70,7 @@ int run(const std::vector<std::string>& argv)
                           {"matched", e.matched},
                           {"simulations", e.simulations},
                           {"note", e.note}};
-    cloth::write_file_atomic(*out, j.dump(2) + "\n");
+    drape::write_file_atomic(*out, j.dump(2) + "\n");
     if (json) {
         std::cout << j.dump(2) << "\n";
     } else {

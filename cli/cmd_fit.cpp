@@ -1,8 +1,9 @@
 // drape fit: fit a fabric preset to drape-test records.
-#include "command.hpp"
+#include "cli/command.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
+#include "engine/fabric/preset.hpp"
 #include "engine/estimate/fit.hpp"
 #include "engine/estimate/report.hpp"
 
@@ -99,9 +100,7 @@ int run(const std::vector<std::string>& argv)
     fo.recentre_contours = a.has("--recentre-contours");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
     if (const auto s = a.get("--start")) {
-        const cloth::FabricPreset sp = cloth::load_fabric(*s);
-        if (const auto* p = std::get_if<cloth::FabricParams>(&sp.fabric)) fo.start = *p;
-        else fo.start = cloth::continuum_from_seed(std::get<cloth::SeedParams>(sp.fabric));
+        fo.start = fabric::load_fabric(*s).params; // a seed-19 preset starts from its continuum equivalent
     }
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     std::vector<estimate::MeasuredDrape> recs;
@@ -122,15 +121,15 @@ int run(const std::vector<std::string>& argv)
     estimate::FitResult r = estimate::fit_fabric(recs, fo);
     std::signal(SIGINT, old);
     if (!quiet) std::fprintf(stderr, "\n");
-    r.params.name = a.get_or("--name", recs.front().id);
+    r.name = a.get_or("--name", recs.front().id);
     nlohmann::json preset = estimate::fit_to_json(r);
-    cloth::write_file_atomic(*out, preset.dump(2) + "\n");
+    drape::write_file_atomic(*out, preset.dump(2) + "\n");
     std::vector<std::string> files;
     if (const auto rep = a.get("--report")) files = estimate::write_fit_report(r, *rep, *out);
     if (json) {
         nlohmann::json j;
         j["preset_path"] = *out;
-        j["name"] = r.params.name;
+        j["name"] = r.name;
         j["model"] = estimate::to_string(fo.model);
         j["parameters"] = preset["parameters"];
         j["fit"] = preset["fit"];

@@ -1,9 +1,10 @@
 // drape fit-summary: tables and plots across fit reports (several records,
 // several models), e.g. the before/after of docs/model-discrepancy.md.
-#include "command.hpp"
+#include "cli/command.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
+#include "engine/fabric/preset.hpp"
 #include "engine/estimate/objective.hpp"
 #include "engine/estimate/plot.hpp"
 #include "engine/estimate/residual.hpp"
@@ -191,8 +192,8 @@ int run(const std::vector<std::string>& argv)
                       cd / n, beyond);
         md << buf;
     }
-    cloth::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());
-    cloth::write_file_atomic((std::filesystem::path(*out) / "summary.json").string(), js.dump(2) + "\n");
+    drape::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());
+    drape::write_file_atomic((std::filesystem::path(*out) / "summary.json").string(), js.dump(2) + "\n");
 
     // D error per record (one row each), one marker per label.
     {

@@ -1,11 +1,11 @@
 // `drape import FILE`: what a mesh file holds once it is in the engine's frame.
 #include <stdexcept> // before command.hpp, which uses std::runtime_error
 
-#include "command.hpp"
+#include "cli/command.hpp"
 
 #ifdef HAVE_DRAPE_IMPORTERS
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/units.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
 #include "importers/mesh_import.hpp"
 
 #include <nlohmann/json.hpp>

@@ -1,6 +1,6 @@
 // `drape kes-dc`: drape coefficient predicted from Kawabata (KES-FB) data with
 // the Gider (2004) regression quoted in the seed paper, to compare with a photo D.
-#include "command.hpp"
+#include "cli/command.hpp"
 
 #ifdef HAVE_DRAPE_CAPTURE
 #include "engine/capture/measure.hpp"

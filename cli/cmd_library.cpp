@@ -1,12 +1,13 @@
 // `drape library ...`: manage the SQLite fabric library from scripts and shells.
 #include <stdexcept> // before command.hpp, which uses std::runtime_error
 
-#include "command.hpp"
+#include "cli/command.hpp"
 
 #ifdef HAVE_DRAPE_LIBRARY
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
-#include "engine/cloth/units.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
+#include "engine/core/units.hpp"
+#include "engine/fabric/preset.hpp"
 #include "engine/library/fabric_library.hpp"
 
 #include <nlohmann/json.hpp>
@@ -30,7 +31,7 @@ json record_json(const FabricRecord& r, bool with_preset)
               {"composition", r.composition},
               {"format", r.format},
               {"areal_density_kg_m2", r.areal_density_kg_m2},
-              {"drape_coefficient", null_or(r.drape_coefficient)},
+              {"drape_coefficient_percent", null_or(r.drape_coefficient_percent)},
               {"fit_quality", null_or(r.fit_quality)},
               {"created", r.created},
               {"modified", r.modified},
@@ -47,25 +48,18 @@ std::string fmt_opt(const std::optional<double>& v, const char* f, double scale 
     return buf;
 }
 
-/// D on the command line: a fraction (0.65) or a percentage (65%).
-double parse_fraction(const std::string& flag, const std::string& text)
+/// D on the command line, in percent as everywhere in Drapekit: "65" or "65%".
+double parse_percent(const std::string& flag, const std::string& text)
 {
     std::string t = text;
-    double scale = 1.0;
-    if (!t.empty() && t.back() == '%') {
-        t.pop_back();
-        scale = 0.01;
-    }
-    std::size_t pos = 0;
+    const bool sign = !t.empty() && t.back() == '%';
+    if (sign) t.pop_back();
     double v = 0;
-    try {
-        v = std::stod(t, &pos);
-    } catch (const std::exception&) {
-        pos = 0;
-    }
-    if (pos == 0 || pos != t.size()) throw cli::UsageError(flag + ": '" + text + "' is not a number or percentage");
-    v *= scale;
-    if (v < 0 || v > 1) throw cli::UsageError(flag + ": '" + text + "' is outside 0..1 (0..100 %)");
+    if (!parse_number(t, v)) throw cli::UsageError(flag + ": '" + text + "' is not a percentage (e.g. 65 or 65%)");
+    if (v < 0 || v > 100) throw cli::UsageError(flag + ": '" + text + "' is outside 0..100 %");
+    if (!sign && v > 0 && v <= 1)
+        throw cli::UsageError(flag + ": '" + text + "' reads as " + text + " % (D is in percent); write " + format_value(100 * v) +
+                              " for " + format_value(100 * v) + " %, or " + text + "% if you mean it");
     return v;
 }
 
@@ -78,19 +72,9 @@ OnConflict parse_conflict(const std::string& s)
     throw cli::UsageError("--on-conflict: '" + s + "' must be fail, skip, replace or rename");
 }
 
-json parse_json_file(const std::string& path)
-{
-    const std::string text = cloth::read_file(path);
-    try {
-        return json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw FileError(path + ": not valid JSON (" + e.what() + ")");
-    }
-}
-
 void write_output(const json& j, const std::optional<std::string>& out)
 {
-    if (out && *out != "-") cloth::write_file_atomic(*out, j.dump(2) + "\n");
+    if (out && *out != "-") drape::write_file_atomic(*out, j.dump(2) + "\n");
     else std::cout << j.dump(2) << "\n";
 }
 
@@ -123,8 +107,8 @@ int run_library(const std::vector<std::string>& argv)
         // Weights on the command line in g/m^2, the unit on fabric labels.
         if (a.get("--weight-min")) f.weight_min = a.get_double("--weight-min", 0) * 1e-3;
         if (a.get("--weight-max")) f.weight_max = a.get_double("--weight-max", 0) * 1e-3;
-        if (auto s = a.get("--d-min")) f.drape_min = parse_fraction("--d-min", *s);
-        if (auto s = a.get("--d-max")) f.drape_max = parse_fraction("--d-max", *s);
+        if (auto s = a.get("--d-min")) f.drape_min = parse_percent("--d-min", *s);
+        if (auto s = a.get("--d-max")) f.drape_max = parse_percent("--d-max", *s);
         if (a.get("--fit-min")) f.fit_min = a.get_double("--fit-min", 0);
         if (a.get("--fit-max")) f.fit_max = a.get_double("--fit-max", 0);
         f.modified_from = a.get_or("--since", "");
@@ -149,7 +133,7 @@ int run_library(const std::vector<std::string>& argv)
         std::printf("%-34s %-22s %8s %7s %10s  %s\n", "name", "composition", "g/m^2", "D [%]", "fit", "modified");
         for (const auto& r : rows)
             std::printf("%-34s %-22s %8.1f %7s %10s  %s\n", r.name.c_str(), r.composition.substr(0, 22).c_str(),
-                        r.areal_density_kg_m2 * 1e3, fmt_opt(r.drape_coefficient, "%.1f", 100).c_str(),
+                        r.areal_density_kg_m2 * 1e3, fmt_opt(r.drape_coefficient_percent, "%.1f").c_str(),
                         fmt_opt(r.fit_quality, "%.3g").c_str(), r.modified.c_str());
         std::printf("%zu fabric(s) in %s\n", rows.size(), lib.path().c_str());
         return 0;
@@ -166,15 +150,14 @@ int run_library(const std::vector<std::string>& argv)
         std::printf("name:         %s\ncomposition:  %s\nformat:       %s\nweight:       %.1f g/m^2\n", r.name.c_str(),
                     r.composition.c_str(), r.format.c_str(), r.areal_density_kg_m2 * 1e3);
         std::printf("D:            %s %%\nfit quality:  %s\ncreated:      %s\nmodified:     %s (revision %d)\n",
-                    fmt_opt(r.drape_coefficient, "%.1f", 100).c_str(), fmt_opt(r.fit_quality, "%.4g").c_str(),
+                    fmt_opt(r.drape_coefficient_percent, "%.1f").c_str(), fmt_opt(r.fit_quality, "%.4g").c_str(),
                     r.created.c_str(), r.modified.c_str(), r.revision);
-        if (const auto* p = std::get_if<cloth::FabricParams>(&r.preset.fabric)) {
+        if (!r.preset.is_seed()) {
             std::printf("parameters:\n");
             for (const auto& s : cloth::param_table())
-                std::printf("  %-24s %-14.6g %s\n", std::string(s.key).c_str(), (*p)[s.id],
-                            std::string(s.unit).c_str());
+                std::printf("  %-24s %-14.6g %s\n", std::string(s.key).c_str(), r.preset.params[s.id], std::string(s.unit).c_str());
         } else {
-            std::printf("seed-19 constants:\n%s\n", cloth::seed_to_json(std::get<cloth::SeedParams>(r.preset.fabric)).dump(2).c_str());
+            std::printf("seed-19 constants:\n%s\n", fabric::seed_to_json(*r.preset.seed).dump(2).c_str());
         }
         for (const char* k : {"source", "notes", "provenance"})
             if (r.preset_json.contains(k)) std::printf("%s: %s\n", k, r.preset_json[k].dump().c_str());
@@ -186,13 +169,13 @@ int run_library(const std::vector<std::string>& argv)
         if (update ? a.positionals().size() != 2 : a.positionals().size() != 1)
             throw cli::UsageError(update ? "library update needs NAME FILE" : "library add needs one preset FILE (or seed-table1)");
         const std::string file = a.positionals().back();
-        const cloth::FabricPreset p = cloth::load_fabric(file);
+        const fabric::FabricPreset p = fabric::load_fabric(file);
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
         std::string name = update ? a.positionals().front() : a.get_or("--name", "");
         if (update) {
             lib.update(name, p);
         } else {
-            if (name.empty()) name = preset_name(p);
+            if (name.empty()) name = p.name;
             if (name.empty() || name == "unnamed") throw ParameterError(file + ": the preset has no name; pass --name");
             if (a.has("--replace") && lib.find(name)) lib.update(name, p);
             else lib.add(p, name);
@@ -215,7 +198,7 @@ int run_library(const std::vector<std::string>& argv)
         cli::Args a(rest, with_common({}), {"--json"});
         if (a.positionals().empty()) throw cli::UsageError("library remove needs NAME [NAME ...]");
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
-        for (const auto& n : a.positionals()) lib.remove(n);
+        lib.remove(a.positionals()); // all or nothing
         if (a.has("--json")) std::cout << json{{"removed", a.positionals()}, {"count", lib.count()}}.dump(2) << "\n";
         else std::printf("removed %zu fabric(s); %d left\n", a.positionals().size(), lib.count());
         return 0;
@@ -263,12 +246,12 @@ int run_library(const std::vector<std::string>& argv)
             if (files.empty()) throw FileError(file + ": no *.json preset files in this folder");
             j = json::array();
             for (const auto& f : files) {
-                json one = parse_json_file(f.string());
-                cloth::fabric_from_json(one, f.string()); // names the file if it is bad
+                json one = drape::read_json_file(f.string());
+                fabric::fabric_from_json(one, f.string()); // names the file if it is bad
                 j.push_back(std::move(one));
             }
         } else {
-            j = parse_json_file(file);
+            j = drape::read_json_file(file);
         }
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
         ImportReport rep;
@@ -279,7 +262,7 @@ int run_library(const std::vector<std::string>& argv)
             const auto before = lib.count();
             const auto id = lib.import_preset(j, file, a.get_or("--name", ""), oc);
             (void)id;
-            rep.names.push_back(a.get_or("--name", preset_name(cloth::fabric_from_json(j, file))));
+            rep.names.push_back(a.get_or("--name", fabric::fabric_from_json(j, file).name));
             if (lib.count() > before) {
                 rep.added = 1;
             } else {
@@ -308,7 +291,7 @@ DRAPE_COMMAND({"library", "manage the fabric library (SQLite): list, show, add, 
                "  Every sub-command takes --json for machine-readable output.\n"
                "\n"
                "  list   [--search TEXT] [--name S] [--composition S] [--weight-min G] [--weight-max G] (g/m^2)\n"
-               "         [--d-min D] [--d-max D] (0.65 or 65%) [--fit-min Q] [--fit-max Q]\n"
+               "         [--d-min D] [--d-max D] (percent: 65 or 65%) [--fit-min Q] [--fit-max Q] (reduced chi-square)\n"
                "         [--since DATE] [--until DATE] (modified, ISO 8601) [--sort name|weight|d|modified|fit] [--desc] [--limit N]\n"
                "  show   NAME                       parameters, composition, D, fit, dates\n"
                "  add    FILE [--name NAME] [--replace]   a preset JSON (drapekit-fabric or seed-19) or seed-table1\n"

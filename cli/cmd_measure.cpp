@@ -1,10 +1,10 @@
 // `drape measure RECORD_DIR`: a drape-lab record -> calibrated measurements.
-#include "command.hpp"
+#include "cli/command.hpp"
 
 #ifdef HAVE_DRAPE_CAPTURE
 #include "engine/capture/export.hpp"
 #include "engine/capture/measure.hpp"
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -20,7 +20,7 @@ int run_measure(const std::vector<std::string>& argv)
     using namespace drape;
     cli::Args a(argv, {"--overlay", "--rays", "--node-prominence", "--texture", "--mesh"}, {"--json", "--no-calibrate"});
     if (a.positionals().size() != 1) throw cli::UsageError("expected exactly one RECORD_DIR");
-    const capture::Record rec = capture::read_record(a.positionals()[0]);
+    const record::Record rec = record::read_record(a.positionals()[0]);
     capture::MeasureOptions opt;
     opt.rays = a.get_int("--rays", 720, 90, 7200);
     opt.calibrate = !a.has("--no-calibrate");

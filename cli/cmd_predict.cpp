@@ -1,11 +1,13 @@
 // drape predict: simulate a fitted preset on another drape set-up.
-#include "command.hpp"
+#include "cli/command.hpp"
+#include "cli/setup.hpp"
 
 #include "engine/cloth/drape_io.hpp"
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
-#include "engine/estimate/fit.hpp"
+#include "engine/core/error.hpp"
+#include "engine/fabric/preset.hpp"
+#include "engine/cloth/blas_threads.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -18,6 +20,7 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
 360/180 mm from a fit at 300/150. Prints the same keys as `drape simulate`.
 
   --fabric F            preset file (drapekit-fabric or seed-19 JSON) or seed-table1
+  --set KEY=VALUE       override one parameter (a key of the parameter table; repeatable)
   --sample-diameter L   specimen diameter (default 300mm; units mm, cm, m; bare = m)
   --disc-diameter L     pedestal disc diameter (default 150mm)
   --pedestal-height L   pedestal height (default 120mm)
@@ -31,38 +34,28 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--fabric", "--sample-diameter", "--disc-diameter", "--pedestal-height", "--grid", "--seed", "--areal-density", "--folds"},
-           {"--json", "--quiet"});
+    Args a(argv, fabric_flags() + setup_value_flags(kAllSetup) + std::set<std::string>{"--areal-density"},
+           setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
-    const auto fabric_arg = a.get("--fabric");
-    if (!fabric_arg) throw UsageError("--fabric is required");
-    cloth::FabricPreset preset = cloth::load_fabric(*fabric_arg);
-    cloth::DrapeSetup setup;
-    setup.sample_diameter = a.get_length("--sample-diameter", 0.30);
-    setup.disc_diameter = a.get_length("--disc-diameter", 0.15);
-    setup.pedestal_height = a.get_length("--pedestal-height", 0.12);
-    // Same mesh density as the fit (the fit's bias is then the same): grid scaled with the diameter.
-    int grid = 31;
-    double fit_D1 = 0.30;
-    if (preset.extra.contains("provenance") && preset.extra["provenance"].contains("grid") && preset.extra["provenance"]["grid"].is_number_integer()) {
-        grid = preset.extra["provenance"]["grid"].get<int>();
-        if (preset.extra.contains("fit") && preset.extra["fit"].contains("records") && !preset.extra["fit"]["records"].empty() &&
-            preset.extra["fit"]["records"][0].contains("sample_diameter_m"))
-            fit_D1 = preset.extra["fit"]["records"][0]["sample_diameter_m"].get<double>();
-        grid = static_cast<int>(std::lround(grid * setup.sample_diameter / fit_D1));
-        if (grid % 2 == 0) ++grid;
-    }
-    setup.grid = a.get_int("--grid", grid, 5, 1000);
-    setup.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
-    if (a.has("--folds")) setup = cloth::on_fold_branch(setup, a.get_int("--folds", 0, 2, 16));
+    fabric::FabricPreset preset = load_fabric_flags(a);
     if (a.has("--areal-density")) {
-        auto* p = std::get_if<cloth::FabricParams>(&preset.fabric);
-        if (!p) throw UsageError("--areal-density needs a drapekit-fabric preset");
-        (*p)[cloth::Param::AreaDensity] = a.get_double("--areal-density", 0) * 1e-3;
-        p->validate("--areal-density");
+        cloth::FabricParams p = preset.params;
+        p[cloth::Param::AreaDensity] = a.get_double("--areal-density", 0) * 1e-3;
+        p.validate("--areal-density");
+        preset.set_params(p);
     }
-    setup.validate();
-    estimate::single_threaded_blas();
+    cloth::DrapeSetup defaults;
+    defaults.sample_diameter = a.get_length("--sample-diameter", defaults.sample_diameter);
+    // Same mesh density as the fit (the fit's bias is then the same): the fit's
+    // grid scaled with the diameter.
+    defaults.grid = 31;
+    if (preset.provenance && preset.provenance->grid > 0) {
+        const double fit_D1 = preset.fit && preset.fit->sample_diameter_m > 0 ? preset.fit->sample_diameter_m : 0.30;
+        defaults.grid = static_cast<int>(std::lround(preset.provenance->grid * defaults.sample_diameter / fit_D1));
+        if (defaults.grid % 2 == 0) ++defaults.grid;
+    }
+    const cloth::DrapeSetup setup = parse_setup(a, defaults);
+    cloth::single_threaded_blas();
     cloth::RestOptions ro;
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     if (!quiet)
@@ -70,7 +63,7 @@ int run(const std::vector<std::string>& argv)
             std::fprintf(stderr, "\r  %-8ld iterations  residual %.2e  wall %.1fs   ", st.steps, st.residual, st.wall_seconds);
             return true;
         };
-    const cloth::DrapeResult r = cloth::simulate_drape(preset.fabric, setup, ro, preset.model);
+    const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
     if (!quiet) std::fprintf(stderr, "\n");
     if (json) {
         std::cout << cloth::drape_summary_json(r, setup, ro.integrator).dump(2) << "\n";

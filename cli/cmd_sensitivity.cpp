@@ -1,8 +1,9 @@
 // drape sensitivity: one parameter at a time around a preset (seed paper's study).
-#include "command.hpp"
+#include "cli/command.hpp"
+#include "cli/setup.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/core/error.hpp"
+#include "engine/fabric/preset.hpp"
 #include "engine/estimate/sensitivity.hpp"
 
 #include <cstdio>
@@ -18,8 +19,9 @@ harmonic magnitudes of the shadow outline: DIR/sensitivity.csv and two PNG plots
 per parameter.
 
   --fabric F            drapekit-fabric preset
+  --set KEY=VALUE       override one parameter (a key of the parameter table; repeatable)
   --out DIR             output folder
-  --params K,K,...      parameter keys (default bend_warp_N_m,bend_weft_N_m,shear_N_m,
+  --params K,K,...      parameter keys (default bend_warp_Nm,bend_weft_Nm,shear_N_m,
                         stretch_warp_N_m,stretch_weft_N_m,areal_density_kg_m2)
   --steps N             values per parameter (default 5)
   --span DECADES        range of log parameters (default 1)
@@ -29,20 +31,21 @@ per parameter.
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--fabric", "--out", "--params", "--steps", "--span", "--sample-diameter", "--disc-diameter", "--grid", "--seed"},
+    Args a(argv,
+           fabric_flags() + setup_value_flags(kSampleDiameter | kDiscDiameter | kGrid | kSeed) +
+               std::set<std::string>{"--out", "--params", "--steps", "--span"},
            {"--quiet"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
-    const auto fabric_arg = a.get("--fabric");
     const auto out = a.get("--out");
-    if (!fabric_arg || !out) throw UsageError("--fabric and --out are required");
-    const cloth::FabricPreset preset = cloth::load_fabric(*fabric_arg);
-    const auto* base = std::get_if<cloth::FabricParams>(&preset.fabric);
-    if (!base) throw UsageError("sensitivity needs a drapekit-fabric (continuum) preset, not seed-19");
+    if (!out) throw UsageError("--out DIR is required");
+    const fabric::FabricPreset preset = load_fabric_flags(a);
+    if (preset.is_seed()) throw UsageError("sensitivity needs a drapekit-fabric (continuum) preset, not seed-19");
+    const cloth::FabricParams* base = &preset.params;
     estimate::SensitivityOptions o;
-    o.setup.sample_diameter = a.get_length("--sample-diameter", 0.30);
-    o.setup.disc_diameter = a.get_length("--disc-diameter", 0.15);
-    o.setup.grid = a.get_int("--grid", 25, 5, 200);
-    o.setup.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
+    cloth::DrapeSetup defaults;
+    defaults.grid = 25;
+    o.setup = parse_setup(a, defaults);
+    if (o.setup.grid > 200) throw UsageError("--grid: " + std::to_string(o.setup.grid) + " is outside [5, 200]");
     o.steps = a.get_int("--steps", 5, 2, 41);
     o.span_decades = a.get_double("--span", 1.0);
     if (const auto ps = a.get("--params")) {

@@ -1,9 +1,10 @@
 // drape simulate: drape a fabric preset over the drapemeter and measure it.
-#include "command.hpp"
+#include "cli/command.hpp"
+#include "cli/setup.hpp"
 
 #include "engine/cloth/drape_io.hpp"
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/core/error.hpp"
+#include "engine/fabric/preset.hpp"
 
 #include <cstdio>
 #include <iostream>
@@ -17,6 +18,8 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
 (drape coefficient, nodes, hem height, slices).
 
   --fabric F            preset file (drapekit-fabric or seed-19 JSON) or seed-table1
+  --set KEY=VALUE       override one parameter of the preset (a key of the parameter table in its
+                        unit, e.g. --set bend_warp_Nm=2e-6; repeatable)
   --sample-diameter L   specimen diameter (default 300mm; units mm, cm, m; bare = m)
   --disc-diameter L     pedestal disc diameter (default 150mm)
   --pedestal-height L   pedestal height (default 120mm)
@@ -40,22 +43,15 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--fabric", "--sample-diameter", "--disc-diameter", "--pedestal-height", "--grid", "--integrator", "--dt",
-                  "--tolerance", "--max-time", "--seed", "--out", "--edge-radius", "--max-iterations", "--folds", "--perturbation"},
-           {"--json", "--quiet", "--trace", "--vertex-contact-only", "--disc-grip"});
+    Args a(argv,
+           fabric_flags() + setup_value_flags(kAllSetup) +
+               std::set<std::string>{"--integrator", "--dt", "--tolerance", "--max-time", "--out", "--max-iterations"},
+           setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet", "--trace", "--vertex-contact-only"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
-    const auto fabric_arg = a.get("--fabric");
-    if (!fabric_arg) throw UsageError("--fabric is required");
-    cloth::FabricPreset preset = cloth::load_fabric(*fabric_arg);
-    cloth::DrapeSetup setup;
-    setup.sample_diameter = a.get_length("--sample-diameter", 0.30);
-    setup.disc_diameter = a.get_length("--disc-diameter", 0.15);
-    setup.pedestal_height = a.get_length("--pedestal-height", 0.12);
-    setup.grid = a.get_int("--grid", 60, 5, 1000);
-    setup.edge_radius = a.get_length("--edge-radius", setup.edge_radius);
-    setup.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
-    if (a.has("--folds")) setup = cloth::on_fold_branch(setup, a.get_int("--folds", 0, 2, 16));
-    setup.perturbation = a.get_length("--perturbation", setup.perturbation);
+    fabric::FabricPreset preset = load_fabric_flags(a);
+    cloth::DrapeSetup defaults;
+    defaults.grid = 60;
+    const cloth::DrapeSetup setup = parse_setup(a, defaults);
     cloth::RestOptions ro;
     try {
         ro.integrator = cloth::parse_integrator(a.get_or("--integrator", "static"));
@@ -68,23 +64,21 @@ int run(const std::vector<std::string>& argv)
     if (!(ro.residual > 0) || ro.residual >= 1) throw UsageError("--tolerance must be in (0, 1)");
     ro.max_newton = a.get_int("--max-iterations", 1000, 1, 1000000);
     ro.max_sim_time = a.get_double("--max-time", 60.0);
-    if (!(ro.max_sim_time > 0)) throw UsageError("--max-time must be positive");
+    if (!(ro.max_sim_time > 0) || ro.max_sim_time > 1e5) throw UsageError("--max-time must be in (0, 1e5] s of simulated time");
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     ro.trace = a.has("--trace");
     preset.model.edge_contact = !a.has("--vertex-contact-only");
-    setup.disc_grip = a.has("--disc-grip");
     if (!quiet)
         ro.progress = [](const cloth::SolverStatus& st) {
             std::fprintf(stderr, "\r  %-8ld steps  residual %.2e  t=%.3fs  wall %.1fs   ", st.steps, st.residual, st.sim_time,
                          st.wall_seconds);
             return true;
         };
-    setup.validate();
-    const cloth::DrapeResult r = cloth::simulate_drape(preset.fabric, setup, ro, preset.model);
+    const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
     if (!quiet) std::fprintf(stderr, "\n");
     const auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
     if (const auto out = a.get("--out")) {
-        auto sys = cloth::make_drape_system(preset.fabric, setup, preset.model); // for the mesh topology
+        auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // for the mesh topology
         cloth::write_drape_outputs(*out, r, setup, ro.integrator, sys->mesh());
     }
     if (json) {

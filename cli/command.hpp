@@ -20,7 +20,8 @@ public:
     Args(const std::vector<std::string>& argv, const std::set<std::string>& value_flags,
          const std::set<std::string>& switches);
     bool has(const std::string& flag) const;
-    std::optional<std::string> get(const std::string& flag) const;
+    std::optional<std::string> get(const std::string& flag) const; ///< the last value given
+    std::vector<std::string> get_all(const std::string& flag) const; ///< every value of a repeatable flag, in order
     std::string get_or(const std::string& flag, const std::string& fallback) const;
     /// Integer / double values with a clear error naming the flag and value.
     int get_int(const std::string& flag, int fallback, int min, int max) const;
@@ -30,7 +31,7 @@ public:
     const std::vector<std::string>& positionals() const { return m_pos; }
 
 private:
-    std::map<std::string, std::string> m_values;
+    std::map<std::string, std::vector<std::string>> m_values;
     std::set<std::string> m_switches;
     std::vector<std::string> m_pos;
 };

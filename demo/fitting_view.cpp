@@ -136,7 +136,7 @@ FittingView::~FittingView()
     m_quick = nullptr;
 }
 
-void FittingView::setMannequin(std::shared_ptr<const Mannequin> m)
+void FittingView::setMannequin(std::shared_ptr<const importers::Mannequin> m)
 {
     m_mannequin = std::move(m);
     showBody();
@@ -144,7 +144,7 @@ void FittingView::setMannequin(std::shared_ptr<const Mannequin> m)
 
 void FittingView::showBody()
 {
-    m_state->m_bodyVisible = m_mannequin && (!m_scene || m_scene->garment == Garment::Skirt);
+    m_state->m_bodyVisible = m_mannequin && (!m_scene || m_scene->garment == importers::Garment::Skirt);
     if (m_mannequin) {
         const auto& M = m_mannequin->mesh;
         ++m_generation;
@@ -163,7 +163,7 @@ void FittingView::setClothColor(const QColor& c)
 void FittingView::resetCamera()
 {
     auto& cam = m_state->camera;
-    const bool table = m_scene && m_scene->garment == Garment::Tablecloth;
+    const bool table = m_scene && m_scene->garment == importers::Garment::Tablecloth;
     if (table) {
         cam.target = Eigen::Vector3d(0, 0, 0.45);
         cam.distance = 3.2;
@@ -180,15 +180,15 @@ void FittingView::resetCamera()
     emit m_state->cameraChanged();
 }
 
-bool FittingView::drape(Garment garment, const FabricChoice& fabric, QString* error)
+bool FittingView::drape(importers::Garment garment, const library::FabricChoice& fabric, QString* error)
 {
     if (m_job.running()) {
         if (error) *error = tr("a drape is already running");
         return false;
     }
     try {
-        auto scene = std::make_unique<Scene>(garment == Garment::Skirt ? make_skirt_scene(m_mannequin, fabric.preset)
-                                                                       : make_tablecloth_scene(fabric.preset));
+        auto scene = std::make_unique<importers::Scene>(garment == importers::Garment::Skirt ? importers::make_skirt_scene(m_mannequin, fabric.preset)
+                                                                       : importers::make_tablecloth_scene(fabric.preset));
         m_scene = std::move(scene);
     } catch (const std::exception& e) {
         if (error) *error = QString::fromStdString(e.what());
@@ -211,9 +211,9 @@ bool FittingView::drape(Garment garment, const FabricChoice& fabric, QString* er
     m_clothGeneration = m_generation;
     m_state->m_cloth->setMesh(makeMesh(m_clothGeneration, cm.F, cm.vertex_count()));
     showPositions(m_scene->system->x, true);
-    m_state->m_tableVisible = garment == Garment::Tablecloth;
+    m_state->m_tableVisible = garment == importers::Garment::Tablecloth;
     if (m_state->m_tableVisible) {
-        const Table& t = m_scene->table;
+        const importers::Table& t = m_scene->table;
         // Qt Quick 3D's #Cylinder: radius 50, height 100 units, centred. Drawn
         // 1.5 % narrower and 4 mm lower than the collider: the cloth's flat
         // triangles chord across the rounded top edge, and the drawn rim would
@@ -231,7 +231,7 @@ bool FittingView::drape(Garment garment, const FabricChoice& fabric, QString* er
     const int gen = m_clothGeneration;
     const QString name = m_fabricName;
     return m_job.start(QStringLiteral("drape %1").arg(name), [this, self, sys, gen](widget::JobContext& ctx) {
-        cloth::RestOptions opt = demo_rest_options();
+        cloth::RestOptions opt = importers::garment_rest_options();
         opt.cancel = ctx.cancelFlag();
         QElapsedTimer since;
         since.start();

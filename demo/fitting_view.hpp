@@ -7,7 +7,8 @@
 // a pedestal); a fitting needs an imported body and a generated garment, so
 // this view reuses DrapeView's building blocks (ClothGeometry, OrbitCamera,
 // LongJob, the z-up -> y-up convention) with its own small scene.
-#include "demo/fitting_scene.hpp"
+#include "engine/library/fabric_choices.hpp"
+#include "importers/garment_scene.hpp"
 
 #include "widget/cloth_geometry.hpp"
 #include "widget/long_job.hpp"
@@ -82,12 +83,12 @@ public:
     ~FittingView() override;
 
     /// Shows this body (null hides it). Takes effect for the next skirt drape.
-    void setMannequin(std::shared_ptr<const Mannequin> m);
-    std::shared_ptr<const Mannequin> mannequin() const { return m_mannequin; }
+    void setMannequin(std::shared_ptr<const importers::Mannequin> m);
+    std::shared_ptr<const importers::Mannequin> mannequin() const { return m_mannequin; }
     /// Builds the scene on the GUI thread (fast) and drapes it on a worker
     /// thread. Returns false with `error` set when the scene cannot be built
     /// (bad fabric, no mannequin) or a drape is already running.
-    bool drape(Garment garment, const FabricChoice& fabric, QString* error = nullptr);
+    bool drape(importers::Garment garment, const library::FabricChoice& fabric, QString* error = nullptr);
     void cancel();
     bool busy() const { return m_job.running(); }
 
@@ -103,7 +104,7 @@ public:
     /// Results of the last finished drape (valid after finished(true, ...)).
     const cloth::SolverStatus& lastStatus() const { return m_status; }
     cloth::Positions lastPositions() const;
-    const Scene* scene() const { return m_scene.get(); }
+    const importers::Scene* scene() const { return m_scene.get(); }
     QString fabricName() const { return m_fabricName; }
 
     QSize sizeHint() const override { return {560, 640}; }
@@ -118,8 +119,8 @@ private:
     void showPositions(const cloth::Positions& x, bool cloth);
     QQuickWidget* m_quick = nullptr;
     FittingSceneState* m_state = nullptr;
-    std::shared_ptr<const Mannequin> m_mannequin;
-    std::unique_ptr<Scene> m_scene;
+    std::shared_ptr<const importers::Mannequin> m_mannequin;
+    std::unique_ptr<importers::Scene> m_scene;
     widget::LongJob m_job;
     cloth::SolverStatus m_status;
     QString m_fabricName;

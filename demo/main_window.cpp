@@ -55,7 +55,7 @@ MainWindow::MainWindow(const DemoOptions& options, QWidget* parent) : QMainWindo
     buildUi();
     reloadFabrics();
     QString err;
-    const QString path = m_options.mannequin.isEmpty() ? QString::fromStdString(default_mannequin_path()) : m_options.mannequin;
+    const QString path = m_options.mannequin.isEmpty() ? QString::fromStdString(importers::default_mannequin_path()) : m_options.mannequin;
     if (!loadMannequin(path, &err)) showMessage(tr("Mannequin: %1").arg(err));
 }
 
@@ -194,7 +194,7 @@ void MainWindow::buildUi()
 bool MainWindow::loadMannequin(const QString& path, QString* error)
 {
     try {
-        auto m = std::make_shared<Mannequin>(load_mannequin(path.toStdString(), importOptions(m_options)));
+        auto m = std::make_shared<importers::Mannequin>(importers::load_mannequin(path.toStdString(), importOptions(m_options)));
         m_mannequin = m;
         m_viewA->setMannequin(m);
         m_viewB->setMannequin(m);
@@ -223,7 +223,7 @@ void MainWindow::chooseMannequin()
 void MainWindow::reloadFabrics(const QString& select)
 {
     std::vector<std::string> warnings;
-    m_fabrics = available_fabrics(m_options.library.toStdString(), m_options.starterDir.toStdString(), &warnings);
+    m_fabrics = library::available_fabrics(m_options.library.toStdString(), m_options.starterDir.toStdString(), &warnings);
     for (QComboBox* box : {m_fabricA, m_fabricB}) {
         const QString keep = select.isEmpty() ? box->currentText() : select;
         box->clear();
@@ -262,8 +262,8 @@ bool MainWindow::startDrape(QString* error)
         if (error) *error = tr("no fabric chosen");
         return false;
     }
-    const Garment g = parse_garment(m_garment->currentData().toString().toStdString());
-    if (g == Garment::Skirt && !m_mannequin) {
+    const importers::Garment g = importers::parse_garment(m_garment->currentData().toString().toStdString());
+    if (g == importers::Garment::Skirt && !m_mannequin) {
         if (error) *error = tr("no mannequin loaded");
         return false;
     }
@@ -291,7 +291,7 @@ void MainWindow::onViewFinished()
     setBusy(false);
     QString text = m_lastMessage;
     if (auto* s = m_viewA->scene(); s && s->mannequin && m_allOk) {
-        const Penetration p = body_penetration(*s->mannequin, m_viewA->lastPositions());
+        const importers::Penetration p = importers::body_penetration(*s->mannequin, m_viewA->lastPositions());
         text += tr("; closest cloth vertex %1 mm from the body").arg(p.min_distance * 1000, 0, 'f', 1);
     }
     m_status->setText(text);
@@ -364,12 +364,12 @@ void MainWindow::fitFromRecord()
         }
         QString name = QString::fromStdString(records.front().id) + tr(" (fitted)");
         try {
-            cloth::FabricPreset preset = cloth::fabric_from_json(*result, "fit of " + records.front().source);
-            library::set_preset_name(preset, name.toStdString());
+            fabric::FabricPreset preset = fabric::fabric_from_json(*result, "fit of " + records.front().source);
+            preset.name = name.toStdString();
             const std::string path =
                 m_options.library.isEmpty() ? library::default_library_path() : m_options.library.toStdString();
             library::FabricLibrary lib(path);
-            lib.import_preset(cloth::fabric_to_json(preset), "fit", name.toStdString(), library::OnConflict::Rename);
+            lib.import_preset(fabric::fabric_to_json(preset), "fit", name.toStdString(), library::OnConflict::Rename);
             reloadFabrics(name);
             showMessage(tr("Fitted fabric added to the library %1").arg(QString::fromStdString(path)));
         } catch (const std::exception& e) {
@@ -406,7 +406,7 @@ QByteArray MainWindow::summaryJson() const
     QJsonObject root;
     QJsonArray views;
     for (FittingView* v : {m_viewA, m_viewB}) {
-        const Scene* s = v->scene();
+        const importers::Scene* s = v->scene();
         if (!s || (v == m_viewB && !m_compare->isChecked())) continue;
         QJsonObject o;
         const cloth::SolverStatus& st = v->lastStatus();
@@ -420,7 +420,7 @@ QByteArray MainWindow::summaryJson() const
         o["wall_seconds"] = st.wall_seconds;
         const cloth::Positions x = v->lastPositions();
         if (s->mannequin && x.rows() > 0) {
-            const Penetration p = body_penetration(*s->mannequin, x);
+            const importers::Penetration p = importers::body_penetration(*s->mannequin, x);
             o["min_body_distance_m"] = p.min_distance;
             o["vertices_inside_body"] = p.inside;
             o["waist_z_m"] = s->waist.z;

@@ -48,7 +48,7 @@ public:
 
     /// Loads the mannequin; false (and an error message) when it cannot.
     bool loadMannequin(const QString& path, QString* error = nullptr);
-    const std::vector<FabricChoice>& fabrics() const { return m_fabrics; }
+    const std::vector<library::FabricChoice>& fabrics() const { return m_fabrics; }
     /// Index of the first fabric whose name contains `text` (case-insensitive), -1 if none.
     int findFabric(const QString& text) const;
 
@@ -87,8 +87,8 @@ private:
     void showMessage(const QString& text);
 
     DemoOptions m_options;
-    std::shared_ptr<const Mannequin> m_mannequin;
-    std::vector<FabricChoice> m_fabrics;
+    std::shared_ptr<const importers::Mannequin> m_mannequin;
+    std::vector<library::FabricChoice> m_fabrics;
     FittingView* m_viewA = nullptr;
     FittingView* m_viewB = nullptr;
     QSplitter* m_split = nullptr;

@@ -1,4 +1,4 @@
-#include "garment.hpp"
+#include "importers/garment.hpp"
 
 namespace drape::importers {
 

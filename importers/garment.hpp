@@ -2,7 +2,7 @@
 // Imported garment meshes as cloth: the same triangle model and fabric preset
 // as the grid cloth (engine/cloth/mesh.hpp make_triangle_mesh + model.hpp).
 #include "engine/cloth/mesh.hpp"
-#include "mesh_import.hpp"
+#include "importers/mesh_import.hpp"
 
 namespace drape::importers {
 

@@ -1,8 +1,8 @@
-#include "mesh_collider.hpp"
+#include "importers/mesh_collider.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/units.hpp"
-#include "mesh_import.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
+#include "importers/mesh_import.hpp"
 
 #include <Eigen/Geometry>
 

@@ -1,7 +1,7 @@
-#include "mesh_import.hpp"
+#include "importers/mesh_import.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/units.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
 
 #include <Eigen/LU>
 #include <assimp/Importer.hpp>

@@ -4,9 +4,9 @@
 #include "widget/drape_worker.hpp"
 #include "widget/line_geometry.hpp"
 
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "engine/cloth/params.hpp"
-#include "engine/cloth/seed_format.hpp"
+#include "engine/fabric/seed_format.hpp"
 
 #include <Eigen/Geometry>
 
@@ -97,11 +97,11 @@ void DrapeController::setFabricPreset(const QString& preset)
 
 bool DrapeController::applyFabricPreset(const QString& preset)
 {
-    cloth::FabricPreset p;
+    fabric::FabricPreset p;
     try {
         // Presets are small JSON files: reading them here lets the property
         // reject a bad file at once (the previous fabric stays in use).
-        if (!preset.isEmpty()) p = cloth::load_fabric(preset.toStdString());
+        if (!preset.isEmpty()) p = fabric::load_fabric(preset.toStdString());
     } catch (const std::exception& e) {
         fail(QStringLiteral("fabric preset '%1': %2").arg(preset, QString::fromUtf8(e.what())));
         return false;
@@ -659,7 +659,7 @@ bool DrapeController::saveFabricPreset(const QString& path)
 {
     try {
         if (path.isEmpty()) throw FileError("save fabric preset: empty file name");
-        cloth::save_fabric(m_preset, path.toStdString());
+        fabric::save_fabric(m_preset, path.toStdString());
     } catch (const std::exception& e) {
         fail(QStringLiteral("save fabric preset '%1': %2").arg(path, QString::fromUtf8(e.what())));
         return false;
@@ -670,12 +670,9 @@ bool DrapeController::saveFabricPreset(const QString& path)
 QVariantList DrapeController::fabricParameters() const
 {
     QVariantList out;
-    const auto* fp = std::get_if<cloth::FabricParams>(&m_preset.fabric);
-    cloth::FabricParams shown;
-    if (fp)
-        shown = *fp;
-    else if (const auto* sp = std::get_if<cloth::SeedParams>(&m_preset.fabric))
-        shown = cloth::continuum_from_seed(*sp); // read-only view of the grid constants
+    // A seed preset shows its continuum equivalents, read-only (its grid constants are the physics).
+    const bool editable = !m_preset.is_seed();
+    const cloth::FabricParams& shown = m_preset.params;
     for (const cloth::ParamSpec& s : cloth::param_table()) {
         QVariantMap m;
         m[QStringLiteral("key")] = QString::fromUtf8(s.key.data(), qsizetype(s.key.size()));
@@ -686,7 +683,7 @@ QVariantList DrapeController::fabricParameters() const
         m[QStringLiteral("upper")] = s.upper;
         m[QStringLiteral("defaultValue")] = s.default_value;
         m[QStringLiteral("logScale")] = s.log_scale;
-        m[QStringLiteral("editable")] = fp != nullptr;
+        m[QStringLiteral("editable")] = editable;
         out.push_back(m);
     }
     return out;
@@ -700,13 +697,12 @@ bool DrapeController::setFabricParameter(const QString& key, double value)
         fail(QStringLiteral("fabric parameter '%1': no such parameter").arg(key));
         return false;
     }
-    auto* fp = std::get_if<cloth::FabricParams>(&m_preset.fabric);
-    if (!fp) {
+    if (m_preset.is_seed()) {
         fail(QStringLiteral("fabric parameter '%1': the preset holds the seed's grid constants; "
                             "edit them in the preset file").arg(key));
         return false;
     }
-    cloth::FabricParams edited = *fp;
+    cloth::FabricParams edited = m_preset.params;
     edited[s->id] = value;
     try {
         edited.validate("fabric parameter");
@@ -714,7 +710,7 @@ bool DrapeController::setFabricParameter(const QString& key, double value)
         fail(QString::fromUtf8(e.what()));
         return false;
     }
-    *fp = edited;
+    m_preset.set_params(edited);
     emit fabricParametersChanged();
     scheduleRebuild();
     return true;

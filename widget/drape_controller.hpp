@@ -15,7 +15,7 @@
 #include "widget/long_job.hpp"
 #include "widget/orbit_camera.hpp"
 
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/fabric/preset.hpp"
 
 #include <QColor>
 #include <QImage>
@@ -143,7 +143,7 @@ public:
     DrapeFramePtr currentFrame() const { return m_frame; }
     DrapeMeshPtr currentMesh() const { return m_mesh; }
     /// The fabric preset in use (as loaded, with edits from setFabricParameter).
-    const cloth::FabricPreset& preset() const { return m_preset; }
+    const fabric::FabricPreset& preset() const { return m_preset; }
 
     /// Runs `fn` on a worker thread with progress and cancel (see LongJob): the
     /// hook for fitting a preset to a record. False when a job is running.
@@ -252,7 +252,7 @@ private:
     void toWorker(F&& f);
 
     QString m_fabricPreset;
-    cloth::FabricPreset m_preset;
+    fabric::FabricPreset m_preset;
     double m_sampleDiameterMm = 300;
     double m_discDiameterMm = 150;
     int m_gridSize = 40;

@@ -1,8 +1,9 @@
 #include "widget/drape_worker.hpp"
 
 #include "engine/cloth/colliders.hpp"
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "engine/cloth/model.hpp"
+#include "engine/core/io.hpp"
 
 #include <Eigen/Geometry>
 
@@ -15,7 +16,6 @@
 #include <numbers>
 #include <random>
 #include <sstream>
-#include <variant>
 
 namespace drape::widget {
 
@@ -25,33 +25,25 @@ namespace {
 // machine with software OpenGL each rendered frame takes CPU from the solver.
 constexpr qint64 kFrameIntervalMs = 30;
 
-template <class... Ts>
-struct Overloaded : Ts... {
-    using Ts::operator()...;
-};
-template <class... Ts>
-Overloaded(Ts...) -> Overloaded<Ts...>;
-
 /// Square sheet of side sample_diameter centred over the pedestal, with the same
 /// pedestal/floor colliders as the drapemeter and a small smooth random lift so
 /// the symmetric start can buckle (the disc gets the same from make_drape_system).
-std::unique_ptr<cloth::ClothSystem> makeSquareSystem(const cloth::FabricPreset& preset, const cloth::DrapeSetup& setup)
+std::unique_ptr<cloth::ClothSystem> makeSquareSystem(const fabric::FabricPreset& preset, const cloth::DrapeSetup& setup)
 {
     setup.validate();
     cloth::ClothMesh mesh;
     cloth::ClothModel model;
-    std::visit(Overloaded{[&](const cloth::FabricParams& p) {
-                              const double w = setup.sample_diameter;
-                              mesh = cloth::make_rectangle(w, w, setup.grid, setup.grid, Eigen::Vector3d(-w / 2, -w / 2, 0));
-                              model = cloth::make_model(mesh, p, preset.model);
-                          },
-                          [&](const cloth::SeedParams& s) {
-                              // The seed's constants describe their own grid: keep it.
-                              const double w = s.w * 0.01, h = s.h * 0.01;
-                              mesh = cloth::make_rectangle(w, h, s.u, s.v, Eigen::Vector3d(-w / 2, -h / 2, 0));
-                              model = cloth::make_seed_model(mesh, s, preset.model);
-                          }},
-               preset.fabric);
+    const cloth::Material material = preset.material();
+    if (!material.grid_springs) {
+        const double w = setup.sample_diameter;
+        mesh = cloth::make_rectangle(w, w, setup.grid, setup.grid, Eigen::Vector3d(-w / 2, -w / 2, 0));
+        model = cloth::make_model(mesh, material.params, preset.model);
+    } else {
+        // The seed's constants describe their own grid: keep it.
+        const cloth::GridSprings& g = *material.grid_springs;
+        mesh = cloth::make_rectangle(g.width, g.height, g.cells_u, g.cells_v, Eigen::Vector3d(-g.width / 2, -g.height / 2, 0));
+        model = cloth::make_grid_spring_model(mesh, g, preset.model);
+    }
     auto sys = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
     const double R = 0.5 * setup.sample_diameter;
     std::mt19937_64 rng(setup.seed);
@@ -90,12 +82,7 @@ double maxFreeSpeed(const cloth::ClothSystem& s)
     return m;
 }
 
-QString fabricName(const cloth::FabricPreset& p)
-{
-    return std::visit(Overloaded{[](const cloth::FabricParams& f) { return QString::fromStdString(f.name); },
-                                 [](const cloth::SeedParams&) { return QStringLiteral("seed grid constants"); }},
-                      p.fabric);
-}
+QString fabricName(const fabric::FabricPreset& p) { return QString::fromStdString(p.name); }
 
 } // namespace
 
@@ -156,7 +143,7 @@ void DrapeWorker::rebuild(std::shared_ptr<const DrapeSpec> spec)
         if (spec->shape == QLatin1String("square"))
             sys = makeSquareSystem(spec->preset, spec->setup);
         else if (spec->shape == QLatin1String("disc"))
-            sys = cloth::make_drape_system(spec->preset.fabric, spec->setup, spec->preset.model);
+            sys = cloth::make_drape_system(spec->preset.material(), spec->setup, spec->preset.model);
         else
             throw ParameterError("shape: unknown cloth shape '" + spec->shape.toStdString() + "' (use disc or square)");
         if (!sys || sys->vertex_count() == 0) throw ParameterError("cloth: the mesh has no vertices");
@@ -575,7 +562,7 @@ void DrapeWorker::saveResults(const QString& jsonPath, const QString& integrator
         j["format"] = "drapekit-widget-state";
         j["version"] = 1;
         j["fabric_preset"] = m_spec->presetName.toStdString();
-        j["fabric"] = cloth::fabric_to_json(m_spec->preset);
+        j["fabric"] = fabric::fabric_to_json(m_spec->preset);
         const cloth::DrapeSetup& su = m_spec->setup;
         j["setup"] = {{"shape", m_spec->shape.toStdString()},
                       {"sample_diameter_m", su.sample_diameter},
@@ -614,8 +601,8 @@ void DrapeWorker::saveResults(const QString& jsonPath, const QString& integrator
                         {"hem_min_z_m", r.hem.min_z},
                         {"hem_max_z_m", r.hem.max_z},
                         {"outline_m", outline}};
-        cloth::write_file_atomic(objPath.toStdString(), obj.str());
-        cloth::write_file_atomic(jsonPath.toStdString(), j.dump(2) + "\n");
+        drape::write_file_atomic(objPath.toStdString(), obj.str());
+        drape::write_file_atomic(jsonPath.toStdString(), j.dump(2) + "\n");
         emit resultsSaved(jsonPath, objPath);
     } catch (const std::exception& e) {
         fail(QStringLiteral("save results to '%1'").arg(jsonPath), e);

@@ -7,7 +7,7 @@
 #include "widget/drape_frame.hpp"
 
 #include "engine/cloth/drape.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/fabric/preset.hpp"
 #include "engine/cloth/solver.hpp"
 
 #include <QElapsedTimer>
@@ -24,7 +24,7 @@ namespace drape::widget {
 
 /// Everything needed to build a cloth scene.
 struct DrapeSpec {
-    cloth::FabricPreset preset;
+    fabric::FabricPreset preset;
     QString presetName;          ///< as given by the user (path or built-in name)
     cloth::DrapeSetup setup;     ///< diameters [m], grid, floor ...
     QString shape = "disc";      ///< "disc" (drapemeter specimen) or "square" (sheet of side sample diameter)

@@ -1,6 +1,7 @@
 #include "engine/capture/calibrate.hpp"
+#include "engine/capture/image.hpp"
 
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,7 +16,7 @@ namespace {
 
 cv::Point3d to_cv(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-void pose_to_cv(const Camera& c, cv::Mat& rvec, cv::Mat& tvec)
+void pose_to_cv(const record::Camera& c, cv::Mat& rvec, cv::Mat& tvec)
 {
     cv::Matx33d R;
     for (int i = 0; i < 3; ++i)
@@ -24,7 +25,7 @@ void pose_to_cv(const Camera& c, cv::Mat& rvec, cv::Mat& tvec)
     tvec = (cv::Mat_<double>(3, 1) << c.t.x(), c.t.y(), c.t.z());
 }
 
-double rms(const Camera& c, const std::vector<cv::Point3d>& W, const std::vector<cv::Point2f>& I)
+double rms(const record::Camera& c, const std::vector<cv::Point3d>& W, const std::vector<cv::Point2f>& I)
 {
     double s = 0;
     for (std::size_t i = 0; i < W.size(); ++i) {
@@ -43,19 +44,19 @@ std::string fmt(const char* f, double v)
 
 } // namespace
 
-Calibration calibrate_camera(const Record& rec, const std::string& camera, const cv::Mat& image)
+Calibration calibrate_camera(const record::Record& rec, const std::string& camera, const cv::Mat& image)
 {
     auto it = rec.cameras.find(camera);
     if (it == rec.cameras.end()) throw ParameterError("calibrate_camera: no station '" + camera + "' in meta.json");
     Calibration cal;
     cal.declared = cal.measured = it->second;
-    const Camera& c = cal.declared;
+    const record::Camera& c = cal.declared;
 
     cv::Mat grey;
     cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
     std::vector<cv::Point3d> W;
     std::vector<cv::Point2f> I;
-    for (const Board& b : rec.boards) {
+    for (const record::Board& b : rec.boards) {
         // Crop to the board's declared footprint plus a margin of one square,
         // so the other boards and the fabric cannot confuse the detector.
         std::vector<cv::Point2f> outline;
@@ -132,7 +133,7 @@ Calibration calibrate_camera(const Record& rec, const std::string& camera, const
     }
     cv::Mat rvec, tvec;
     pose_to_cv(c, rvec, tvec);
-    cv::solvePnP(W, I, c.K(), c.dist.empty() ? cv::Mat() : cv::Mat(c.dist), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
+    cv::solvePnP(W, I, camera_matrix(c), c.dist.empty() ? cv::Mat() : cv::Mat(c.dist), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
     cv::Matx33d Rm;
     cv::Rodrigues(rvec, Rm);
     for (int i = 0; i < 3; ++i)

@@ -2,7 +2,9 @@
 // Checks a station's declared pose against the chessboards printed on the floor
 // sheet: findChessboardCorners on each board's crop, then solvePnP with the
 // declared intrinsics over all detected corners.
-#include "engine/capture/record.hpp"
+#include "engine/record/record.hpp"
+
+#include <opencv2/core.hpp>
 
 #include <string>
 #include <vector>
@@ -11,8 +13,8 @@ namespace drape::capture {
 
 struct Calibration {
     bool ok = false;                 ///< a pose was measured (at least one board detected)
-    Camera declared;                 ///< as written in meta.json
-    Camera measured;                 ///< declared intrinsics, pose from solvePnP (= declared when !ok)
+    record::Camera declared;                 ///< as written in meta.json
+    record::Camera measured;                 ///< declared intrinsics, pose from solvePnP (= declared when !ok)
     std::vector<std::string> boards_found, boards_missed;
     int corners = 0;                 ///< corners used by solvePnP
     double rms_px_measured = 0;      ///< reprojection RMS of the corners with the measured pose [px]
@@ -27,6 +29,6 @@ struct Calibration {
 
 /// Calibrates station `camera` from `image`. Never throws for a board that is
 /// not found (reported in boards_missed); throws ParameterError for an unknown station.
-Calibration calibrate_camera(const Record& rec, const std::string& camera, const cv::Mat& image);
+Calibration calibrate_camera(const record::Record& rec, const std::string& camera, const cv::Mat& image);
 
 } // namespace drape::capture

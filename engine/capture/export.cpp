@@ -1,6 +1,6 @@
 #include "engine/capture/export.hpp"
 
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -10,12 +10,12 @@
 
 namespace drape::capture {
 
-cv::Mat rectified_texture(const Record& rec, const Measurement& m, double metres_per_pixel)
+cv::Mat rectified_texture(const record::Record& rec, const Measurement& m, double metres_per_pixel)
 {
     if (m.top_image.empty() || !m.top.measured)
         throw ParameterError("rectified_texture: the record has no measured top view");
     if (!(metres_per_pixel > 0)) throw ParameterError("rectified_texture: metres_per_pixel must be > 0");
-    const Camera cam = m.top_calibration && m.top_calibration->ok ? m.top_calibration->measured : rec.cameras.at("top");
+    const record::Camera cam = m.top_calibration && m.top_calibration->ok ? m.top_calibration->measured : rec.cameras.at("top");
     const double half = rec.R1;
     const int n = static_cast<int>(std::ceil(2 * half / metres_per_pixel));
     // Hem radius and height per ray, from the traced outline.
@@ -51,7 +51,7 @@ cv::Mat rectified_texture(const Record& rec, const Measurement& m, double metres
     return out;
 }
 
-SurfaceMesh contour_surface(const Record& rec, const Measurement& m, int segments)
+SurfaceMesh contour_surface(const record::Record& rec, const Measurement& m, int segments)
 {
     if (m.contours.empty()) throw ParameterError("contour_surface: the record has no fitted contour levels");
     if (segments < 8) throw ParameterError("contour_surface: segments must be >= 8");

@@ -13,7 +13,7 @@ namespace drape::capture {
 /// (default 0.25 mm). Exact on the pedestal top; the hanging part is taken as a
 /// cone from the disc edge to the hem height of each ray. Outside the traced
 /// outline the image is white.
-cv::Mat rectified_texture(const Record& rec, const Measurement& m, double metres_per_pixel = 0.25e-3);
+cv::Mat rectified_texture(const record::Record& rec, const Measurement& m, double metres_per_pixel = 0.25e-3);
 
 /// Triangle mesh [m] through the Fourier series of every contour level plus the
 /// pedestal edge ring at z = 0, `segments` vertices per ring. Needs >= 1 level.
@@ -21,7 +21,7 @@ struct SurfaceMesh {
     std::vector<Eigen::Vector3d> vertices;
     std::vector<std::array<int, 3>> triangles;
 };
-SurfaceMesh contour_surface(const Record& rec, const Measurement& m, int segments = 180);
+SurfaceMesh contour_surface(const record::Record& rec, const Measurement& m, int segments = 180);
 
 /// Wavefront OBJ (metres). Throws FileError when the file cannot be written.
 void write_obj(const SurfaceMesh& mesh, const std::filesystem::path& file);

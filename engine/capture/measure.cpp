@@ -1,6 +1,7 @@
 #include "engine/capture/measure.hpp"
 
-#include "engine/cloth/error.hpp"
+#include "engine/capture/image.hpp"
+#include "engine/core/error.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -79,7 +80,7 @@ void append_segment(Section& s, const Eigen::Vector2d& a, const Eigen::Vector2d&
 
 /// Section of the chosen height model at ray angle `theta` [rad]. Marching
 /// step 0.2 mm: well below the 0.7 mm footprint of one top-view pixel.
-Section make_section(HeightModel model, double R1, double R2, const ContourStack* stack, int k_contour)
+Section make_section(HeightModel model, double R1, double R2, const record::ContourStack* stack, int k_contour)
 {
     constexpr double step = 0.2e-3, beyond = 0.02;
     const double L = R1 - R2; // hanging length of a radial fibre
@@ -132,8 +133,8 @@ struct Trace {
 /// Outermost fabric point along every ray: march each section from outside in
 /// and stop at the first point whose image is fabric (p >= 0.5 inside the
 /// central component); the crossing is interpolated linearly in p.
-Trace trace_outline(const Camera& cam, const cv::Mat& prob, const cv::Mat& gate, HeightModel model, double R1,
-                    double R2, const ContourStack* stack, int rays, const cv::Mat& lightness)
+Trace trace_outline(const record::Camera& cam, const cv::Mat& prob, const cv::Mat& gate, HeightModel model, double R1,
+                    double R2, const record::ContourStack* stack, int rays, const cv::Mat& lightness)
 {
     Trace tr;
     const double L = R1 - R2;
@@ -242,7 +243,7 @@ const char* to_string(HeightModel m)
 
 // ---- segmentation -------------------------------------------------------------
 
-FabricModel fabric_model(const Record& rec, const Camera& cam, const cv::Mat& lab)
+FabricModel fabric_model(const record::Record& rec, const record::Camera& cam, const cv::Mat& lab)
 {
     FabricModel m;
     std::vector<double> L, A, B;
@@ -335,10 +336,10 @@ cv::Mat central_component(const cv::Mat& prob, const Eigen::Vector2d& centre, do
     return gate;
 }
 
-void measure_top(const Record& rec, const MeasureOptions& opt, const ContourStack* stack, Measurement& out)
+void measure_top(const record::Record& rec, const MeasureOptions& opt, const record::ContourStack* stack, Measurement& out)
 {
-    const Camera& declared = rec.cameras.at("top");
-    Camera cam = declared;
+    const record::Camera& declared = rec.cameras.at("top");
+    record::Camera cam = declared;
     if (opt.calibrate && !rec.boards.empty()) {
         out.top_calibration = calibrate_camera(rec, "top", out.top_image);
         for (const auto& w : out.top_calibration->warnings) out.warnings.push_back(w);
@@ -432,9 +433,9 @@ void measure_top(const Record& rec, const MeasureOptions& opt, const ContourStac
 }
 
 /// Front hem seen against the pedestal in the side view.
-void measure_side(const Record& rec, Measurement& out)
+void measure_side(const record::Record& rec, Measurement& out)
 {
-    const Camera& cam = rec.cameras.at("side");
+    const record::Camera& cam = rec.cameras.at("side");
     SideView& sv = out.side;
     const cv::Mat lab = to_lab(out.side_image);
     const FabricModel& fm = out.top.model;
@@ -530,7 +531,7 @@ void measure_side(const Record& rec, Measurement& out)
     out.measured.push_back("side view: hem height in front of the pedestal");
 }
 
-void measure_contours(const Record& rec, const ContourStack& st, Measurement& out)
+void measure_contours(const record::Record& rec, const record::ContourStack& st, Measurement& out)
 {
     for (std::size_t d = 0; d < st.depths.size(); ++d) {
         ContourLevel lv;
@@ -589,17 +590,17 @@ void measure_contours(const Record& rec, const ContourStack& st, Measurement& ou
 
 } // namespace
 
-Measurement measure_record(const Record& rec, const MeasureOptions& opt)
+Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
 {
     Measurement out;
     out.specimen_id = rec.specimen_id;
     out.lab_dc_percent = rec.lab_drape_coefficient_percent;
     for (const auto& k : rec.unknown_fields) out.warnings.push_back("meta.json: unknown field '" + k + "' kept, not used");
 
-    std::optional<ContourStack> stack;
+    std::optional<record::ContourStack> stack;
     if (std::filesystem::exists(rec.file(rec.contours_file))) {
         try {
-            stack = read_contours(rec);
+            stack = record::read_contours(rec);
             measure_contours(rec, *stack, out);
         } catch (const Error& e) {
             out.not_measured.push_back(std::string("laser contours: ") + e.what());
@@ -774,10 +775,10 @@ nlohmann::ordered_json to_json(const Measurement& m)
     return j;
 }
 
-cv::Mat draw_top_overlay(const Record& rec, const Measurement& m)
+cv::Mat draw_top_overlay(const record::Record& rec, const Measurement& m)
 {
     if (m.top_image.empty()) throw ParameterError("draw_top_overlay: the record has no readable top photo");
-    const Camera cam = m.top_calibration && m.top_calibration->ok ? m.top_calibration->measured : rec.cameras.at("top");
+    const record::Camera cam = m.top_calibration && m.top_calibration->ok ? m.top_calibration->measured : rec.cameras.at("top");
     // Crop to the specimen's reach and enlarge 2x with cubic interpolation, so
     // a person can judge the traced edge to a fraction of a pixel.
     constexpr double zoom = 2.0;

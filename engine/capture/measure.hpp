@@ -3,7 +3,7 @@
 // perspective-corrected shadow outline -> shared drape metrics, side-view hem,
 // laser-contour Fourier series. Everything in metres, world frame.
 #include "engine/capture/calibrate.hpp"
-#include "engine/capture/record.hpp"
+#include "engine/record/record.hpp"
 #include "engine/cloth/metrics.hpp"
 
 #include <nlohmann/json.hpp>
@@ -108,10 +108,10 @@ struct MeasureOptions {
 
 /// Segments and measures a record. Missing or broken optional files
 /// (photos, contours) are listed in not_measured; a broken meta.json throws.
-Measurement measure_record(const Record& rec, const MeasureOptions& opt = {});
+Measurement measure_record(const record::Record& rec, const MeasureOptions& opt = {});
 
 /// Builds the fabric classifier of a top photo (exposed for tests).
-FabricModel fabric_model(const Record& rec, const Camera& cam, const cv::Mat& lab);
+FabricModel fabric_model(const record::Record& rec, const record::Camera& cam, const cv::Mat& lab);
 /// Fabric probability map (CV_32F, 0..1) of a Lab image under a model.
 cv::Mat fabric_probability(const cv::Mat& lab, const FabricModel& m);
 
@@ -119,7 +119,7 @@ cv::Mat fabric_probability(const cv::Mat& lab, const FabricModel& m);
 nlohmann::ordered_json to_json(const Measurement& m);
 
 /// Overlay on the top photo: traced outline, nodes, pedestal circle, specimen circle.
-cv::Mat draw_top_overlay(const Record& rec, const Measurement& m);
+cv::Mat draw_top_overlay(const record::Record& rec, const Measurement& m);
 
 /// Gider (2004) KES regression quoted in the seed paper (section 5.2). Inputs in
 /// the KES-FB units: two_hb [gf cm/cm], miu [-], g [gf/(cm deg)], rt [%],

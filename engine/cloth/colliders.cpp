@@ -1,6 +1,6 @@
-#include "colliders.hpp"
+#include "engine/cloth/colliders.hpp"
 
-#include "error.hpp"
+#include "engine/core/error.hpp"
 
 #include <cmath>
 #include <limits>

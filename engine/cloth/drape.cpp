@@ -1,7 +1,7 @@
-#include "drape.hpp"
+#include "engine/cloth/drape.hpp"
 
-#include "error.hpp"
-#include "units.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
 
 #include <Eigen/Dense>
 
@@ -36,8 +36,6 @@ void DrapeSetup::validate() const
 }
 
 namespace {
-
-double seed_sample_diameter(const SeedParams& s) { return s.w * 0.01; }
 
 /// Lifts the overhanging part of the flat sheet by a seeded mix of harmonics
 /// (DrapeSetup::perturbation documents the form).
@@ -138,28 +136,28 @@ Positions interpolate_positions(const ClothMesh& coarse, const Positions& xc, co
 
 } // namespace
 
-std::unique_ptr<ClothSystem> make_drape_system(const FabricSpec& fabric, const DrapeSetup& setup, const ModelOptions& mopt)
+std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const DrapeSetup& setup, const ModelOptions& mopt)
 {
     setup.validate();
     ClothMesh mesh;
     ClothModel model;
-    if (const auto* p = std::get_if<FabricParams>(&fabric)) {
+    if (!fabric.grid_springs) {
         mesh = make_disc(setup.sample_diameter, setup.grid, 0.0);
-        model = make_model(mesh, *p, mopt);
+        model = make_model(mesh, fabric.params, mopt);
     } else {
-        const auto& s = std::get<SeedParams>(fabric);
-        s.validate("seed parameters");
-        if (std::abs(seed_sample_diameter(s) - setup.sample_diameter) > 1e-6)
-            throw ParameterError("the seed-19 preset describes a " + format_double(seed_sample_diameter(s) * 1000) +
-                                 " mm sheet (w = " + format_double(s.w) + " cm) but the sample diameter is " +
-                                 format_double(setup.sample_diameter * 1000) + " mm");
-        if (s.u != s.v || s.w != s.h)
-            throw ParameterError("the drapemeter needs a round sheet: seed w = h and u = v (got w = " + format_double(s.w) +
-                                 ", h = " + format_double(s.h) + ", u = " + std::to_string(s.u) + ", v = " + std::to_string(s.v) + ")");
-        mesh = make_disc(setup.sample_diameter, s.u + 1, 0.0);
+        const GridSprings& g = *fabric.grid_springs;
+        g.validate("grid springs");
+        if (std::abs(g.width - setup.sample_diameter) > 1e-6)
+            throw ParameterError("the grid springs (a seed-19 preset) describe a " + format_value(g.width * 1000) +
+                                 " mm sheet but the sample diameter is " + format_value(setup.sample_diameter * 1000) + " mm");
+        if (g.cells_u != g.cells_v || g.width != g.height)
+            throw ParameterError("the drapemeter needs a round sheet: a square grid of square cells (got " +
+                                 format_value(g.width * 1000) + " x " + format_value(g.height * 1000) + " mm, " +
+                                 std::to_string(g.cells_u) + " x " + std::to_string(g.cells_v) + " cells)");
+        mesh = make_disc(setup.sample_diameter, g.cells_u + 1, 0.0);
         ModelOptions o = mopt;
         if (o.bending == BendingModel::Quadratic) o.bending = BendingModel::Flexion;
-        model = make_seed_model(mesh, s, o);
+        model = make_grid_spring_model(mesh, g, o);
     }
     // Static friction holds the specimen's centre on the disc (see HorizontalAnchor):
     // the vertex nearest the axis is tethered horizontally, stiff enough that the
@@ -204,10 +202,10 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
     return r;
 }
 
-DrapeResult simulate_drape(const FabricSpec& fabric, const DrapeSetup& setup, const RestOptions& ropt, const ModelOptions& mopt)
+DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt, const ModelOptions& mopt)
 {
     auto sys = make_drape_system(fabric, setup, mopt);
-    const bool continuation = ropt.integrator == Integrator::Static && std::holds_alternative<FabricParams>(fabric) && setup.grid > 40;
+    const bool continuation = ropt.integrator == Integrator::Static && !fabric.grid_springs && setup.grid > 40;
     SolverStatus pre;
     if (continuation) {
         DrapeSetup coarse = setup;
@@ -234,7 +232,7 @@ DrapeResult simulate_drape(const FabricSpec& fabric, const DrapeSetup& setup, co
     return m;
 }
 
-DrapeResult simulate_drape_from(const FabricSpec& fabric, const DrapeSetup& setup, const Positions& start, const RestOptions& ropt,
+DrapeResult simulate_drape_from(const Material& fabric, const DrapeSetup& setup, const Positions& start, const RestOptions& ropt,
                                 const ModelOptions& mopt)
 {
     auto sys = make_drape_system(fabric, setup, mopt);

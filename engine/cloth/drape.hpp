@@ -1,15 +1,14 @@
 #pragma once
 // The drapemeter experiment: a round specimen centred on a pedestal, draped to
 // rest, measured with the shared metric code.
-#include "metrics.hpp"
-#include "params.hpp"
-#include "seed_format.hpp"
-#include "solver.hpp"
+#include "engine/cloth/metrics.hpp"
+#include "engine/cloth/model.hpp"
+#include "engine/cloth/params.hpp"
+#include "engine/cloth/solver.hpp"
 
 #include <cstdint>
 #include <memory>
 #include <optional>
-#include <variant>
 
 namespace drape::cloth {
 
@@ -57,11 +56,9 @@ inline DrapeSetup on_fold_branch(DrapeSetup s, int n, double lift_m = kFoldBranc
     return s;
 }
 
-using FabricSpec = std::variant<FabricParams, SeedParams>;
-
-/// Builds the drape scene: disc mesh (or the seed's grid for SeedParams), model,
-/// pedestal and floor colliders, perturbed flat start.
-std::unique_ptr<ClothSystem> make_drape_system(const FabricSpec& fabric, const DrapeSetup& setup, const ModelOptions& mopt = {});
+/// Builds the drape scene: disc mesh (or the material's own grid when it has
+/// grid springs), model, pedestal and floor colliders, perturbed flat start.
+std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const DrapeSetup& setup, const ModelOptions& mopt = {});
 
 struct Slice {
     double depth_m;
@@ -83,12 +80,12 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
 /// Simulates a drape to rest and measures it. For the static solver with a
 /// grid finer than 40 this solves a coarse grid first and interpolates
 /// (continuation), which is how the cold start stays fast.
-DrapeResult simulate_drape(const FabricSpec& fabric, const DrapeSetup& setup, const RestOptions& ropt = {},
+DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt = {},
                            const ModelOptions& mopt = {});
 
 /// Warm start: re-solve from a previous rest state (same mesh), e.g. after a
 /// small parameter change during a fit.
-DrapeResult simulate_drape_from(const FabricSpec& fabric, const DrapeSetup& setup, const Positions& start,
+DrapeResult simulate_drape_from(const Material& fabric, const DrapeSetup& setup, const Positions& start,
                                 const RestOptions& ropt = {}, const ModelOptions& mopt = {});
 
 } // namespace drape::cloth

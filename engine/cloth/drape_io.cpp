@@ -1,7 +1,7 @@
-#include "drape_io.hpp"
+#include "engine/cloth/drape_io.hpp"
 
-#include "error.hpp"
-#include "fabric_io.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -1,6 +1,6 @@
 #pragma once
 // Output files of a drape: JSON summary, rest mesh (OBJ), slices and outline (CSV).
-#include "drape.hpp"
+#include "engine/cloth/drape.hpp"
 
 #include <nlohmann/json.hpp>
 

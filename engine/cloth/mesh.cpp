@@ -1,6 +1,6 @@
-#include "mesh.hpp"
+#include "engine/cloth/mesh.hpp"
 
-#include "error.hpp"
+#include "engine/core/error.hpp"
 
 #include <Eigen/Dense>
 

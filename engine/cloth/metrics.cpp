@@ -1,6 +1,6 @@
-#include "metrics.hpp"
+#include "engine/cloth/metrics.hpp"
 
-#include "error.hpp"
+#include "engine/core/error.hpp"
 
 #include <Eigen/Dense>
 

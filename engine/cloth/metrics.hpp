@@ -5,7 +5,7 @@
 //
 // Frame: the pedestal axis is the origin; theta is measured from +x (warp)
 // towards +y (weft), in radians.
-#include "mesh.hpp"
+#include "engine/cloth/mesh.hpp"
 
 #include <Eigen/Core>
 

@@ -1,6 +1,7 @@
-#include "model.hpp"
+#include "engine/cloth/model.hpp"
 
-#include "error.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
 
 #include <Eigen/Dense>
 
@@ -80,7 +81,7 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
     p.validate();
     if (!(opt.contact_depth > 0)) throw ParameterError("ModelOptions: contact_depth must be positive");
     if (mesh.grid.valid() && opt.bending != BendingModel::Quadratic)
-        throw ParameterError("make_model: the seed's flexion springs are grid constants; use a seed-19 preset for them");
+        throw ParameterError("make_model: flexion springs are grid constants; use GridSprings (a seed-19 preset) for them");
     ClothModel m;
     m.mass = p[Param::AreaDensity] * mesh.vertex_areas();
     m.air_damping = p[Param::DampAir];
@@ -178,14 +179,35 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
     return m;
 }
 
-ClothModel make_seed_model(const ClothMesh& mesh, const SeedParams& s, const ModelOptions& opt)
+void GridSprings::validate(const std::string& where) const
 {
-    s.validate("seed parameters");
-    if (!mesh.grid.valid()) throw ParameterError("make_seed_model: the seed's model needs a grid mesh");
+    auto check = [&](const char* name, double x, bool strictly_positive) {
+        if (!std::isfinite(x) || x < 0 || (strictly_positive && !(x > 0)))
+            throw ParameterError(where + ": " + name + " = " + format_value(x) + " must be a " +
+                                 (strictly_positive ? "positive" : "non-negative") + " number");
+    };
+    check("width", width, true);
+    check("height", height, true);
+    if (cells_u < 4 || cells_u > 2000) throw ParameterError(where + ": cells along u = " + std::to_string(cells_u) + " must be in [4, 2000]");
+    if (cells_v < 4 || cells_v > 2000) throw ParameterError(where + ": cells along v = " + std::to_string(cells_v) + " must be in [4, 2000]");
+    check("particle mass", particle_mass, true);
+    check("k_u", k_u, true);
+    check("k_v", k_v, true);
+    check("k_shear", k_shear, false);
+    check("k_flex_u", k_flex_u, false);
+    check("k_flex_v", k_flex_v, false);
+    for (auto [name, d] : {std::pair{"d_u", d_u}, {"d_v", d_v}, {"d_shear", d_shear}, {"d_flex_u", d_flex_u}, {"d_flex_v", d_flex_v}})
+        check(name, d, false);
+}
+
+ClothModel make_grid_spring_model(const ClothMesh& mesh, const GridSprings& s, const ModelOptions& opt)
+{
+    s.validate("grid springs");
+    if (!mesh.grid.valid()) throw ParameterError("make_grid_spring_model: grid springs need a grid mesh");
     if (opt.bending == BendingModel::Quadratic)
-        throw ParameterError("make_seed_model: the seed's model bends with flexion springs (BendingModel::Flexion)");
+        throw ParameterError("make_grid_spring_model: grid springs bend with flexion springs (BendingModel::Flexion)");
     ClothModel m;
-    m.mass = Eigen::VectorXd::Constant(mesh.vertex_count(), s.particle_mass_kg());
+    m.mass = Eigen::VectorXd::Constant(mesh.vertex_count(), s.particle_mass);
     m.air_damping = 0;
     m.contact_offset = 0;
     m.friction = 0;
@@ -196,16 +218,16 @@ ClothModel make_seed_model(const ClothMesh& mesh, const SeedParams& s, const Mod
         for (int i = 0; i < g.nu; ++i) {
             const int a = g.at(i, j);
             if (a < 0) continue;
-            add_spring(m, mesh, a, g.at(i + 1, j), s.sst_ku, s.sst_du, SpringKind::StretchU);
-            add_spring(m, mesh, a, g.at(i, j + 1), s.sst_kv, s.sst_dv, SpringKind::StretchV);
-            add_spring(m, mesh, a, g.at(i + 1, j + 1), s.ssh_k, s.ssh_d, SpringKind::Shear);
-            if (g.at(i + 1, j) >= 0) add_spring(m, mesh, g.at(i + 1, j), g.at(i, j + 1), s.ssh_k, s.ssh_d, SpringKind::Shear);
+            add_spring(m, mesh, a, g.at(i + 1, j), s.k_u, s.d_u, SpringKind::StretchU);
+            add_spring(m, mesh, a, g.at(i, j + 1), s.k_v, s.d_v, SpringKind::StretchV);
+            add_spring(m, mesh, a, g.at(i + 1, j + 1), s.k_shear, s.d_shear, SpringKind::Shear);
+            if (g.at(i + 1, j) >= 0) add_spring(m, mesh, g.at(i + 1, j), g.at(i, j + 1), s.k_shear, s.d_shear, SpringKind::Shear);
             if (opt.bending != BendingModel::Quadratic) {
-                add_spring(m, mesh, a, g.at(i + 2, j), s.sfl_ku, s.sfl_du, SpringKind::FlexionU);
-                add_spring(m, mesh, a, g.at(i, j + 2), s.sfl_kv, s.sfl_dv, SpringKind::FlexionV);
+                add_spring(m, mesh, a, g.at(i + 2, j), s.k_flex_u, s.d_flex_u, SpringKind::FlexionU);
+                add_spring(m, mesh, a, g.at(i, j + 2), s.k_flex_v, s.d_flex_v, SpringKind::FlexionV);
             }
         }
-    m.description = "the seed paper's mass-spring model (structural, shear, flexion springs) on its own grid";
+    m.description = "mass-spring grid (structural, shear, flexion springs) from explicit constants on its own grid";
     return m;
 }
 

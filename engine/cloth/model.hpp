@@ -1,11 +1,11 @@
 #pragma once
 // Per-element constants of the mass-spring model for one mesh, made from
-// continuum parameters (the one documented mapping) or from the seed's grid
-// constants.
-#include "mesh.hpp"
-#include "params.hpp"
-#include "seed_format.hpp"
+// continuum parameters (the one documented mapping) or from explicit grid
+// springs (the seed paper's model, whose file format lives in engine/fabric).
+#include "engine/cloth/mesh.hpp"
+#include "engine/cloth/params.hpp"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -110,9 +110,42 @@ struct ClothModel {
 /// direction to the warp.
 ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelOptions& opt = {});
 
-/// The seed's model on its own grid: structural, shear and flexion springs with
-/// the given constants, particle mass 1/ClothOverMass (see seed_format.hpp).
-/// `mesh` must be a grid mesh.
-ClothModel make_seed_model(const ClothMesh& mesh, const SeedParams& s, const ModelOptions& opt = {});
+/// A mass-spring grid given by its element constants instead of continuum
+/// values (SI): the seed paper's model is one (its 19 constants in paper
+/// units are engine/fabric/seed_format.hpp's business). The constants belong
+/// to one grid: a `width` x `height` sheet of `cells_u` x `cells_v` square
+/// patches, simulated on that grid only.
+struct GridSprings {
+    double width = 0.30, height = 0.30;   ///< [m] the sheet the grid spans
+    int cells_u = 30, cells_v = 30;       ///< patches along u (warp) and v (weft); nodes = cells + 1
+    double particle_mass = 2e-5;          ///< [kg] every node
+    double k_u = 150, d_u = 7;            ///< structural springs along u [N/m], [N*s/m]
+    double k_v = 150, d_v = 7;            ///< along v
+    double k_shear = 40, d_shear = 6;     ///< both diagonals of every patch
+    double k_flex_u = 24, d_flex_u = 8;   ///< skip-one (flexion) springs along u
+    double k_flex_v = 24, d_flex_v = 8;   ///< along v
+    /// ParameterError naming the field when a constant is non-finite or negative,
+    /// a stiffness or the mass is not positive, or the grid is smaller than 4 cells.
+    void validate(const std::string& where) const;
+};
+
+/// What a cloth is made of, as the scene builders take it: continuum
+/// parameters, mapped onto any mesh by make_model, or - for the seed's
+/// presets - explicit grid springs that only exist on their own grid. For
+/// those, `params` holds their continuum equivalents (stretch, shear, mass;
+/// bending at its default: flexion springs have no continuum counterpart),
+/// which is what a garment made of that preset uses.
+struct Material {
+    FabricParams params;
+    std::optional<GridSprings> grid_springs;
+    Material() = default;
+    Material(const FabricParams& p) : params(p) {} // NOLINT: a continuum fabric is a material
+    Material(const FabricParams& p, const GridSprings& g) : params(p), grid_springs(g) {}
+};
+
+/// The grid-spring model on its own grid: structural, shear and flexion springs
+/// with the given constants, every node of mass `particle_mass`. `mesh` must be
+/// a grid mesh; `opt.bending` must not be Quadratic (these are spring constants).
+ClothModel make_grid_spring_model(const ClothMesh& mesh, const GridSprings& g, const ModelOptions& opt = {});
 
 } // namespace drape::cloth

@@ -1,16 +1,16 @@
 #pragma once
 // The one parameter table. Every physical fabric parameter is declared here once
-// (name, unit, bounds, default, doc); JSON I/O, the widget's property panel, the
-// estimator's bounds and the CLI all read this table.
+// (JSON key, unit, bounds, fit range, default, doc); preset JSON, the widget's
+// property panel, the estimator's fit variables and the CLI's --set all read
+// this table.
 //
 // Values are continuum, resolution-independent SI quantities. model.hpp turns
-// them into per-spring constants for a given mesh; the seed paper's 19 grid
-// constants are an import/export format (seed_format.hpp), not the core
-// representation.
+// them into per-element constants for a given mesh; the seed paper's 19 grid
+// constants are an import/export format (engine/fabric/seed_format.hpp), not
+// the core representation.
 #include <array>
 #include <string>
 #include <string_view>
-#include <vector>
 
 namespace drape::cloth {
 
@@ -37,29 +37,37 @@ enum class Param : int {
 inline constexpr int kParamCount = static_cast<int>(Param::Count);
 
 /// Declaration of one parameter.
+///
+/// Keys end in their unit: a product is written without a separator and a
+/// quotient after an underscore, so `bend_warp_Nm` is N*m, `stretch_warp_N_m`
+/// is N/m and `damp_stretch_Ns_m` is N*s/m.
 struct ParamSpec {
     Param id;
-    std::string_view key;   ///< JSON key (unit suffixed), e.g. "bend_warp_N_m"
-    std::string_view unit;  ///< display unit, e.g. "N*m"
-    double lower;           ///< smallest physically meaningful value
-    double upper;           ///< largest physically meaningful value
+    std::string_view key;        ///< JSON key, e.g. "bend_warp_Nm"
+    std::string_view legacy_key; ///< key of presets written before the unit-suffix rule ("" if unchanged); still read
+    std::string_view unit;       ///< display unit, e.g. "N*m"
+    double lower;                ///< smallest physically meaningful value
+    double upper;                ///< largest physically meaningful value
     double default_value;
-    bool log_scale;         ///< search on a log scale when fitting
-    bool affects_statics;   ///< false for dampers: they do not change a rest state
+    bool log_scale;              ///< search on a log scale when fitting
+    bool affects_statics;        ///< false for dampers: they do not change a rest state
+    /// Range a drape test can tell apart (the fit's bounds; lies inside [lower, upper]).
+    /// Equal to [lower, upper] where nothing narrower is known.
+    double fit_lower;
+    double fit_upper;
     std::string_view doc;
 };
 
 /// The table, in Param order.
 const std::array<ParamSpec, kParamCount>& param_table();
 const ParamSpec& spec(Param p);
-/// Looks a parameter up by JSON key; returns nullptr when unknown.
+/// Looks a parameter up by JSON key (or its legacy key); nullptr when unknown.
 const ParamSpec* find_param(std::string_view key);
 
-/// A full set of continuum fabric parameters (SI), with a name and free-form
-/// provenance kept as JSON text.
+/// A full set of continuum fabric parameters (SI). What the parameters are
+/// called and where they came from is the preset's business (engine/fabric).
 struct FabricParams {
     std::array<double, kParamCount> values{};
-    std::string name = "unnamed";
 
     FabricParams(); ///< all defaults
     double& operator[](Param p) { return values[static_cast<int>(p)]; }

@@ -1,6 +1,6 @@
-#include "solver.hpp"
+#include "engine/cloth/solver.hpp"
 
-#include "error.hpp"
+#include "engine/core/error.hpp"
 
 #include <Eigen/CholmodSupport>
 

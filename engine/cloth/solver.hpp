@@ -1,6 +1,6 @@
 #pragma once
 // Time integrators and the static (rest-state) solver.
-#include "system.hpp"
+#include "engine/cloth/system.hpp"
 
 #include <atomic>
 #include <functional>

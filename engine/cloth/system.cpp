@@ -1,6 +1,6 @@
-#include "system.hpp"
+#include "engine/cloth/system.hpp"
 
-#include "error.hpp"
+#include "engine/core/error.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -2,9 +2,9 @@
 // A cloth in a scene: mesh, model constants, colliders and the state (x, v).
 // Forces, energies and their derivatives live here; integrators and the static
 // solver (solver.hpp) drive it.
-#include "colliders.hpp"
-#include "mesh.hpp"
-#include "model.hpp"
+#include "engine/cloth/colliders.hpp"
+#include "engine/cloth/mesh.hpp"
+#include "engine/cloth/model.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>

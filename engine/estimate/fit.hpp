@@ -7,9 +7,9 @@
 // Method after Kuzmina, Tamas, Halasz, Grof (seed paper, section 5.4): "the
 // actual simulation parameters are defined by the minimum of the difference
 // between the modeled and the measured geometry".
-#include "measured.hpp"
-#include "objective.hpp"
-#include "residual.hpp"
+#include "engine/estimate/measured.hpp"
+#include "engine/estimate/objective.hpp"
+#include "engine/estimate/residual.hpp"
 
 #include "engine/cloth/drape.hpp"
 #include "engine/cloth/params.hpp"
@@ -142,6 +142,7 @@ struct RecordFit {
 };
 
 struct FitResult {
+    std::string name;                           ///< the preset's name (empty: the first record's id)
     cloth::FabricParams params;                 ///< best fit (areal density/thickness of the first record)
     std::vector<FitVariable> variables;
     Eigen::VectorXd best_coords;                ///< search coordinates of the optimum
@@ -176,9 +177,6 @@ struct FitResult {
 /// other sample/disc sizes). Throws ParameterError on no records or bad options.
 /// Cancellation (options.cancel) returns the best point so far with cancelled = true.
 FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options);
-
-/// Limits OpenBLAS (used by the sparse solver) to one thread when it is the BLAS in use.
-void single_threaded_blas();
 
 /// The parameters of `base` with areal density and thickness from the record.
 cloth::FabricParams params_for_record(const cloth::FabricParams& base, const MeasuredDrape& m);

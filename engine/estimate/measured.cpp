@@ -1,14 +1,9 @@
-#include "measured.hpp"
+#include "engine/estimate/measured.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
-#include "engine/cloth/units.hpp"
-
-#include <nlohmann/json.hpp>
-
-#ifdef DRAPE_ESTIMATE_HAVE_CAPTURE
 #include "engine/capture/measure.hpp"
-#endif
+#include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
+#include "engine/record/record.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -20,14 +15,7 @@
 
 namespace drape::estimate {
 
-using nlohmann::json;
 namespace fs = std::filesystem;
-
-Eigen::Vector2d PinholeCamera::project(const Eigen::Vector3d& X) const
-{
-    const Eigen::Vector3d c = R * X + t;
-    return {fx * c.x() / c.z() + cx, fy * c.y() / c.z() + cy};
-}
 
 cloth::DrapeSetup MeasuredDrape::setup(int grid, std::uint64_t seed) const
 {
@@ -55,160 +43,46 @@ std::vector<double> MeasuredDrape::depths() const
     return d;
 }
 
-namespace {
-
-const json& field(const json& j, const std::string& key, const std::string& where)
-{
-    if (!j.is_object() || !j.contains(key)) throw FileError(where + ": missing field '" + key + "'");
-    return j.at(key);
-}
-
-double number(const json& j, const std::string& key, const std::string& where)
-{
-    const json& v = field(j, key, where);
-    if (!v.is_number()) throw FileError(where + ": field '" + key + "' = " + v.dump() + " is not a number");
-    const double x = v.get<double>();
-    if (!std::isfinite(x)) throw FileError(where + ": field '" + key + "' is not finite");
-    return x;
-}
-
-double positive(const json& j, const std::string& key, const std::string& where)
-{
-    const double x = number(j, key, where);
-    if (!(x > 0)) throw ParameterError(where + ": field '" + key + "' = " + format_double(x) + " must be positive");
-    return x;
-}
-
-std::optional<PinholeCamera> read_camera(const json& cams, const std::string& name, const std::string& where)
-{
-    if (!cams.is_object() || !cams.contains(name)) return std::nullopt;
-    const json& c = cams[name];
-    const std::string w = where + ": cameras." + name;
-    PinholeCamera cam;
-    cam.fx = positive(c, "fx", w);
-    cam.fy = positive(c, "fy", w);
-    cam.cx = number(c, "cx", w);
-    cam.cy = number(c, "cy", w);
-    const json& R = field(c, "R_world_to_cam", w);
-    const json& t = field(c, "t_world_to_cam_mm", w);
-    if (!R.is_array() || R.size() != 3 || !t.is_array() || t.size() != 3)
-        throw FileError(w + ": R_world_to_cam must be 3x3 and t_world_to_cam_mm a 3-vector");
-    for (int i = 0; i < 3; ++i) {
-        if (!R[i].is_array() || R[i].size() != 3 || !t[i].is_number())
-            throw FileError(w + ": R_world_to_cam / t_world_to_cam_mm hold non-numbers");
-        for (int k = 0; k < 3; ++k) cam.R(i, k) = R[i][k].get<double>();
-        cam.t(i) = t[i].get<double>() * 1e-3;
-    }
-    if (c.contains("image_size") && c["image_size"].is_array() && c["image_size"].size() == 2) {
-        cam.width = c["image_size"][0].get<int>();
-        cam.height = c["image_size"][1].get<int>();
-    } else if (c.contains("width") && c.contains("height")) {
-        cam.width = c["width"].get<int>();
-        cam.height = c["height"].get<int>();
-    }
-    return cam;
-}
-
-} // namespace
-
 MeasuredDrape load_record(const std::string& dir, bool use_photos)
 {
-    const fs::path root(dir);
-    if (!fs::is_directory(root)) throw FileError(dir + ": not a record folder");
-    const std::string meta_path = (root / "meta.json").string();
-    json meta;
-    try {
-        meta = json::parse(cloth::read_file(meta_path));
-    } catch (const json::parse_error& e) {
-        throw FileError(meta_path + ": not valid JSON (" + e.what() + ")");
-    }
+    const record::Record rec = record::read_record(dir);
+    const std::string meta_path = (rec.dir / "meta.json").string();
     MeasuredDrape m;
     m.source = dir;
-    m.id = meta.contains("specimen_id") && meta["specimen_id"].is_string() ? meta["specimen_id"].get<std::string>()
-                                                                          : root.filename().string();
-    const json& conf = field(meta, "configuration", meta_path);
-    const std::string cw = meta_path + ": configuration";
-    m.sample_diameter = positive(conf, "specimen_diameter_D1_mm", cw) * 1e-3;
-    m.disc_diameter = positive(conf, "support_disc_diameter_D2_mm", cw) * 1e-3;
-    m.pedestal_height = conf.contains("pedestal_height_mm") ? positive(conf, "pedestal_height_mm", cw) * 1e-3 : 0.12;
-    if (m.sample_diameter <= m.disc_diameter)
-        throw ParameterError(cw + ": specimen_diameter_D1_mm = " + format_double(m.sample_diameter * 1e3) +
-                             " must exceed support_disc_diameter_D2_mm = " + format_double(m.disc_diameter * 1e3));
-    const json& fab = field(meta, "fabric", meta_path);
-    const std::string fw = meta_path + ": fabric";
-    m.areal_density = positive(fab, "areal_density_g_m2", fw) * 1e-3;
-    m.thickness = fab.contains("thickness_mm") ? positive(fab, "thickness_mm", fw) * 1e-3 : 0.5e-3;
-    if (meta.contains("lab_drape_coefficient_percent"))
-        m.drape_coefficient_percent = number(meta, "lab_drape_coefficient_percent", meta_path);
-    if (meta.contains("node_count")) {
-        m.node_count = static_cast<int>(number(meta, "node_count", meta_path));
+    m.id = rec.specimen_id;
+    m.sample_diameter = 2 * rec.R1;
+    m.disc_diameter = 2 * rec.R2;
+    m.pedestal_height = rec.pedestal_height;
+    if (!rec.areal_density)
+        throw FileError(meta_path + ": field 'fabric.areal_density_g_m2' is missing (a fit needs the fabric's weight)");
+    m.areal_density = *rec.areal_density;
+    m.thickness = rec.thickness.value_or(0.5e-3);
+    if (rec.lab_drape_coefficient_percent) m.drape_coefficient_percent = *rec.lab_drape_coefficient_percent;
+    if (rec.node_count) {
+        m.node_count = *rec.node_count;
         m.node_source = "meta.json";
     }
-    std::string contour_file = "contours.csv";
-    if (meta.contains("contours") && meta["contours"].is_object()) {
-        const json& c = meta["contours"];
-        if (c.contains("file") && c["file"].is_string()) contour_file = c["file"].get<std::string>();
-        if (c.contains("repeatability_sigma_mm")) m.laser_sigma_m = positive(c, "repeatability_sigma_mm", meta_path + ": contours") * 1e-3;
-    }
-    if (meta.contains("cameras")) m.top_camera = read_camera(meta["cameras"], "top", meta_path);
-    if (m.top_camera) {
-        std::string img = "top.jpg";
-        const json& c = meta["cameras"]["top"];
-        if (c.contains("image") && c["image"].is_string()) img = c["image"].get<std::string>();
-        if (fs::exists(root / img)) m.top_photo = (root / img).string();
+    m.laser_sigma_m = rec.contour_sigma;
+    if (const auto it = rec.cameras.find("top"); it != rec.cameras.end()) {
+        m.top_camera = it->second;
+        std::error_code ec;
+        if (const auto photo = rec.file(it->second.image); fs::is_regular_file(photo, ec)) m.top_photo = photo.string();
     }
 
-    // contours.csv: depth_mm,theta_deg,x_mm,y_mm
-    const std::string cpath = (root / contour_file).string();
-    std::istringstream in(cloth::read_file(cpath));
-    std::string line;
-    std::map<double, std::vector<std::pair<double, double>>> by_depth; // depth mm -> (theta deg, r m)
-    int lineno = 0;
-    while (std::getline(in, line)) {
-        ++lineno;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        if (line.empty()) continue;
-        if (lineno == 1 && line.find("depth") != std::string::npos) continue;
-        double v[4];
-        std::istringstream ls(line);
-        std::string cell;
-        for (int i = 0; i < 4; ++i) {
-            if (!std::getline(ls, cell, ',')) throw FileError(cpath + ":" + std::to_string(lineno) + ": expected 4 columns");
-            try {
-                std::size_t used = 0;
-                v[i] = std::stod(cell, &used);
-            } catch (const std::exception&) {
-                throw FileError(cpath + ":" + std::to_string(lineno) + ": '" + cell + "' is not a number");
-            }
-            if (!std::isfinite(v[i])) throw FileError(cpath + ":" + std::to_string(lineno) + ": non-finite value");
-        }
-        by_depth[v[0]].push_back({v[1], std::hypot(v[2], v[3]) * 1e-3});
-    }
-    for (auto& [depth_mm, rows] : by_depth) {
-        if (rows.size() < 8) throw FileError(cpath + ": depth " + format_double(depth_mm) + " mm has only " + std::to_string(rows.size()) + " rows");
-        const int N = static_cast<int>(rows.size());
-        const double step = 360.0 / N;
-        MeasuredContour c;
-        c.depth_m = depth_mm * 1e-3;
-        c.profile.r.assign(N, std::numeric_limits<double>::quiet_NaN());
-        for (const auto& [th, r] : rows) {
-            const double kk = th / step;
-            const int k = static_cast<int>(std::lround(kk));
-            if (std::abs(kk - k) > 1e-3 || k < 0 || k >= N)
-                throw FileError(cpath + ": depth " + format_double(depth_mm) + " mm: theta_deg = " + format_double(th) +
-                                " is not on the regular " + format_double(step) + " degree grid");
-            c.profile.r[k] = r;
-        }
-        if (!c.profile.complete()) throw FileError(cpath + ": depth " + format_double(depth_mm) + " mm has missing or repeated angles");
-        m.contours.push_back(std::move(c));
+    const std::string cpath = rec.file(rec.contours_file).string();
+    const record::ContourStack stack = record::read_contours(rec);
+    for (std::size_t d = 0; d < stack.depths.size(); ++d) {
+        // The profiler reports a depth only where the cut closes: every ray has its point.
+        if (!stack.profiles[d].complete())
+            throw FileError(cpath + ": depth " + format_value(stack.depths[d] * 1e3) + " mm has missing angles (" +
+                            std::to_string(stack.points[d].size()) + " of " + std::to_string(stack.profiles[d].size()) + " rays)");
+        m.contours.push_back({stack.depths[d], stack.profiles[d]});
     }
     if (m.contours.empty()) throw FileError(cpath + ": no contours");
-#ifdef DRAPE_ESTIMATE_HAVE_CAPTURE
     if (use_photos && m.node_count < 0) {
         // The photos: node count from the top view's perspective-corrected
         // outline, lowest hem point from the side view (capture layer).
         try {
-            const capture::Record rec = capture::read_record(root);
             const capture::MeasureOptions mo;
             const capture::Measurement cm = capture::measure_record(rec, mo);
             if (cm.top.measured) {
@@ -223,13 +97,10 @@ MeasuredDrape load_record(const std::string& dir, bool use_photos)
             }
             for (const auto& w : cm.warnings) m.notes.push_back("capture: " + w);
             for (const auto& w : cm.not_measured) m.notes.push_back("capture: not measured: " + w);
-        } catch (const std::exception& e) {
+        } catch (const drape::Error& e) {
             m.notes.push_back(std::string("capture failed, contours only: ") + e.what());
         }
     }
-#else
-    (void)use_photos;
-#endif
     if (m.node_count < 0) m.node_source = "crests of the deepest contour";
     return m;
 }

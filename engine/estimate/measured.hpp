@@ -6,6 +6,7 @@
 // like with like.
 #include "engine/cloth/drape.hpp"
 #include "engine/cloth/metrics.hpp"
+#include "engine/record/record.hpp"
 
 #include <Eigen/Core>
 
@@ -22,15 +23,6 @@ namespace drape::estimate {
 struct MeasuredContour {
     double depth_m = 0;           ///< [m] below the pedestal top
     cloth::RadialProfile profile; ///< r(theta) [m], theta_k = 2 pi k / N from +x (warp) towards +y (weft)
-};
-
-/// Pinhole camera (world -> pixel), OpenCV convention, world in metres.
-struct PinholeCamera {
-    double fx = 0, fy = 0, cx = 0, cy = 0; ///< [px]
-    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-    Eigen::Vector3d t = Eigen::Vector3d::Zero(); ///< [m]
-    int width = 0, height = 0;                   ///< [px]
-    Eigen::Vector2d project(const Eigen::Vector3d& X_world_m) const;
 };
 
 /// Measured quantities of one record. NaN / -1 mark quantities the record lacks.
@@ -62,7 +54,7 @@ struct MeasuredDrape {
     /// axis is estimated instead of read as fold shape. Off by default: a centred
     /// stack keeps its harmonic 1, which is information about the drape.
     bool recentre_contours = false;
-    std::optional<PinholeCamera> top_camera; ///< calibration of the top photo, for overlays
+    std::optional<record::Camera> top_camera; ///< calibration of the top photo, for overlays
     std::string top_photo;           ///< path of top.jpg ("" if none)
 
     /// The drape set-up this record was measured on, simulated at `grid` with perturbation `seed`.
@@ -74,13 +66,13 @@ struct MeasuredDrape {
 /// rounded count when it is in 2..16, else 0 (start from the random mix).
 int measured_fold_branch(double node_count);
 
-/// Reads a lab record folder (meta.json + contours.csv, format of
-/// shared/data/drape-lab/README.md; mm -> m, g/m^2 -> kg/m^2). Throws
-/// FileError / ParameterError naming the file, field and value.
-/// When the capture layer is built (drape_capture) and `use_photos`, the node
-/// count comes from the top photo and the hem height from the side photo
-/// (capture::measure_record); otherwise the node count is that of the deepest
-/// contour and the hem is not used.
+/// Reads a lab record folder through the one record reader (record::read_record,
+/// record::read_contours; format of shared/data/drape-lab/README.md). Throws
+/// FileError / ParameterError naming the file, field and value. With
+/// `use_photos` the node count comes from the top photo and the hem height from
+/// the side photo (capture::measure_record); otherwise (or when the photos
+/// cannot be measured) the node count is that of the deepest contour and the
+/// hem is not used.
 MeasuredDrape load_record(const std::string& dir, bool use_photos = true);
 
 /// Turns a simulated drape into a record, as the lab would measure it: the

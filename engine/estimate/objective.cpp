@@ -1,6 +1,6 @@
-#include "objective.hpp"
+#include "engine/estimate/objective.hpp"
 
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -31,45 +31,29 @@ std::string to_string(ModelVariant v)
 
 std::vector<FitVariable> fit_variables(ModelVariant v)
 {
-    // Fit bounds: the table's bounds narrowed to what a 300 mm drape test can
-    // tell apart. Below 1e-8 N*m a fabric drapes like a liquid sheet (D at its
-    // floor); the upper bound is the table's 1e-2 N*m (heavy stiff fabrics of
-    // set-a need up to ~1e-3 N*m along one axis). Shear: woven apparel fabrics
-    // have a KES-FB1 shear stiffness G of about 0.2-5 gf/(cm*deg), i.e.
-    // 11-280 N/m (1 gf/(cm*deg) = 56.2 N/m per radian; Kawabata's
-    // measurements as summarised in textile handbooks); the bounds keep a decade of
-    // margin below (1 N/m) and above 1e3 N/m the fold pattern no longer
-    // changes. Below 1 N/m a sheet drapes like a net (D 11 % at grid 25 with
-    // 0.1 N/m) and the static solver needs ~1000 iterations per drape.
-    auto clamp = [](Param p, double lo, double hi) {
-        const auto& s = cloth::spec(p);
-        return std::pair{std::max(lo, s.lower), std::min(hi, s.upper)};
-    };
+    // The fit ranges are the parameter table's (cloth/params.cpp says why
+    // each is what a drape test can tell apart). Log-scaled parameters are
+    // searched in log10; the radii linearly, so 0 (the seed's linear bending)
+    // stays reachable.
     std::vector<FitVariable> out;
-    auto add_log = [&](std::string name, std::vector<Param> ps, double lo, double hi) {
-        const auto [l, h] = clamp(ps.front(), lo, hi);
-        out.push_back({std::move(name), std::move(ps), true, std::log10(l), std::log10(h)});
+    auto add = [&](Param p) {
+        const auto& s = cloth::spec(p);
+        FitVariable f;
+        f.name = std::string(s.key);
+        f.params = {p};
+        f.log_scale = s.log_scale;
+        f.lower = s.log_scale ? std::log10(s.fit_lower) : s.fit_lower;
+        f.upper = s.log_scale ? std::log10(s.fit_upper) : s.fit_upper;
+        out.push_back(std::move(f));
     };
-    add_log("bend_warp_N_m", {Param::BendWarp}, 1e-8, 1e-2);
-    add_log("bend_weft_N_m", {Param::BendWeft}, 1e-8, 1e-2);
-    add_log("shear_N_m", {Param::Shear}, 1.0, 1e3);
-    if (v == ModelVariant::Stiffening || v == ModelVariant::Full) {
-        // Stiffening bending (issue 7): the radius of curvature at which M/kappa
-        // doubles, searched linearly from 0 (the seed's linear bending) to 30 mm
-        // (beyond it the term dominates every drape curvature; a linear search keeps
-        // 0 reachable, which a log scale would not).
-        const auto [l, h] = clamp(Param::BendStiffeningRadius, 0.0, 0.03);
-        out.push_back({"bend_stiffening_radius_m", {Param::BendStiffeningRadius}, false, l, h});
-    }
-    if (v == ModelVariant::Softening) {
-        // Yielding bending: the radius below which the moment saturates at B / rho,
-        // linear from 0 (the seed's linear bending) to 30 mm.
-        const auto [l, h] = clamp(Param::BendSofteningRadius, 0.0, 0.03);
-        out.push_back({"bend_softening_radius_m", {Param::BendSofteningRadius}, false, l, h});
-    }
+    add(Param::BendWarp);
+    add(Param::BendWeft);
+    add(Param::Shear);
+    if (v == ModelVariant::Stiffening || v == ModelVariant::Full) add(Param::BendStiffeningRadius);
+    if (v == ModelVariant::Softening) add(Param::BendSofteningRadius);
     if (v == ModelVariant::Full) {
-        add_log("stretch_warp_N_m", {Param::StretchWarp}, 30, 1e5);
-        add_log("stretch_weft_N_m", {Param::StretchWeft}, 30, 1e5);
+        add(Param::StretchWarp);
+        add(Param::StretchWeft);
     }
     return out;
 }

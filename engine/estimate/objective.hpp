@@ -2,7 +2,7 @@
 // Parameter space and objective of the fit: which parameters a drape test can
 // constrain, and the whitened residual vector (simulated minus measured, each
 // divided by its noise) whose sum of squares the optimizer minimises.
-#include "measured.hpp"
+#include "engine/estimate/measured.hpp"
 
 #include "engine/cloth/params.hpp"
 
@@ -24,10 +24,10 @@ ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "st
 std::string to_string(ModelVariant v);
 
 /// One fitted coordinate: a parameter (or a tied group, e.g. stretch warp and
-/// weft together) searched in log10 (or linear) space within fit bounds that are
-/// the parameter table's bounds narrowed to what a drape test can see.
+/// weft together) searched in log10 (or linear) space within the parameter
+/// table's fit range (cloth::ParamSpec::fit_lower/fit_upper).
 struct FitVariable {
-    std::string name;                ///< e.g. "bend_warp_N_m"
+    std::string name;                ///< the parameter's key, e.g. "bend_warp_Nm"
     std::vector<cloth::Param> params;///< set together (tied)
     bool log_scale = true;
     double lower = 0, upper = 0;     ///< fit bounds in search coordinates (log10 of the value when log_scale)

@@ -1,6 +1,6 @@
-#include "plot.hpp"
+#include "engine/estimate/plot.hpp"
 
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>

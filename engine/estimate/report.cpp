@@ -1,9 +1,10 @@
-#include "report.hpp"
+#include "engine/estimate/report.hpp"
 
-#include "plot.hpp"
+#include "engine/estimate/plot.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
+#include "engine/fabric/preset.hpp"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -136,7 +137,7 @@ bool top_overlay(const RecordFit& rf, double rot, const std::string& path)
     if (!rf.measured.top_camera || rf.measured.top_photo.empty()) return false;
     cv::Mat img = cv::imread(rf.measured.top_photo, cv::IMREAD_COLOR);
     if (img.empty()) return false;
-    const PinholeCamera& cam = *rf.measured.top_camera;
+    const record::Camera& cam = *rf.measured.top_camera;
     auto draw = [&](const std::vector<Eigen::Vector3d>& pts, cv::Scalar c, int t, bool closed) {
         std::vector<cv::Point> px;
         for (const auto& p : pts) {
@@ -306,7 +307,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
     std::vector<std::string> files;
     const fs::path root(dir);
     std::ostringstream md;
-    md << "# Fit report: " << r.params.name << "\n\n";
+    md << "# Fit report: " << r.name << "\n\n";
     md << "Model `" << to_string(r.options.model) << "`, grid " << r.options.grid << ", seed " << r.options.seed << ", "
        << r.options.seeds_per_evaluation << " perturbation seeds per evaluation. " << r.evaluations << " evaluations, "
        << r.simulations << " simulations, " << num(r.seconds_per_simulation, "%.2f") << " s per simulation, "
@@ -440,8 +441,8 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
         terms.push_back({{"record", t.record}, {"kind", t.kind}, {"depth_m", t.depth_m}, {"harmonic", t.harmonic}, {"simulated", t.simulated},
                          {"measured", t.measured}, {"sigma", t.sigma}, {"whitened", t.whitened()}, {"fitted", t.fitted}});
     rep["residual_terms"] = terms;
-    cloth::write_file_atomic((root / "report.json").string(), rep.dump(2) + "\n");
-    cloth::write_file_atomic((root / "report.md").string(), md.str());
+    drape::write_file_atomic((root / "report.json").string(), rep.dump(2) + "\n");
+    drape::write_file_atomic((root / "report.md").string(), md.str());
     files.push_back("report.json");
     files.push_back("report.md");
     return files;

@@ -3,7 +3,7 @@
 // top photo when the record has a calibrated one, else a plot), r(theta) per
 // depth measured vs fitted, the residual per harmonic; the parameter table with
 // intervals; as PNG plots, report.json and a readable report.md.
-#include "fit.hpp"
+#include "engine/estimate/fit.hpp"
 
 #include <string>
 #include <vector>

@@ -1,4 +1,4 @@
-#include "residual.hpp"
+#include "engine/estimate/residual.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 // Residual analysis of a fit (issue 7): is what the model leaves over larger
 // than the measurement noise, where is it structured (harmonics, depths,
 // channels), and which missing effects is that structure consistent with.
-#include "objective.hpp"
+#include "engine/estimate/objective.hpp"
 
 #include <nlohmann/json.hpp>
 

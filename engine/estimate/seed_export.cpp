@@ -1,8 +1,8 @@
-#include "seed_export.hpp"
+#include "engine/estimate/seed_export.hpp"
 
-#include "root.hpp"
+#include "engine/estimate/root.hpp"
 
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,18 +12,18 @@ namespace drape::estimate {
 
 using cloth::Param;
 
-cloth::SeedParams seed_without_flexion(const cloth::FabricParams& p, double sample_diameter_m, int patches)
+fabric::SeedParams seed_without_flexion(const cloth::FabricParams& p, double sample_diameter_m, int patches)
 {
     if (patches < 4) throw ParameterError("seed export: " + std::to_string(patches) + " patches across is below 4");
     if (!(sample_diameter_m > 0)) throw ParameterError("seed export: sample diameter must be positive");
-    cloth::SeedParams s;
+    fabric::SeedParams s;
     s.w = s.h = sample_diameter_m * 100.0; // cm
     s.u = s.v = patches;
     s.x0 = -s.w / 2;
     s.y0 = s.h / 2;
     s.z0 = 0;
     const double h = s.hu_m(); // square patches: ksh = 1
-    s.cloth_over_mass = cloth::kSeedMassUnitKg / (p[Param::AreaDensity] * h * h);
+    s.cloth_over_mass = fabric::kSeedMassUnitKg / (p[Param::AreaDensity] * h * h);
     const double G = p[Param::Shear];
     s.ssh_k = G;
     s.sst_ku = p[Param::StretchWarp] - G;
@@ -40,7 +40,7 @@ cloth::SeedParams seed_without_flexion(const cloth::FabricParams& p, double samp
 }
 
 namespace {
-double mean_dc(const cloth::FabricSpec& f, const cloth::DrapeSetup& setup, const cloth::ModelOptions& mo, int seeds, int& sims)
+double mean_dc(const cloth::Material& f, const cloth::DrapeSetup& setup, const cloth::ModelOptions& mo, int seeds, int& sims)
 {
     double d = 0;
     for (int k = 0; k < seeds; ++k) {
@@ -70,14 +70,15 @@ SeedExport export_seed(const cloth::FabricParams& p, const cloth::DrapeSetup& se
     // Warp : weft flexion in the ratio of the bending rigidities.
     const double ratio = std::sqrt(std::max(p[Param::BendWarp], 1e-30) / std::max(p[Param::BendWeft], 1e-30));
     auto with_k = [&](double log_k) {
-        cloth::SeedParams s = out.seed;
+        fabric::SeedParams s = out.seed;
         const double k = std::pow(10.0, log_k);
         s.sfl_ku = k * ratio;
         s.sfl_kv = k / ratio;
         return s;
     };
     auto err = [&](double log_k) {
-        const double d = mean_dc(with_k(log_k), setup, mo, seeds, out.simulations);
+        const fabric::SeedParams sk = with_k(log_k);
+        const double d = mean_dc(cloth::Material(fabric::continuum_from_seed(sk), fabric::grid_springs(sk)), setup, mo, seeds, out.simulations);
         std::snprintf(buf, sizeof buf, "flexion %.3g N/m: D %.1f %%", std::pow(10.0, log_k), d);
         say(buf);
         return d - out.target_dc_percent;

@@ -17,7 +17,7 @@
 // exported and the result says it did not match.
 #include "engine/cloth/drape.hpp"
 #include "engine/cloth/params.hpp"
-#include "engine/cloth/seed_format.hpp"
+#include "engine/fabric/seed_format.hpp"
 
 #include <functional>
 #include <string>
@@ -25,7 +25,7 @@
 namespace drape::estimate {
 
 struct SeedExport {
-    cloth::SeedParams seed;
+    fabric::SeedParams seed;
     double target_dc_percent = 0;   ///< the preset's D on the set-up (seed-averaged)
     double seed_dc_percent = 0;     ///< the exported seed constants' D
     bool matched = false;           ///< |seed D - target D| <= tolerance
@@ -42,6 +42,6 @@ SeedExport export_seed(const cloth::FabricParams& p, const cloth::DrapeSetup& se
 
 /// The exact part only: mass, structural and shear springs, dampers; flexion
 /// constants 0. Exposed for tests (continuum_from_seed inverts it).
-cloth::SeedParams seed_without_flexion(const cloth::FabricParams& p, double sample_diameter_m, int patches);
+fabric::SeedParams seed_without_flexion(const cloth::FabricParams& p, double sample_diameter_m, int patches);
 
 } // namespace drape::estimate

@@ -1,17 +1,17 @@
-#include "sensitivity.hpp"
+#include "engine/estimate/sensitivity.hpp"
 
-#include "fit.hpp"
-#include "plot.hpp"
+#include "engine/estimate/plot.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/cloth/blas_threads.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
+#include "engine/core/parallel.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <mutex>
 #include <sstream>
-#include <thread>
 
 namespace drape::estimate {
 
@@ -24,7 +24,7 @@ std::vector<SensitivityRow> sensitivity_study(const cloth::FabricParams& base, c
         throw ParameterError("sensitivity: span = " + std::to_string(opt.span_decades) + " decades is outside (0, 4]");
     base.validate("sensitivity: base fabric");
     opt.setup.validate();
-    single_threaded_blas();
+    cloth::single_threaded_blas();
     std::vector<SensitivityRow> rows;
     for (Param p : opt.params) {
         const auto& sp = cloth::spec(p);
@@ -42,16 +42,10 @@ std::vector<SensitivityRow> sensitivity_study(const cloth::FabricParams& base, c
         }
     }
     std::mutex mu;
-    std::size_t next = 0;
     int done = 0;
-    auto worker = [&] {
-        for (;;) {
-            std::size_t j;
-            {
-                std::lock_guard lk(mu);
-                if (next >= rows.size() || (opt.cancel && opt.cancel->load())) return;
-                j = next++;
-            }
+    parallel_for(
+        rows.size(), opt.threads,
+        [&](std::size_t j) {
             SensitivityRow& r = rows[j];
             cloth::FabricParams p = base;
             p[r.param] = r.value;
@@ -67,12 +61,8 @@ std::vector<SensitivityRow> sensitivity_study(const cloth::FabricParams& base, c
             std::lock_guard lk(mu);
             ++done;
             if (opt.progress) opt.progress(done, static_cast<int>(rows.size()));
-        }
-    };
-    std::vector<std::thread> pool;
-    for (int i = 1; i < std::max(1, opt.threads); ++i) pool.emplace_back(worker);
-    worker();
-    for (auto& t : pool) t.join();
+        },
+        [&] { return opt.cancel && opt.cancel->load(); });
     return rows;
 }
 
@@ -96,7 +86,7 @@ std::vector<std::string> write_sensitivity(const std::vector<SensitivityRow>& ro
         for (int k = 0; k < K; ++k) csv << "," << (k < static_cast<int>(r.harmonic_magnitudes_m.size()) ? r.harmonic_magnitudes_m[k] : 0.0);
         csv << "\n";
     }
-    cloth::write_file_atomic((std::filesystem::path(dir) / "sensitivity.csv").string(), csv.str());
+    drape::write_file_atomic((std::filesystem::path(dir) / "sensitivity.csv").string(), csv.str());
     files.push_back("sensitivity.csv");
     std::vector<Param> params;
     for (const auto& r : rows)

@@ -1,7 +1,10 @@
-#include "fabric_library.hpp"
+#include "engine/library/fabric_library.hpp"
 
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/units.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
+#include "engine/core/units.hpp"
+#include "engine/library/schema.hpp"
+#include "engine/library/sqlite.hpp"
 
 #include <sqlite3.h>
 
@@ -16,132 +19,14 @@
 namespace drape::library {
 
 using nlohmann::json;
+using sql::exec;
+using sql::pragma_int;
+using sql::Stmt;
+using sql::Transaction;
 
 namespace {
 
 constexpr const char* kLibraryFormat = "drapekit-fabric-library";
-
-/// Thin RAII statement. Every error becomes a FileError naming the library file.
-class Stmt {
-public:
-    Stmt(sqlite3* db, const std::string& path, const std::string& sql) : m_db(db), m_path(path)
-    {
-        if (sqlite3_prepare_v2(db, sql.c_str(), static_cast<int>(sql.size()), &m_s, nullptr) != SQLITE_OK)
-            fail("prepare");
-    }
-    ~Stmt() { sqlite3_finalize(m_s); }
-    Stmt(const Stmt&) = delete;
-    Stmt& operator=(const Stmt&) = delete;
-
-    Stmt& bind(int i, const std::string& v)
-    {
-        check(sqlite3_bind_text(m_s, i, v.c_str(), static_cast<int>(v.size()), SQLITE_TRANSIENT), "bind");
-        return *this;
-    }
-    Stmt& bind(int i, double v)
-    {
-        check(sqlite3_bind_double(m_s, i, v), "bind");
-        return *this;
-    }
-    Stmt& bind(int i, std::int64_t v)
-    {
-        check(sqlite3_bind_int64(m_s, i, v), "bind");
-        return *this;
-    }
-    Stmt& bind(int i, const std::optional<double>& v)
-    {
-        if (v) return bind(i, *v);
-        check(sqlite3_bind_null(m_s, i), "bind");
-        return *this;
-    }
-    /// True while there is a row.
-    bool step()
-    {
-        const int rc = sqlite3_step(m_s);
-        if (rc == SQLITE_ROW) return true;
-        if (rc == SQLITE_DONE) return false;
-        fail("step");
-    }
-    void run()
-    {
-        while (step()) {
-        }
-    }
-    std::string text(int c) const
-    {
-        const auto* t = sqlite3_column_text(m_s, c);
-        return t ? std::string(reinterpret_cast<const char*>(t), static_cast<std::size_t>(sqlite3_column_bytes(m_s, c)))
-                 : std::string();
-    }
-    double real(int c) const { return sqlite3_column_double(m_s, c); }
-    std::int64_t integer(int c) const { return sqlite3_column_int64(m_s, c); }
-    std::optional<double> opt_real(int c) const
-    {
-        if (sqlite3_column_type(m_s, c) == SQLITE_NULL) return std::nullopt;
-        return real(c);
-    }
-
-private:
-    void check(int rc, const char* what)
-    {
-        if (rc != SQLITE_OK) fail(what);
-    }
-    [[noreturn]] void fail(const char* what)
-    {
-        const int code = sqlite3_extended_errcode(m_db);
-        std::string msg = m_path + ": database error (" + what + "): " + sqlite3_errmsg(m_db);
-        if ((code & 0xff) == SQLITE_FULL) msg += "; the write was rolled back and the library is unchanged";
-        throw FileError(msg);
-    }
-    sqlite3* m_db;
-    const std::string& m_path;
-    sqlite3_stmt* m_s = nullptr;
-};
-
-void exec(sqlite3* db, const std::string& path, const std::string& sql)
-{
-    char* err = nullptr;
-    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
-        const std::string m = err ? err : sqlite3_errmsg(db);
-        sqlite3_free(err);
-        std::string msg = path + ": database error: " + m + " (in: " + sql.substr(0, 60) + ")";
-        if ((sqlite3_extended_errcode(db) & 0xff) == SQLITE_FULL)
-            msg += "; the write was rolled back and the library is unchanged";
-        throw FileError(msg);
-    }
-}
-
-std::int64_t pragma_int(sqlite3* db, const std::string& path, const std::string& pragma)
-{
-    Stmt s(db, path, "PRAGMA " + pragma);
-    return s.step() ? s.integer(0) : 0;
-}
-
-/// One transaction: rolled back unless commit() ran, so an exception in the
-/// middle of a write leaves the database as it was.
-class Transaction {
-public:
-    Transaction(sqlite3* db, const std::string& path, bool write) : m_db(db), m_path(path)
-    {
-        // IMMEDIATE takes the write lock up front, so two writers queue on the
-        // busy timeout instead of failing with a deadlock on lock upgrade.
-        exec(db, path, write ? "BEGIN IMMEDIATE" : "BEGIN");
-    }
-    ~Transaction()
-    {
-        if (!m_done) sqlite3_exec(m_db, "ROLLBACK", nullptr, nullptr, nullptr);
-    }
-    void commit()
-    {
-        exec(m_db, m_path, "COMMIT");
-        m_done = true;
-    }
-
-private:
-    sqlite3* m_db;
-    const std::string& m_path;
-    bool m_done = false;
-};
 
 std::string now_utc()
 {
@@ -170,24 +55,6 @@ std::string like_pattern(const std::string& s)
     return out + "%";
 }
 
-struct Derived {
-    std::string format, composition;
-    double weight = 0;
-    std::optional<double> drape, fit;
-};
-
-Derived derive(const cloth::FabricPreset& p)
-{
-    Derived d;
-    d.format = std::holds_alternative<cloth::SeedParams>(p.fabric) ? "seed-19" : "drapekit-fabric";
-    if (p.extra.contains("composition") && p.extra["composition"].is_string())
-        d.composition = p.extra["composition"].get<std::string>();
-    d.weight = areal_density_of(p);
-    d.drape = drape_coefficient_of(p);
-    d.fit = fit_quality_of(p);
-    return d;
-}
-
 const char* const kColumns =
     "id, name, composition, format, areal_density, drape_coefficient, fit_quality, created, modified, revision, preset";
 
@@ -199,74 +66,15 @@ FabricRecord read_record(const Stmt& s, const std::string& path)
     r.composition = s.text(2);
     r.format = s.text(3);
     r.areal_density_kg_m2 = s.real(4);
-    r.drape_coefficient = s.opt_real(5);
+    r.drape_coefficient_percent = s.opt_real(5);
     r.fit_quality = s.opt_real(6);
     r.created = s.text(7);
     r.modified = s.text(8);
     r.revision = static_cast<int>(s.integer(9));
     const std::string where = path + ": fabric '" + r.name + "'";
-    try {
-        r.preset_json = json::parse(s.text(10));
-    } catch (const json::parse_error& e) {
-        throw FileError(where + ": stored preset is not valid JSON (" + e.what() + ")");
-    }
-    r.preset = cloth::fabric_from_json(r.preset_json, where);
+    r.preset_json = parse_json(s.text(10), where + " (stored preset)");
+    r.preset = fabric::fabric_from_json(r.preset_json, where);
     return r;
-}
-
-/// Migration i takes the schema from version i to i + 1. Append, never edit.
-using Migration = std::function<void(sqlite3*, const std::string&)>;
-
-const std::vector<Migration>& migrations()
-{
-    static const std::vector<Migration> m = {
-        // 0 -> 1: the first schema, presets stored verbatim.
-        [](sqlite3* db, const std::string& path) {
-            exec(db, path,
-                 "CREATE TABLE fabrics ("
-                 " id INTEGER PRIMARY KEY,"
-                 " name TEXT NOT NULL UNIQUE COLLATE NOCASE,"
-                 " preset TEXT NOT NULL,"
-                 " created TEXT NOT NULL,"
-                 " modified TEXT NOT NULL)");
-        },
-        // 1 -> 2: searchable columns derived from the preset, filled in for the
-        // rows an older Drapekit wrote.
-        [](sqlite3* db, const std::string& path) {
-            exec(db, path,
-                 "ALTER TABLE fabrics ADD COLUMN format TEXT NOT NULL DEFAULT 'drapekit-fabric';"
-                 "ALTER TABLE fabrics ADD COLUMN composition TEXT NOT NULL DEFAULT '';"
-                 "ALTER TABLE fabrics ADD COLUMN areal_density REAL NOT NULL DEFAULT 0;"
-                 "ALTER TABLE fabrics ADD COLUMN drape_coefficient REAL;"
-                 "ALTER TABLE fabrics ADD COLUMN fit_quality REAL;"
-                 "ALTER TABLE fabrics ADD COLUMN revision INTEGER NOT NULL DEFAULT 1;"
-                 "CREATE INDEX fabrics_weight ON fabrics(areal_density);"
-                 "CREATE INDEX fabrics_drape ON fabrics(drape_coefficient);"
-                 "CREATE INDEX fabrics_modified ON fabrics(modified);");
-            std::vector<std::pair<std::int64_t, Derived>> rows;
-            {
-                Stmt s(db, path, "SELECT id, name, preset FROM fabrics");
-                while (s.step()) {
-                    const std::string where = path + ": fabric '" + s.text(1) + "'";
-                    json j;
-                    try {
-                        j = json::parse(s.text(2));
-                    } catch (const json::parse_error& e) {
-                        throw FileError(where + ": stored preset is not valid JSON (" + e.what() + ")");
-                    }
-                    rows.emplace_back(s.integer(0), derive(cloth::fabric_from_json(j, where)));
-                }
-            }
-            for (const auto& [id, d] : rows) {
-                Stmt u(db, path,
-                       "UPDATE fabrics SET format = ?1, composition = ?2, areal_density = ?3, drape_coefficient = ?4,"
-                       " fit_quality = ?5 WHERE id = ?6");
-                u.bind(1, d.format).bind(2, d.composition).bind(3, d.weight).bind(4, d.drape).bind(5, d.fit).bind(6, id);
-                u.run();
-            }
-        },
-    };
-    return m;
 }
 
 } // namespace
@@ -279,58 +87,6 @@ std::string default_library_path()
     if (const char* x = std::getenv("XDG_DATA_HOME"); x && *x) return std::string(x) + "/drapekit/library.sqlite";
     if (const char* h = std::getenv("HOME"); h && *h) return std::string(h) + "/.local/share/drapekit/library.sqlite";
     return "drapekit-library.sqlite";
-}
-
-std::string preset_name(const cloth::FabricPreset& p)
-{
-    if (const auto* f = std::get_if<cloth::FabricParams>(&p.fabric)) return f->name;
-    if (p.extra.contains("name") && p.extra["name"].is_string()) return p.extra["name"].get<std::string>();
-    return {};
-}
-
-void set_preset_name(cloth::FabricPreset& p, const std::string& name)
-{
-    if (auto* f = std::get_if<cloth::FabricParams>(&p.fabric)) {
-        f->name = name;
-        if (p.extra.contains("name")) p.extra.erase("name");
-    } else {
-        p.extra["name"] = name;
-    }
-}
-
-double areal_density_of(const cloth::FabricPreset& p)
-{
-    if (const auto* f = std::get_if<cloth::FabricParams>(&p.fabric)) return (*f)[cloth::Param::AreaDensity];
-    // The engine's one mapping from the seed's grid constants (seed_format.hpp).
-    return cloth::continuum_from_seed(std::get<cloth::SeedParams>(p.fabric))[cloth::Param::AreaDensity];
-}
-
-namespace {
-std::optional<double> finite_number(const json& j)
-{
-    if (j.is_number() && std::isfinite(j.get<double>())) return j.get<double>();
-    return std::nullopt;
-}
-} // namespace
-
-std::optional<double> drape_coefficient_of(const cloth::FabricPreset& p)
-{
-    if (!p.extra.contains("drape_coefficient")) return std::nullopt;
-    const json& d = p.extra["drape_coefficient"];
-    if (d.is_object() && d.contains("value")) return finite_number(d["value"]);
-    return finite_number(d);
-}
-
-std::optional<double> fit_quality_of(const cloth::FabricPreset& p)
-{
-    if (p.extra.contains("fit") && p.extra["fit"].is_object()) {
-        const json& f = p.extra["fit"];
-        for (const char* k : {"quality", "rms_m", "rms"})
-            if (f.contains(k))
-                if (auto v = finite_number(f[k])) return v;
-    }
-    if (p.extra.contains("fit_quality")) return finite_number(p.extra["fit_quality"]);
-    return std::nullopt;
 }
 
 void validate_name(const std::string& name)
@@ -375,11 +131,10 @@ FabricLibrary::FabricLibrary(const std::string& path, Mode mode) : m_path(path),
             exec(m_db, m_path, "PRAGMA query_only=1");
         }
         migrate();
-    } catch (const FileError& e) {
+    } catch (const sql::DatabaseError& e) {
         sqlite3_close(m_db);
         m_db = nullptr;
-        const std::string what = e.what();
-        if (what.find("file is not a database") != std::string::npos)
+        if (e.primary_code() == SQLITE_NOTADB)
             throw FileError(path + ": not a fabric library (not a SQLite database, or a damaged one)");
         throw;
     } catch (...) {
@@ -436,18 +191,18 @@ void FabricLibrary::migrate()
     if (!write)
         throw FileError(m_path + ": schema version " + std::to_string(version) + " needs migrating to " +
                         std::to_string(kSchemaVersion) + "; open it read-write once");
-    for (auto v = version; v < kSchemaVersion; ++v) migrations()[static_cast<std::size_t>(v)](m_db, m_path);
+    migrate_schema(m_db, m_path, version, kSchemaVersion);
     exec(m_db, m_path, "PRAGMA application_id=" + std::to_string(kApplicationId));
     exec(m_db, m_path, "PRAGMA user_version=" + std::to_string(kSchemaVersion));
     tx.commit();
 }
 
-std::int64_t FabricLibrary::put(const cloth::FabricPreset& in, const std::string& name_in, OnConflict on_conflict,
+std::int64_t FabricLibrary::put(const fabric::FabricPreset& in, const std::string& name_in, OnConflict on_conflict,
                                 ImportReport* report)
 {
-    std::string name = name_in.empty() ? preset_name(in) : name_in;
+    std::string name = name_in.empty() ? in.name : name_in;
     validate_name(name);
-    cloth::FabricPreset preset = in;
+    fabric::FabricPreset preset = in;
 
     std::int64_t existing = -1; // row id of a fabric with this name, -1 when none
     {
@@ -481,18 +236,18 @@ std::int64_t FabricLibrary::put(const cloth::FabricPreset& in, const std::string
             break;
         }
     }
-    set_preset_name(preset, name);
-    const json j = cloth::fabric_to_json(preset);
+    preset.name = name;
+    const json j = fabric::fabric_to_json(preset);
     // What is stored must read back: the same check a later read applies.
-    const cloth::FabricPreset check = cloth::fabric_from_json(j, m_path + ": fabric '" + name + "'");
-    const Derived d = derive(check);
+    const fabric::FabricPreset check = fabric::fabric_from_json(j, m_path + ": fabric '" + name + "'");
+    const Columns d = derive_columns(check);
     const std::string now = now_utc();
     std::int64_t id = 0;
     if (existing >= 0) {
         Stmt u(m_db, m_path,
                "UPDATE fabrics SET preset = ?1, format = ?2, composition = ?3, areal_density = ?4, drape_coefficient = ?5,"
                " fit_quality = ?6, modified = ?7, revision = revision + 1 WHERE id = ?8");
-        u.bind(1, j.dump()).bind(2, d.format).bind(3, d.composition).bind(4, d.weight).bind(5, d.drape).bind(6, d.fit);
+        u.bind(1, j.dump()).bind(2, d.format).bind(3, d.composition).bind(4, d.weight).bind(5, d.drape_percent).bind(6, d.fit_quality);
         u.bind(7, now).bind(8, existing);
         u.run();
         id = existing;
@@ -501,8 +256,8 @@ std::int64_t FabricLibrary::put(const cloth::FabricPreset& in, const std::string
         Stmt s(m_db, m_path,
                "INSERT INTO fabrics (name, preset, format, composition, areal_density, drape_coefficient, fit_quality,"
                " created, modified, revision) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?8, 1)");
-        s.bind(1, name).bind(2, j.dump()).bind(3, d.format).bind(4, d.composition).bind(5, d.weight).bind(6, d.drape);
-        s.bind(7, d.fit).bind(8, now);
+        s.bind(1, name).bind(2, j.dump()).bind(3, d.format).bind(4, d.composition).bind(5, d.weight).bind(6, d.drape_percent);
+        s.bind(7, d.fit_quality).bind(8, now);
         s.run();
         id = sqlite3_last_insert_rowid(m_db);
         if (report) ++report->added;
@@ -511,7 +266,7 @@ std::int64_t FabricLibrary::put(const cloth::FabricPreset& in, const std::string
     return id;
 }
 
-std::int64_t FabricLibrary::add(const cloth::FabricPreset& preset, const std::string& name)
+std::int64_t FabricLibrary::add(const fabric::FabricPreset& preset, const std::string& name)
 {
     Transaction tx(m_db, m_path, true);
     const auto id = put(preset, name, OnConflict::Fail, nullptr);
@@ -519,13 +274,13 @@ std::int64_t FabricLibrary::add(const cloth::FabricPreset& preset, const std::st
     return id;
 }
 
-void FabricLibrary::update(const std::string& name, const cloth::FabricPreset& preset)
+void FabricLibrary::update(const std::string& name, const fabric::FabricPreset& preset)
 {
     Transaction tx(m_db, m_path, true);
     {
         Stmt s(m_db, m_path, "SELECT name FROM fabrics WHERE name = ?1");
         s.bind(1, name);
-        if (!s.step()) throw ParameterError(m_path + ": no fabric named '" + name + "'");
+        if (!s.step()) throw NotFoundError(m_path + ": no fabric named '" + name + "'");
     }
     put(preset, name, OnConflict::Replace, nullptr);
     tx.commit();
@@ -547,20 +302,25 @@ void FabricLibrary::rename(const std::string& from, const std::string& to)
         s.bind(1, to);
         if (s.step() && s.integer(0) != r.id) throw ParameterError(m_path + ": a fabric named '" + to + "' already exists");
     }
-    set_preset_name(r.preset, to);
+    r.preset.name = to;
     Stmt u(m_db, m_path, "UPDATE fabrics SET name = ?1, preset = ?2, modified = ?3, revision = revision + 1 WHERE id = ?4");
-    u.bind(1, to).bind(2, cloth::fabric_to_json(r.preset).dump()).bind(3, now_utc()).bind(4, r.id);
+    u.bind(1, to).bind(2, fabric::fabric_to_json(r.preset).dump()).bind(3, now_utc()).bind(4, r.id);
     u.run();
     tx.commit();
 }
 
-void FabricLibrary::remove(const std::string& name)
+void FabricLibrary::remove(const std::string& name) { remove(std::vector<std::string>{name}); }
+
+void FabricLibrary::remove(const std::vector<std::string>& names)
 {
     Transaction tx(m_db, m_path, true);
-    Stmt s(m_db, m_path, "DELETE FROM fabrics WHERE name = ?1");
-    s.bind(1, name);
-    s.run();
-    if (sqlite3_changes(m_db) == 0) throw ParameterError(m_path + ": no fabric named '" + name + "'");
+    for (const auto& name : names) {
+        Stmt s(m_db, m_path, "DELETE FROM fabrics WHERE name = ?1");
+        s.bind(1, name);
+        s.run();
+        if (sqlite3_changes(m_db) == 0)
+            throw NotFoundError(m_path + ": no fabric named '" + name + "'" + (names.size() > 1 ? "; nothing was removed" : ""));
+    }
     tx.commit();
 }
 
@@ -575,7 +335,7 @@ std::optional<FabricRecord> FabricLibrary::find(const std::string& name) const
 FabricRecord FabricLibrary::get(const std::string& name) const
 {
     auto r = find(name);
-    if (!r) throw ParameterError(m_path + ": no fabric named '" + name + "'");
+    if (!r) throw NotFoundError(m_path + ": no fabric named '" + name + "'");
     return std::move(*r);
 }
 
@@ -648,8 +408,8 @@ json FabricLibrary::export_preset(const std::string& name, PresetFormat format) 
 {
     const FabricRecord r = get(name);
     if (format == PresetFormat::Drapekit) return r.preset_json;
-    if (const auto* s = std::get_if<cloth::SeedParams>(&r.preset.fabric)) {
-        json j = cloth::seed_to_json(*s);
+    if (r.preset.seed) {
+        json j = fabric::seed_to_json(*r.preset.seed);
         j["name"] = r.name;
         return j;
     }
@@ -661,7 +421,7 @@ json FabricLibrary::export_preset(const std::string& name, PresetFormat format) 
 std::int64_t FabricLibrary::import_preset(const json& j, const std::string& where, const std::string& name,
                                           OnConflict on_conflict)
 {
-    const cloth::FabricPreset p = cloth::fabric_from_json(j, where);
+    const fabric::FabricPreset p = fabric::fabric_from_json(j, where);
     Transaction tx(m_db, m_path, true);
     const auto id = put(p, name, on_conflict, nullptr);
     tx.commit();
@@ -707,7 +467,7 @@ ImportReport FabricLibrary::import_all(const json& doc, const std::string& where
     }
     // Parse everything before touching the database, so a bad entry names
     // itself and nothing is written.
-    std::vector<std::pair<cloth::FabricPreset, std::string>> items;
+    std::vector<std::pair<fabric::FabricPreset, std::string>> items;
     for (std::size_t i = 0; i < list->size(); ++i) {
         const json& e = (*list)[i];
         const std::string w = where + ": fabrics[" + std::to_string(i) + "]";
@@ -718,7 +478,7 @@ ImportReport FabricLibrary::import_all(const json& doc, const std::string& where
             if (!e["name"].is_string()) throw ParameterError(w + ": field 'name' is not a string");
             name = e["name"].get<std::string>();
         }
-        items.emplace_back(cloth::fabric_from_json(wrapped ? e["preset"] : e, w), name);
+        items.emplace_back(fabric::fabric_from_json(wrapped ? e["preset"] : e, w), name);
     }
     ImportReport report;
     Transaction tx(m_db, m_path, true);

@@ -15,7 +15,7 @@
 // The preset JSON (engine/cloth/fabric_io.hpp) is stored verbatim; the
 // searchable columns (composition, weight, D, fit quality) are derived from it
 // on every write.
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/fabric/preset.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -36,11 +36,11 @@ struct FabricRecord {
     std::string composition;               ///< e.g. "100 % cotton"; from preset "composition"
     std::string format;                    ///< "drapekit-fabric" or "seed-19"
     double areal_density_kg_m2 = 0;        ///< weight [kg/m^2]
-    std::optional<double> drape_coefficient; ///< D [-] (0..1) from preset "drape_coefficient"
-    std::optional<double> fit_quality;     ///< from preset "fit" (see fit_quality_of)
+    std::optional<double> drape_coefficient_percent; ///< D [%] of the preset's drape reference
+    std::optional<double> fit_quality;     ///< reduced chi-square of the preset's fit (about 1 = within noise)
     std::string created, modified;         ///< ISO 8601 UTC, e.g. "2026-11-22T01:02:03Z"
     int revision = 1;                      ///< 1 on add, +1 on every update or rename
-    cloth::FabricPreset preset;
+    fabric::FabricPreset preset;
     nlohmann::json preset_json;            ///< the stored preset file contents
 };
 
@@ -54,7 +54,7 @@ struct Filter {
     std::string name;                  ///< substring of the name
     std::string composition;           ///< substring of the composition
     std::optional<double> weight_min, weight_max;   ///< [kg/m^2]
-    std::optional<double> drape_min, drape_max;     ///< D [-]
+    std::optional<double> drape_min, drape_max;     ///< D [%]
     std::optional<double> fit_min, fit_max;         ///< fit quality
     std::string modified_from, modified_to;         ///< ISO 8601 dates or times, inclusive ("2026-11-01")
     SortKey sort = SortKey::Name;
@@ -75,7 +75,8 @@ enum class PresetFormat { Drapekit, Seed19 };
 class FabricLibrary {
 public:
     enum class Mode { ReadWrite, ReadOnly };
-    static constexpr int kSchemaVersion = 2;
+    /// 3: D in percent, fit quality = reduced chi-square, presets in the typed format.
+    static constexpr int kSchemaVersion = 3;
     static constexpr std::int32_t kApplicationId = 0x44524150; ///< "DRAP"
 
     /// Opens (ReadWrite: creates, with its parent folder, or migrates) the
@@ -94,11 +95,14 @@ public:
 
     /// Adds a preset under `name` (empty: the preset's own name). Throws
     /// ParameterError when the name is taken or invalid. Returns the id.
-    std::int64_t add(const cloth::FabricPreset& preset, const std::string& name = {});
+    std::int64_t add(const fabric::FabricPreset& preset, const std::string& name = {});
     /// Replaces the preset stored under `name` (its name stays `name`).
-    void update(const std::string& name, const cloth::FabricPreset& preset);
+    void update(const std::string& name, const fabric::FabricPreset& preset);
     void rename(const std::string& from, const std::string& to);
     void remove(const std::string& name);
+    /// Removes every named fabric in one transaction: when one name is not in
+    /// the library, nothing is removed (ParameterError naming it).
+    void remove(const std::vector<std::string>& names);
 
     std::optional<FabricRecord> find(const std::string& name) const;
     FabricRecord get(const std::string& name) const; ///< throws ParameterError when absent
@@ -124,7 +128,7 @@ public:
 
 private:
     void migrate();
-    std::int64_t put(const cloth::FabricPreset& preset, const std::string& name, OnConflict on_conflict,
+    std::int64_t put(const fabric::FabricPreset& preset, const std::string& name, OnConflict on_conflict,
                      ImportReport* report);
 
     sqlite3* m_db = nullptr;
@@ -136,16 +140,6 @@ private:
 /// $XDG_DATA_HOME/drapekit/library.sqlite, else ~/.local/share/drapekit/library.sqlite.
 std::string default_library_path();
 
-/// The preset's display name (FabricParams::name, or "name" in a seed preset's extras).
-std::string preset_name(const cloth::FabricPreset& p);
-/// Sets the preset's name where preset_name() reads it.
-void set_preset_name(cloth::FabricPreset& p, const std::string& name);
-/// Areal density [kg/m^2] of either kind of preset (seed: cloth::continuum_from_seed).
-double areal_density_of(const cloth::FabricPreset& p);
-/// D [-] from extra "drape_coefficient" (a number, or an object with "value"); absent otherwise.
-std::optional<double> drape_coefficient_of(const cloth::FabricPreset& p);
-/// Fit quality from extra "fit": its "quality", else "rms_m", else "rms"; or extra "fit_quality".
-std::optional<double> fit_quality_of(const cloth::FabricPreset& p);
 /// Throws ParameterError unless the name is 1..200 printable characters without
 /// leading or trailing blanks.
 void validate_name(const std::string& name);

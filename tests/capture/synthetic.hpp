@@ -5,7 +5,7 @@
 // model (4x supersampled, soft floor shadow, sensor noise, JPEG), plus the
 // floor chessboards. Everything a test needs to know is computed here from the
 // geometry, never copied from the code under test.
-#include "engine/capture/record.hpp"
+#include "engine/record/record.hpp"
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
@@ -75,9 +75,9 @@ inline nlohmann::json meta_json(const Spec& s)
 }
 
 /// The true top camera (declared pose without the offset).
-inline drape::capture::Camera true_camera()
+inline drape::record::Camera true_camera()
 {
-    drape::capture::Camera c;
+    drape::record::Camera c;
     c.width = 1152;
     c.height = 872;
     c.fx = c.fy = 1280;

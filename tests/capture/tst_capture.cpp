@@ -1,7 +1,8 @@
 // Capture layer on synthetic records with known answers, bad input, KES.
 #include "engine/capture/export.hpp"
+#include "engine/capture/image.hpp"
 #include "engine/capture/measure.hpp"
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "synthetic.hpp"
 
 #include <QtTest>
@@ -76,7 +77,7 @@ private slots:
         if (grey) s.fabric_bgr = cv::Scalar(66, 62, 60);
         const auto dir = temp_dir(QTest::currentDataTag());
         synth::write_record(dir, s);
-        const auto rec = capture::read_record(dir);
+        const auto rec = record::read_record(dir);
         const auto m = capture::measure_record(rec);
         QVERIFY2(m.top.measured, join(m.not_measured).c_str());
         QCOMPARE(m.top.model.chromatic, !grey);
@@ -122,7 +123,7 @@ private slots:
         s.declared_t_offset = Eigen::Vector3d(0.004, -0.003, 0.0); // declared 5 mm off
         const auto dir = temp_dir("pose");
         synth::write_record(dir, s);
-        const auto rec = capture::read_record(dir);
+        const auto rec = record::read_record(dir);
         const auto m = capture::measure_record(rec);
         QVERIFY(m.top_calibration.has_value());
         const auto& c = *m.top_calibration;
@@ -144,7 +145,7 @@ private slots:
         s.fabric = false;
         const auto dir = temp_dir("empty");
         synth::write_record(dir, s);
-        const auto m = capture::measure_record(capture::read_record(dir));
+        const auto m = capture::measure_record(record::read_record(dir));
         QVERIFY(!m.top.measured);
         QVERIFY2(any_contains(m.not_measured, "top view"), join(m.not_measured).c_str());
         QVERIFY(capture::to_json(m)["drape_coefficient_percent"].is_null());
@@ -157,7 +158,7 @@ private slots:
         synth::write_record(dir, s);
         const auto size = fs::file_size(dir / "top.jpg");
         fs::resize_file(dir / "top.jpg", size / 2);
-        const auto rec = capture::read_record(dir);
+        const auto rec = record::read_record(dir);
         QVERIFY_THROWS_EXCEPTION(FileError, capture::load_image(rec, "top"));
         try {
             capture::load_image(rec, "top");
@@ -178,7 +179,7 @@ private slots:
         cv::Mat small;
         cv::resize(cv::imread((dir / "top.jpg").string()), small, cv::Size(640, 480));
         cv::imwrite((dir / "top.jpg").string(), small);
-        const auto m = capture::measure_record(capture::read_record(dir));
+        const auto m = capture::measure_record(record::read_record(dir));
         QVERIFY(!m.top.measured);
         QVERIFY2(any_contains(m.not_measured, "640 x 480"), join(m.not_measured).c_str());
     }
@@ -188,7 +189,7 @@ private slots:
         auto j = synth::meta_json(synth::Spec{});
         j["configuration"]["specimen_diameter_D1_mm"] = "300";
         try {
-            capture::parse_meta(j.dump(), "/tmp/x", "x/meta.json");
+            record::parse_meta(j.dump(), "/tmp/x", "x/meta.json");
             QFAIL("no error");
         } catch (const FileError& e) {
             const std::string w = e.what();
@@ -198,18 +199,18 @@ private slots:
         }
         auto j2 = synth::meta_json(synth::Spec{});
         j2["cameras"]["top"]["fx"] = "1280";
-        QVERIFY_THROWS_EXCEPTION(FileError, capture::parse_meta(j2.dump(), "/tmp/x", "meta.json"));
+        QVERIFY_THROWS_EXCEPTION(FileError, record::parse_meta(j2.dump(), "/tmp/x", "meta.json"));
         auto j3 = synth::meta_json(synth::Spec{});
         j3["configuration"].erase("support_disc_diameter_D2_mm");
-        QVERIFY_THROWS_EXCEPTION(FileError, capture::parse_meta(j3.dump(), "/tmp/x", "meta.json"));
-        QVERIFY_THROWS_EXCEPTION(FileError, capture::parse_meta("{ not json", "/tmp/x", "meta.json"));
+        QVERIFY_THROWS_EXCEPTION(FileError, record::parse_meta(j3.dump(), "/tmp/x", "meta.json"));
+        QVERIFY_THROWS_EXCEPTION(FileError, record::parse_meta("{ not json", "/tmp/x", "meta.json"));
     }
 
     void unknown_fields_are_kept()
     {
         auto j = synth::meta_json(synth::Spec{});
         j["operator"] = "A. N. Other";
-        const auto rec = capture::parse_meta(j.dump(), "/tmp/x", "meta.json");
+        const auto rec = record::parse_meta(j.dump(), "/tmp/x", "meta.json");
         QCOMPARE(rec.unknown_fields.size(), std::size_t(1));
         QCOMPARE(rec.unknown_fields[0], std::string("operator"));
         QCOMPARE(rec.raw["operator"].get<std::string>(), std::string("A. N. Other"));
@@ -226,9 +227,9 @@ private slots:
             f << "depth_mm,theta_deg,x_mm\n";
             for (int k = 0; k < 360; ++k) f << "5," << k << ",90.0\n";
         }
-        const auto rec = capture::read_record(dir);
+        const auto rec = record::read_record(dir);
         try {
-            capture::read_contours(rec);
+            record::read_contours(rec);
             QFAIL("no error");
         } catch (const FileError& e) {
             QVERIFY2(std::string(e.what()).find("y_mm") != std::string::npos, e.what());
@@ -242,7 +243,7 @@ private slots:
             f << "depth_mm,theta_deg,x_mm,y_mm\n5,0,90.0,0.0\n5,1,abc,1.0\n";
         }
         try {
-            capture::read_contours(rec);
+            record::read_contours(rec);
             QFAIL("no error");
         } catch (const FileError& e) {
             QVERIFY2(std::string(e.what()).find(":3:") != std::string::npos, e.what());
@@ -266,7 +267,7 @@ private slots:
                 f << "10," << k << "," << r * std::cos(th) + n(rng) << "," << r * std::sin(th) + n(rng) << "\n";
             }
         }
-        const auto m = capture::measure_record(capture::read_record(dir));
+        const auto m = capture::measure_record(record::read_record(dir));
         QCOMPARE(m.contours.size(), std::size_t(1));
         const auto& c = m.contours[0];
         QVERIFY(std::abs(c.mean_radius - 0.100) < 1e-4);
@@ -276,7 +277,7 @@ private slots:
         QVERIFY(c.residual_rms <= 1.1 * c.noise_sigma);
 
         // Surface through the levels: pedestal-edge ring + one ring per level.
-        const auto rec = capture::read_record(dir);
+        const auto rec = record::read_record(dir);
         const auto mesh = capture::contour_surface(rec, m, 90);
         QCOMPARE(mesh.vertices.size(), std::size_t(180));
         QCOMPARE(mesh.triangles.size(), std::size_t(180));
@@ -298,7 +299,7 @@ private slots:
         synth::Spec s;
         const auto dir = temp_dir("texture");
         synth::write_record(dir, s);
-        const auto rec = capture::read_record(dir);
+        const auto rec = record::read_record(dir);
         const auto m = capture::measure_record(rec);
         const cv::Mat tex = capture::rectified_texture(rec, m);
         QCOMPARE(tex.cols, 1200); // 2 R1 at 0.25 mm/px
@@ -315,7 +316,7 @@ private slots:
     void missing_meta_is_an_error()
     {
         const auto dir = temp_dir("nometa");
-        QVERIFY_THROWS_EXCEPTION(FileError, capture::read_record(dir));
+        QVERIFY_THROWS_EXCEPTION(FileError, record::read_record(dir));
     }
 
     void gider_regression()

@@ -37,7 +37,7 @@ private slots:
     {
         if (!fs::exists(kSetA)) QSKIP("shared/data/drape-lab/set-a not present");
         QFETCH(QString, id);
-        const auto rec = capture::read_record(kSetA / id.toStdString());
+        const auto rec = record::read_record(kSetA / id.toStdString());
         QVERIFY(rec.lab_drape_coefficient_percent.has_value());
         const auto m = capture::measure_record(rec);
         QVERIFY(m.top.measured);

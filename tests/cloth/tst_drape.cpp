@@ -1,7 +1,7 @@
 // The drapemeter experiment at small grids: it converges, is plausible,
 // reproducible per seed, warm starts pay, and bad set-ups are refused.
 #include "engine/cloth/drape.hpp"
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 
 #include <QtTest>
 
@@ -141,7 +141,7 @@ private slots:
         // A seed preset describes its own sheet size.
         s = small();
         s.sample_diameter = 0.36;
-        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(SeedParams::table1(), s));
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(Material(FabricParams(), GridSprings{}), s));
     }
 
     void cancellation_stops_the_solver()

@@ -6,6 +6,11 @@
 
 using namespace drape::cloth;
 
+namespace {
+/// The seed paper's Table 1 as grid springs (GridSprings' defaults, in SI).
+Material table1(const GridSprings& g = {}) { return Material(FabricParams(), g); }
+} // namespace
+
 class TestDrapeSlow : public QObject {
     Q_OBJECT
 private slots:
@@ -14,14 +19,14 @@ private slots:
         DrapeSetup setup; // 300 / 150 mm, the seed's grid comes from the preset
         RestOptions st;
         st.integrator = Integrator::Static;
-        const DrapeResult a = simulate_drape(SeedParams::table1(), setup, st, {BendingModel::Flexion, 2e-6});
+        const DrapeResult a = simulate_drape(table1(), setup, st, {BendingModel::Flexion, 2e-6});
         QVERIFY2(a.status.converged(), a.status.message.c_str());
         // Dampers do not change a rest state, and the seed's dashpots (7 N*s/m on
         // a 0.02 g particle) would hold RK4 to steps of 3e-7 s. So RK4 runs the
         // same springs and masses with light dashpots plus air damping.
-        SeedParams light = SeedParams::table1();
-        light.sst_du = light.sst_dv = light.ssh_d = light.sfl_du = light.sfl_dv = 2e-3;
-        auto sys = make_drape_system(light, setup, {BendingModel::Flexion, 2e-6});
+        GridSprings light;
+        light.d_u = light.d_v = light.d_shear = light.d_flex_u = light.d_flex_v = 2e-3;
+        auto sys = make_drape_system(table1(light), setup, {BendingModel::Flexion, 2e-6});
         sys->model().air_damping = 8.0;
         RestOptions rk;
         rk.integrator = Integrator::RK4;
@@ -39,7 +44,7 @@ private slots:
         // barely moves it.
         RestOptions polish;
         polish.integrator = Integrator::Static;
-        const DrapeResult c = simulate_drape_from(SeedParams::table1(), setup, b.x, polish, {BendingModel::Flexion, 2e-6});
+        const DrapeResult c = simulate_drape_from(table1(), setup, b.x, polish, {BendingModel::Flexion, 2e-6});
         QVERIFY2(c.status.converged(), c.status.message.c_str());
         qInfo("RK4 state polished by Newton: D = %.2f %% (%d nodes, %ld iterations)", c.metrics.drape_coefficient_percent,
               c.metrics.node_count, c.status.newton_iterations);

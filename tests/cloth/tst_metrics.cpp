@@ -1,5 +1,5 @@
 // The shared metric path on contours with known answers.
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "engine/cloth/metrics.hpp"
 
 #include <QtTest>

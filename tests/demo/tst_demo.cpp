@@ -1,7 +1,7 @@
 // The fitting demo under Xvfb: the MakeHuman mannequin comes in standing on the
 // floor at human size, a circular skirt drapes on it without passing through
 // the body, and the screenshot shows the cloth around the hips.
-#include "demo/fitting_scene.hpp"
+#include "importers/garment_scene.hpp"
 #include "demo/main_window.hpp"
 
 #include <Eigen/Geometry>
@@ -34,18 +34,18 @@ private slots:
 private:
     static int clothPixels(const QImage& img, const QRect& r, const QColor& cloth);
     QTemporaryDir m_tmp;
-    std::shared_ptr<const demo::Mannequin> m_body;
+    std::shared_ptr<const importers::Mannequin> m_body;
 };
 
 void TstDemo::initTestCase()
 {
-    if (!QFile::exists(QString::fromStdString(demo::default_mannequin_path())))
+    if (!QFile::exists(QString::fromStdString(importers::default_mannequin_path())))
         QSKIP("assimp-testmodels is not installed (cmake/setup-deps.sh installs it)");
     QVERIFY(m_tmp.isValid());
     // A library that does not exist: the demo falls back to the starter presets,
     // so the test does not depend on the user's library.
     qputenv("DRAPE_LIBRARY", m_tmp.filePath("no-library.sqlite").toUtf8());
-    m_body = std::make_shared<demo::Mannequin>(demo::load_mannequin(demo::default_mannequin_path()));
+    m_body = std::make_shared<importers::Mannequin>(importers::load_mannequin(importers::default_mannequin_path()));
 }
 
 void TstDemo::mannequinStandsOnFloor()
@@ -64,14 +64,14 @@ void TstDemo::mannequinStandsOnFloor()
 
 void TstDemo::waistIsATorsoSection()
 {
-    const demo::Girth w = demo::find_waist(*m_body);
+    const importers::Girth w = importers::find_waist(*m_body);
     QCOMPARE(w.rays_hit, w.rays);
     const double h = m_body->height();
     QVERIFY(w.z > 0.56 * h && w.z < 0.66 * h);
     // A torso, not the whole section with the arms: a waist girth 2 pi r of 0.5-1.3 m.
     QVERIFY2(w.mean_radius > 0.08 && w.mean_radius < 0.2, qPrintable(QString::number(w.mean_radius)));
     // The hips (20 cm lower) are wider than the waist.
-    const demo::Girth hips = demo::measure_girth(*m_body, w.z - 0.2);
+    const importers::Girth hips = importers::measure_girth(*m_body, w.z - 0.2);
     QVERIFY(hips.mean_radius > w.mean_radius);
     // The centre is inside the body.
     QVERIFY(m_body->collider->signed_distance(Eigen::Vector3d(w.centre.x(), w.centre.y(), w.z)) < 0);
@@ -79,7 +79,7 @@ void TstDemo::waistIsATorsoSection()
 
 void TstDemo::annulusPanel()
 {
-    const demo::Panel p = demo::make_annulus(Eigen::Vector2d(0.1, -0.2), 1.0, 0.15, 0.6, 32, 10);
+    const importers::Panel p = importers::make_annulus(Eigen::Vector2d(0.1, -0.2), 1.0, 0.15, 0.6, 32, 10);
     QCOMPARE(int(p.X.rows()), 32 * 11);
     QCOMPARE(int(p.F.rows()), 2 * 32 * 10);
     QCOMPARE(int(p.waistband.size()), 32);
@@ -94,7 +94,7 @@ void TstDemo::annulusPanel()
     const double exact = 3.14159265358979 * (0.6 * 0.6 - 0.15 * 0.15);
     QVERIFY(area < exact && area > 0.98 * exact);
     for (int v : p.waistband) QVERIFY(std::abs((p.X.row(v).head<2>() - Eigen::RowVector2d(0.1, -0.2)).norm() - 0.15) < 1e-12);
-    QVERIFY_THROWS_EXCEPTION(std::exception, demo::make_annulus(Eigen::Vector2d::Zero(), 0, 0.5, 0.4, 32, 4));
+    QVERIFY_THROWS_EXCEPTION(std::exception, importers::make_annulus(Eigen::Vector2d::Zero(), 0, 0.5, 0.4, 32, 4));
 }
 
 int TstDemo::clothPixels(const QImage& img, const QRect& r, const QColor& cloth)
@@ -138,14 +138,14 @@ void TstDemo::skirtDrapesOnBody()
     QVERIFY2(st.outcome == cloth::SolverStatus::Outcome::Converged ||
                  st.outcome == cloth::SolverStatus::Outcome::NotConverged,
              cloth::to_string(st.outcome).c_str());
-    const demo::Scene* s = v->scene();
+    const importers::Scene* s = v->scene();
     QVERIFY(s && s->mannequin);
     const cloth::Positions x = v->lastPositions();
     QCOMPARE(int(x.rows()), s->system->vertex_count());
     QVERIFY(x.allFinite());
 
     // The test: no cloth vertex inside the body at rest.
-    const demo::Penetration pen = demo::body_penetration(*s->mannequin, x);
+    const importers::Penetration pen = importers::body_penetration(*s->mannequin, x);
     QVERIFY2(pen.inside == 0, qPrintable(QStringLiteral("%1 vertices inside, deepest %2 m")
                                              .arg(pen.inside).arg(pen.min_distance)));
     // The skirt hangs (the flat pattern fell) and rests on the body: its closest

@@ -2,7 +2,7 @@
 // parameters is fitted; the parameters the drape constrains come back inside
 // their reported intervals, dampers are reported as not identifiable, and the
 // same seed gives the same fit.
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "engine/estimate/fit.hpp"
 #include "synthetic.hpp"
 

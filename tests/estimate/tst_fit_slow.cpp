@@ -2,7 +2,7 @@
 // seeds, a joint fit of two set-ups, prediction of other set-ups from a fit at
 // 300/150 against known truth, non-identifiable parameters of the full model,
 // and a record with an undeclared measurement effect (off-centre profiler).
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "engine/estimate/fit.hpp"
 #include "synthetic.hpp"
 

@@ -1,5 +1,5 @@
 // Record loading, features and the residual analysis: no simulations, fast.
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "engine/estimate/measured.hpp"
 #include "engine/estimate/objective.hpp"
 #include "engine/estimate/residual.hpp"

@@ -2,7 +2,7 @@
 // generalized winding number, exact signed distance of a thin box, normals as
 // the gradient of the distance, offset and band.
 #include "engine/cloth/colliders.hpp"
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "importers/mesh_collider.hpp"
 #include "importers/mesh_import.hpp"
 

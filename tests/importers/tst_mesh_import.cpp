@@ -1,7 +1,7 @@
 // Importer tests on Debian's assimp-testmodels (/usr/share/assimp/models):
 // counts, bounding boxes in metres, unit and up-axis conversion, node
 // transforms, and clear errors on bad files.
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "importers/garment.hpp"
 #include "importers/mesh_import.hpp"
 

@@ -1,7 +1,7 @@
 // Fabric library: add/update/rename/delete, search and filters, preset
 // formats, bulk export/import, migrations, bad files and a full disk.
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+#include "engine/core/error.hpp"
+#include "engine/fabric/preset.hpp"
 #include "engine/library/fabric_library.hpp"
 
 #include <sqlite3.h>
@@ -18,19 +18,23 @@ using nlohmann::json;
 
 namespace {
 
-cloth::FabricPreset make_preset(const std::string& name, double rho, const std::string& composition,
-                                std::optional<double> D = std::nullopt, std::optional<double> fit = std::nullopt)
+fabric::FabricPreset make_preset(const std::string& name, double rho, const std::string& composition,
+                                std::optional<double> D = std::nullopt, std::optional<double> fit = std::nullopt) // D [%]
 {
-    cloth::FabricPreset p;
-    cloth::FabricParams f;
-    f.name = name;
-    f[cloth::Param::AreaDensity] = rho;
-    f[cloth::Param::BendWarp] = 2e-6;
-    p.fabric = f;
-    p.extra["composition"] = composition;
-    p.extra["source"] = "unit test";
-    if (D) p.extra["drape_coefficient"] = *D;
-    if (fit) p.extra["fit"] = {{"quality", *fit}};
+    fabric::FabricPreset p;
+    p.name = name;
+    p.params[cloth::Param::AreaDensity] = rho;
+    p.params[cloth::Param::BendWarp] = 2e-6;
+    p.composition = composition;
+    p.source = "unit test";
+    if (D) {
+        p.drape = fabric::DrapeReference{};
+        p.drape->percent = *D;
+    }
+    if (fit) {
+        p.fit = fabric::FitSummary{};
+        p.fit->reduced_chi2 = *fit;
+    }
     return p;
 }
 
@@ -99,34 +103,34 @@ private slots:
     void addUpdateRenameRemove()
     {
         FabricLibrary lib(tmp("crud.sqlite"));
-        lib.add(make_preset("Cotton A", 0.15, "100 % cotton", 0.65, 0.002));
+        lib.add(make_preset("Cotton A", 0.15, "100 % cotton", 65, 0.002));
         QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset("cotton a", 0.2, "x"))); // names are case-insensitive
         QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset("", 0.2, "x")));
         QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset(" padded", 0.2, "x")));
         // Out-of-range parameters are refused before anything is written.
-        cloth::FabricPreset bad = make_preset("bad", 0.2, "x");
-        std::get<cloth::FabricParams>(bad.fabric)[cloth::Param::AreaDensity] = 50.0;
+        fabric::FabricPreset bad = make_preset("bad", 0.2, "x");
+        bad.params[cloth::Param::AreaDensity] = 50.0;
         QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(bad));
         QCOMPARE(lib.count(), 1);
 
         FabricRecord r = lib.get("Cotton A");
         QCOMPARE(r.composition, std::string("100 % cotton"));
         QCOMPARE(r.areal_density_kg_m2, 0.15);
-        QCOMPARE(*r.drape_coefficient, 0.65);
+        QCOMPARE(*r.drape_coefficient_percent, 65.0);
         QCOMPARE(*r.fit_quality, 0.002);
         QCOMPARE(r.revision, 1);
         QCOMPARE(r.format, std::string("drapekit-fabric"));
-        QCOMPARE(std::get<cloth::FabricParams>(r.preset.fabric)[cloth::Param::BendWarp], 2e-6);
+        QCOMPARE(r.preset.params[cloth::Param::BendWarp], 2e-6);
         QCOMPARE(r.preset_json["source"].get<std::string>(), std::string("unit test"));
 
-        lib.update("Cotton A", make_preset("ignored", 0.18, "cotton/elastane", 0.7));
+        lib.update("Cotton A", make_preset("ignored", 0.18, "cotton/elastane", 70));
         r = lib.get("Cotton A");
         QCOMPARE(r.revision, 2);
         QCOMPARE(r.areal_density_kg_m2, 0.18);
         QCOMPARE(r.composition, std::string("cotton/elastane"));
         QVERIFY(!r.fit_quality);
-        QCOMPARE(cloth::fabric_from_json(r.preset_json, "x").extra.value("composition", ""), std::string("cotton/elastane"));
-        QCOMPARE(std::get<cloth::FabricParams>(r.preset.fabric).name, std::string("Cotton A"));
+        QCOMPARE(fabric::fabric_from_json(r.preset_json, "x").composition, std::string("cotton/elastane"));
+        QCOMPARE(r.preset.name, std::string("Cotton A"));
         QVERIFY_THROWS_EXCEPTION(ParameterError, lib.update("nope", make_preset("n", 0.1, "")));
 
         lib.add(make_preset("Silk", 0.06, "silk"));
@@ -149,12 +153,12 @@ private slots:
     void searchAndFilter()
     {
         FabricLibrary lib(tmp("filter.sqlite"));
-        lib.add(make_preset("Silk crepe", 0.06, "100 % silk", 0.31, 0.004));
-        lib.add(make_preset("Cotton poplin", 0.12, "100 % cotton", 0.68, 0.002));
-        lib.add(make_preset("Denim 12oz", 0.41, "cotton", 0.82));
-        lib.add(make_preset("Wool worsted", 0.22, "wool", 0.55, 0.003));
-        cloth::FabricPreset noted = make_preset("Mystery", 0.3, "");
-        noted.extra["notes"] = "bought in Szeged";
+        lib.add(make_preset("Silk crepe", 0.06, "100 % silk", 31, 0.004));
+        lib.add(make_preset("Cotton poplin", 0.12, "100 % cotton", 68, 0.002));
+        lib.add(make_preset("Denim 12oz", 0.41, "cotton", 82));
+        lib.add(make_preset("Wool worsted", 0.22, "wool", 55, 0.003));
+        fabric::FabricPreset noted = make_preset("Mystery", 0.3, "");
+        noted.notes = "bought in Szeged";
         lib.add(noted);
 
         using V = std::vector<std::string>;
@@ -168,8 +172,8 @@ private slots:
         f.weight_max = 0.3;
         QCOMPARE(names(lib.list(f)), (V{"Cotton poplin", "Wool worsted"}));
         f = {};
-        f.drape_min = 0.5;
-        f.drape_max = 0.7;
+        f.drape_min = 50;
+        f.drape_max = 70;
         QCOMPARE(names(lib.list(f)), (V{"Cotton poplin", "Wool worsted"}));
         f = {};
         f.fit_max = 0.0035; // records without a fit drop out
@@ -207,9 +211,9 @@ private slots:
     void seedFormatImportExport()
     {
         FabricLibrary lib(tmp("seed.sqlite"));
-        cloth::SeedParams s = cloth::SeedParams::table1();
+        fabric::SeedParams s = fabric::SeedParams::table1();
         s.sst_ku = 175.5;
-        json j = cloth::seed_to_json(s);
+        json j = fabric::seed_to_json(s);
         j["name"] = "Seed fabric";
         j["composition"] = "unknown";
         lib.import_preset(j, "seed.json");
@@ -218,11 +222,11 @@ private slots:
         QCOMPARE(r.composition, std::string("unknown"));
         // Weight by the engine's own mapping of the seed's constants, so the
         // library and the simulator agree on what the preset weighs.
-        const double expected = cloth::continuum_from_seed(s)[cloth::Param::AreaDensity];
+        const double expected = fabric::continuum_from_seed(s)[cloth::Param::AreaDensity];
         QVERIFY(expected > 0);
         QVERIFY(std::abs(r.areal_density_kg_m2 - expected) < 1e-12 * expected);
         const json out = lib.export_preset("Seed fabric", PresetFormat::Seed19);
-        const cloth::SeedParams back = cloth::seed_from_json(out, "export");
+        const fabric::SeedParams back = fabric::seed_from_json(out, "export");
         QCOMPARE(back.sst_ku, 175.5);
         QCOMPARE(back.ssh_d, s.ssh_d);
         QCOMPARE(back.u, s.u);
@@ -251,7 +255,7 @@ private slots:
         FabricLibrary a(tmp("bulk-a.sqlite"));
         a.add(make_preset("One", 0.1, "linen", 0.5));
         a.add(make_preset("Two", 0.2, "viscose"));
-        json seed = cloth::seed_to_json(cloth::SeedParams::table1());
+        json seed = fabric::seed_to_json(fabric::SeedParams::table1());
         seed["name"] = "Three";
         a.import_preset(seed, "seed");
         const json doc = a.export_all();
@@ -293,8 +297,10 @@ private slots:
     {
         // A library as schema version 1 wrote it: presets only, no derived columns.
         const std::string path = tmp("v1.sqlite");
-        const json preset = cloth::fabric_to_json(make_preset("Old cotton", 0.14, "cotton", 0.66));
-        std::string text = preset.dump();
+        // The preset as Drapekit wrote it then: D as a fraction, keys without the unit-suffix rule.
+        const std::string text = R"({"format":"drapekit-fabric","version":1,"name":"Old cotton",)"
+                                 R"("parameters":{"areal_density_kg_m2":0.14,"bend_warp_N_m":2e-6},)"
+                                 R"("composition":"cotton","drape_coefficient":0.66,"fit":{"quality":0.5}})";
         std::string quoted;
         for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
         raw_exec(path, "PRAGMA journal_mode=WAL;"
@@ -307,11 +313,16 @@ private slots:
         // Read-only cannot migrate and says so.
         QCOMPARE(expect_file_error(path, [&] { FabricLibrary ro(path, FabricLibrary::Mode::ReadOnly); }), QString());
         FabricLibrary lib(path);
-        QCOMPARE(lib.schema_version(), 2);
+        QCOMPARE(lib.schema_version(), 3);
         const FabricRecord r = lib.get("Old cotton");
         QCOMPARE(r.areal_density_kg_m2, 0.14);
         QCOMPARE(r.composition, std::string("cotton"));
-        QCOMPARE(*r.drape_coefficient, 0.66);
+        QVERIFY(std::abs(*r.drape_coefficient_percent - 66.0) < 1e-9);
+        QCOMPARE(*r.fit_quality, 0.5);
+        QCOMPARE(r.preset.params[cloth::Param::BendWarp], 2e-6);
+        // The stored preset is rewritten in today's format.
+        QVERIFY(r.preset_json["parameters"].contains("bend_warp_Nm"));
+        QVERIFY(std::abs(r.preset_json["drape_coefficient"]["percent"].get<double>() - 66.0) < 1e-9);
         QCOMPARE(r.created, std::string("2020-05-01T10:00:00Z"));
         Filter f;
         f.modified_to = "2020-12";
@@ -344,7 +355,7 @@ private slots:
         {
             FabricLibrary l(trunc);
             for (int i = 0; i < 60; ++i) {
-                cloth::FabricPreset p = make_preset("F" + std::to_string(i), 0.1, std::string(2000, 'c'));
+                fabric::FabricPreset p = make_preset("F" + std::to_string(i), 0.1, std::string(2000, 'c'));
                 l.add(p);
             }
         } // closing checkpoints the WAL into the main file

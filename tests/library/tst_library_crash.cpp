@@ -6,7 +6,7 @@
 //
 // The child is this executable re-run with "--child-writer MODE PATH": it
 // reports each committed write on stdout, one line per commit.
-#include "engine/cloth/error.hpp"
+#include "engine/core/error.hpp"
 #include "engine/library/fabric_library.hpp"
 
 #include <sqlite3.h>
@@ -36,15 +36,13 @@ constexpr int kFabrics = 12; ///< fabrics rewritten together by one bulk write
 
 std::string g_self; ///< path of this executable
 
-cloth::FabricPreset preset(const std::string& name, int generation)
+fabric::FabricPreset preset(const std::string& name, int generation)
 {
-    cloth::FabricPreset p;
-    cloth::FabricParams f;
-    f.name = name;
+    fabric::FabricPreset p;
+    p.name = name;
     // The generation shows in a parameter and in the extras, so a torn write
     // would show as a mismatch between rows or within one.
-    f[cloth::Param::AreaDensity] = 0.1 + 1e-4 * (generation % 1000);
-    p.fabric = f;
+    p.params[cloth::Param::AreaDensity] = 0.1 + 1e-4 * (generation % 1000);
     p.extra["generation"] = generation;
     p.extra["padding"] = std::string(1500, static_cast<char>('a' + generation % 26));
     return p;
@@ -54,7 +52,7 @@ json generation_doc(int generation)
 {
     json doc = {{"format", "drapekit-fabric-library"}, {"version", 1}, {"fabrics", json::array()}};
     for (int i = 0; i < kFabrics; ++i)
-        doc["fabrics"].push_back(cloth::fabric_to_json(preset("fabric " + std::to_string(i), generation)));
+        doc["fabrics"].push_back(fabric::fabric_to_json(preset("fabric " + std::to_string(i), generation)));
     return doc;
 }
 

@@ -3,8 +3,8 @@
 // the solver status and how close the cloth comes to the body. For measuring
 // and debugging the demo's scene (not a test: it prints wall-clock numbers).
 //
-//   drape_fitting_probe [skirt|tablecloth] [FABRIC_PRESET] [OUT.obj]
-#include "demo/fitting_scene.hpp"
+//   garment_probe [skirt|tablecloth] [FABRIC_PRESET] [OUT.obj]
+#include "importers/garment_scene.hpp"
 
 #include <chrono>
 #include <cstdio>
@@ -17,26 +17,26 @@ int main(int argc, char** argv)
     try {
         const std::string garment = argc > 1 ? argv[1] : "skirt";
         const std::string fabric = argc > 2 ? argv[2] : "seed-table1";
-        const cloth::FabricPreset preset = cloth::load_fabric(fabric);
-        auto m = std::make_shared<demo::Mannequin>(demo::load_mannequin(demo::default_mannequin_path()));
+        const fabric::FabricPreset preset = fabric::load_fabric(fabric);
+        auto m = std::make_shared<importers::Mannequin>(importers::load_mannequin(importers::default_mannequin_path()));
         const auto& b = m->bounds;
         std::printf("mannequin %d vertices, %d triangles, bbox min (%.3f %.3f %.3f) max (%.3f %.3f %.3f) m, height %.3f m, open edges %d\n",
                     m->mesh.vertex_count(), m->mesh.triangle_count(), b.min.x(), b.min.y(), b.min.z(), b.max.x(),
                     b.max.y(), b.max.z(), m->height(), m->collider->open_or_nonmanifold_edges());
         for (double f : {0.45, 0.5, 0.53, 0.56, 0.6, 0.62, 0.64, 0.66, 0.7}) {
-            const demo::Girth g = demo::measure_girth(*m, f * m->height());
+            const importers::Girth g = importers::measure_girth(*m, f * m->height());
             std::printf("  girth at %.2f H (z %.3f): centre (%.3f %.3f) mean r %.3f max r %.3f hit %d/%d\n", f, g.z,
                         g.centre.x(), g.centre.y(), g.mean_radius, g.max_radius, g.rays_hit, g.rays);
         }
-        demo::Scene s = garment == "skirt" ? demo::make_skirt_scene(m, preset) : demo::make_tablecloth_scene(preset);
+        importers::Scene s = garment == "skirt" ? importers::make_skirt_scene(m, preset) : importers::make_tablecloth_scene(preset);
         if (garment == "skirt")
             std::printf("waist z %.3f m, mean r %.3f, max r %.3f\n", s.waist.z, s.waist.mean_radius, s.waist.max_radius);
         std::printf("cloth %d vertices, %d triangles\n", s.system->vertex_count(), int(s.system->mesh().F.rows()));
         if (garment == "skirt") {
-            const demo::Penetration p0 = demo::body_penetration(*m, s.system->x);
+            const importers::Penetration p0 = importers::body_penetration(*m, s.system->x);
             std::printf("start: min distance %.4f m, inside %d\n", p0.min_distance, p0.inside);
         }
-        cloth::RestOptions o = demo::demo_rest_options();
+        cloth::RestOptions o = importers::garment_rest_options();
         long last = -50;
         o.progress = [&](const cloth::SolverStatus& st) {
             if (st.newton_iterations - last >= 25) {
@@ -51,7 +51,7 @@ int main(int argc, char** argv)
                     st.newton_iterations, st.residual, st.wall_seconds, st.message.c_str());
         std::printf("cloth z range %.3f .. %.3f m\n", s.system->x.col(2).minCoeff(), s.system->x.col(2).maxCoeff());
         if (garment == "skirt") {
-            const demo::Penetration p = demo::body_penetration(*m, s.system->x);
+            const importers::Penetration p = importers::body_penetration(*m, s.system->x);
             std::printf("rest: min distance to the body %.5f m (vertex %d), vertices inside %d\n", p.min_distance,
                         p.worst_vertex, p.inside);
         }
@@ -65,7 +65,7 @@ int main(int argc, char** argv)
         }
         return st.outcome == cloth::SolverStatus::Outcome::Diverged ? 1 : 0;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "drape_fitting_probe: %s\n", e.what());
+        std::fprintf(stderr, "garment_probe: %s\n", e.what());
         return 1;
     }
 }

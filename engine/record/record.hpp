@@ -1,14 +1,20 @@
 #pragma once
-// Reader of a drape-lab record (shared/data/drape-lab/README.md): meta.json,
-// top/side/iso photographs and the laser contours. Every length read from the
-// record (mm) is converted to metres here, at the edge; the rest of the capture
-// layer works in SI units in the world frame (origin = centre of the pedestal
-// top, z up, x = warp).
+// The one reader of a drape-test record (shared/data/drape-lab/README.md):
+// meta.json (set-up, fabric, cameras, calibration boards, contour
+// declarations, lab readings) and the laser contours. Every length read from
+// the record (mm) is converted to metres here, at the edge; the rest of the
+// code works in SI units in the world frame (origin = centre of the pedestal
+// top, z up, x = warp). No OpenCV: the photos themselves are capture's
+// business (capture/image.hpp).
+//
+// A record is a folder a user may have received from someone else: every file
+// it names must stay inside it (Record::file refuses "..", absolute paths and
+// symbolic links that lead out), and every number is checked against a
+// physical range before anything is allocated from it.
 #include "engine/cloth/metrics.hpp"
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
-#include <opencv2/core.hpp>
 
 #include <filesystem>
 #include <map>
@@ -16,11 +22,11 @@
 #include <string>
 #include <vector>
 
-namespace drape::capture {
+namespace drape::record {
 
-/// Pinhole camera, OpenCV convention (x right, y down, z forward), no distortion
-/// is assumed by the projection helpers (the README declares none; a record with
-/// non-zero coefficients is undistorted through OpenCV where images are read).
+/// Pinhole camera, OpenCV convention (x right, y down, z forward), world in
+/// metres. The projection helpers assume no distortion (the README declares
+/// none; capture undistorts images whose coefficients are not zero).
 struct Camera {
     std::string name;            ///< station name: top, side, iso
     std::string image;           ///< image file name inside the record
@@ -40,7 +46,6 @@ struct Camera {
     /// Intersection of the ray through `px` with the horizontal plane z = `z` [m].
     /// nullopt when the ray is parallel to or points away from the plane.
     std::optional<Eigen::Vector3d> backproject_to_plane(const Eigen::Vector2d& px, double z) const;
-    cv::Matx33d K() const { return {fx, 0, cx, 0, fy, cy, 0, 0, 1}; }
     bool has_distortion() const;
 };
 
@@ -53,10 +58,10 @@ struct Board {
     double z = 0;           ///< plane of the board [m]
 };
 
-/// Laser cross-section contours: one radial profile per depth.
+/// Laser cross-section contours: one radial profile per depth, increasing depth.
 struct ContourStack {
     std::vector<double> depths;                       ///< depth below the pedestal top [m] (> 0)
-    std::vector<cloth::RadialProfile> profiles;       ///< r(theta_k) [m], theta_k = 2 pi k / N
+    std::vector<cloth::RadialProfile> profiles;       ///< r(theta_k) [m], theta_k = 2 pi k / N; NaN where a ray has no point
     std::vector<std::vector<Eigen::Vector2d>> points; ///< the measured (x, y) points [m] per depth
 };
 
@@ -66,7 +71,7 @@ struct Record {
     std::string specimen_id;
     double R1 = 0;                 ///< specimen radius D1/2 [m]
     double R2 = 0;                 ///< support-disc radius D2/2 [m]
-    double pedestal_height = 0;    ///< [m]
+    double pedestal_height = 0.12; ///< [m]
     std::optional<double> areal_density;   ///< [kg/m^2]
     std::optional<double> thickness;       ///< [m]
     std::string colour;                    ///< fabric colour as written by the lab ("" if absent)
@@ -74,14 +79,20 @@ struct Record {
     std::vector<Board> boards;
     std::string contours_file = "contours.csv";
     std::vector<double> contour_depths;    ///< declared depths [m]
-    double contour_theta_step_deg = 1.0;   ///< angular step of the contour rays [deg]
+    std::optional<double> contour_theta_step_deg; ///< declared angular step of the contour rays [deg]
     double contour_sigma = 0.3e-3;         ///< profiler repeatability, 1 sigma per coordinate [m]
     std::optional<double> lab_drape_coefficient_percent; ///< drapemeter reading [%]
+    std::optional<int> node_count;         ///< folds, when the lab states them
     nlohmann::json raw;                    ///< the whole meta.json, unknown fields included
     std::vector<std::string> unknown_fields; ///< top-level keys this reader does not use (kept in raw)
 
-    std::filesystem::path file(const std::string& name) const { return dir / name; }
+    /// A file the record names, resolved inside the record folder. Throws
+    /// FileError when the name is absolute, climbs out with "..", or leads out
+    /// of the folder through a symbolic link.
+    std::filesystem::path file(const std::string& name) const;
     bool has_camera(const std::string& name) const { return cameras.count(name) != 0; }
+    /// True when the contours file exists in the record.
+    bool has_contours() const;
 };
 
 /// Reads and validates RECORD_DIR/meta.json. Throws FileError naming the file,
@@ -91,15 +102,15 @@ Record read_record(const std::filesystem::path& dir);
 /// Parses meta.json text (for tests and tools); `where` names it in messages.
 Record parse_meta(const std::string& text, const std::filesystem::path& dir, const std::string& where);
 
-/// Loads the photograph of station `camera` (BGR, 8 bit). Throws FileError when
-/// the file is missing, not a decodable image, truncated (no JPEG end marker),
-/// or not of the size declared in meta.json.
-cv::Mat load_image(const Record& rec, const std::string& camera);
-
-/// Reads the contours CSV named in meta.json. Throws FileError on a missing
-/// column, a non-numeric cell (naming line and column) or an empty file.
+/// Reads the contours CSV named in meta.json (header depth_mm,theta_deg,x_mm,y_mm
+/// in any column order). Throws FileError naming the line and column on a
+/// missing column, a cell that is not exactly a number, an angle off the ray
+/// grid or repeated, a depth outside the pedestal, or a radius the specimen
+/// cannot reach. Missing rays are NaN in the profile (a depth is then not complete()).
 ContourStack read_contours(const Record& rec);
-/// Same from an explicit path with the declared angular step [deg].
-ContourStack read_contours_file(const std::filesystem::path& file, double theta_step_deg = 1.0);
+/// The same from an explicit file; `R1`, `R2`, `pedestal_height` bound the values [m];
+/// `theta_step_deg` (0 = infer from the data) is the ray spacing.
+ContourStack read_contours_file(const std::filesystem::path& file, double theta_step_deg, double R1, double R2,
+                                double pedestal_height);
 
-} // namespace drape::capture
+} // namespace drape::record

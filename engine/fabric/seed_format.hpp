@@ -3,7 +3,8 @@
 // "Image-based cloth capture and cloth simulation used for estimation cloth
 // draping parameters", Table 1). They are grid constants, not continuum
 // values: they describe one particular 30 x 30 grid. Drapekit reads and writes
-// them exactly, and simulates them on the grid they describe.
+// them exactly (the "seed-19" preset format), and simulates them on the grid
+// they describe (cloth::GridSprings).
 //
 // Units: the paper states none. Drapekit reads them as
 //   w, h, x0, y0, z0 in centimetres (w = 30 is the paper's 30 cm specimen and
@@ -15,11 +16,14 @@
 //   spring constants in N/m, dampers in N*s/m.
 // This is an interpretation, declared here once (kSeedMassUnitKg) and used by
 // both directions, so import and export stay exact whatever one thinks of it.
-#include "params.hpp"
+#include "engine/cloth/model.hpp"
+#include "engine/cloth/params.hpp"
+
+#include <nlohmann/json.hpp>
 
 #include <string>
 
-namespace drape::cloth {
+namespace drape::fabric {
 
 /// Mass unit of ClothOverMass [kg] (see above).
 inline constexpr double kSeedMassUnitKg = 1e-5;
@@ -40,13 +44,24 @@ struct SeedParams {
     double hu_m() const;
     double hv_m() const;
     double particle_mass_kg() const;
+    /// ParameterError naming the seed field (w, ClothOverMass, ...) and value.
     void validate(const std::string& where) const;
 };
 
-/// Equivalent continuum values of the seed constants on their own grid, by the
-/// inverse of model.hpp's mapping (stretch, shear, mass, dampers). The flexion
-/// springs have no continuum counterpart (they resist bending only at second
-/// order, with a grid-dependent strength), so bending is left at its default.
-FabricParams continuum_from_seed(const SeedParams& s);
+/// The seed's constants as the engine's grid springs (SI; exact).
+cloth::GridSprings grid_springs(const SeedParams& s);
 
-} // namespace drape::cloth
+/// Equivalent continuum values of the seed constants on their own grid, by the
+/// inverse of cloth::make_model's mapping (stretch, shear, mass, dampers). The
+/// flexion springs have no continuum counterpart (they resist bending only at
+/// second order, with a grid-dependent strength), so bending is left at its default.
+cloth::FabricParams continuum_from_seed(const SeedParams& s);
+
+/// The "seed-19" JSON object (format + the 19 keys) and back. `where` names
+/// the document in errors (FileError / ParameterError naming the key).
+nlohmann::json seed_to_json(const SeedParams& s);
+SeedParams seed_from_json(const nlohmann::json& j, const std::string& where);
+/// The 19 keys of the format (and "format"): what a seed-19 file holds besides free extras.
+bool is_seed_key(const std::string& key);
+
+} // namespace drape::fabric

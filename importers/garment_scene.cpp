@@ -1,18 +1,16 @@
-#include "demo/fitting_scene.hpp"
+#include "importers/garment_scene.hpp"
 
-#include "engine/cloth/error.hpp"
 #include "engine/cloth/model.hpp"
-#include "engine/library/fabric_library.hpp"
+#include "engine/core/error.hpp"
 
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <limits>
+#include <cstdio>
 #include <random>
 
-namespace drape::demo {
+namespace drape::importers {
 
 namespace {
 
@@ -23,36 +21,6 @@ std::string fmt(double v)
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.4g", v);
     return buf;
-}
-
-cloth::FabricParams continuum_of(const cloth::FabricPreset& preset)
-{
-    if (const auto* p = std::get_if<cloth::FabricParams>(&preset.fabric)) return *p;
-    // The seed's grid constants describe one grid; their continuum equivalent
-    // lets the same fabric drape any mesh.
-    return cloth::continuum_from_seed(std::get<cloth::SeedParams>(preset.fabric));
-}
-
-/// Segments of the section of triangle mesh (X, F) with the plane z = h, as 2-D points pairs.
-std::vector<std::array<Eigen::Vector2d, 2>> section(const cloth::Positions& X, const cloth::Triangles& F, double h)
-{
-    std::vector<std::array<Eigen::Vector2d, 2>> segs;
-    for (Eigen::Index t = 0; t < F.rows(); ++t) {
-        Eigen::Vector2d pts[3];
-        int k = 0;
-        for (int e = 0; e < 3 && k < 3; ++e) {
-            const Eigen::Vector3d a = X.row(F(t, e)), b = X.row(F(t, (e + 1) % 3));
-            const double da = a.z() - h, db = b.z() - h;
-            // Half-open test so a vertex exactly on the plane counts once.
-            if ((da < 0) != (db < 0)) {
-                const double s = da / (da - db);
-                const Eigen::Vector3d p = a + s * (b - a);
-                pts[k++] = p.head<2>();
-            }
-        }
-        if (k == 2) segs.push_back({pts[0], pts[1]});
-    }
-    return segs;
 }
 
 /// Length of the closed curve r(theta) = rc + a (1 + sin(k theta)) [m].
@@ -69,96 +37,6 @@ double fluted_length(double rc, double a, int k)
 }
 
 } // namespace
-
-std::string default_mannequin_path()
-{
-    return "/usr/share/assimp/models/Collada/human.zae";
-}
-
-Mannequin load_mannequin(const std::string& path, const importers::ImportOptions& opt)
-{
-    const importers::ImportedScene scene = importers::import_scene(path, opt);
-    Mannequin m;
-    m.path = path;
-    m.mesh = scene.merged();
-    const importers::AlignedBox b = m.mesh.bounds();
-    const double h = b.max.z() - b.min.z();
-    if (!(h > 0.5 && h < 2.5))
-        throw ParameterError(path + ": mannequin is " + fmt(h) + " m tall after conversion (unit " +
-                             importers::to_string(opt.unit) + ", up " + importers::to_string(opt.up) +
-                             "); expected 0.5..2.5 m: give the file's unit and up axis");
-    // Stand it on the floor, centred on the z axis.
-    const Eigen::Vector3d shift(-(b.min.x() + b.max.x()) / 2, -(b.min.y() + b.max.y()) / 2, -b.min.z());
-    m.mesh.X.rowwise() += shift.transpose();
-    m.bounds = m.mesh.bounds();
-    m.collider = std::make_shared<importers::MeshCollider>(m.mesh.X, m.mesh.F, 0.0);
-    m.contact = std::make_shared<importers::MeshCollider>(m.mesh.X, m.mesh.F, Mannequin::kContactPadding);
-    return m;
-}
-
-Girth measure_girth(const Mannequin& m, double z, int rays)
-{
-    Girth g;
-    g.z = z;
-    g.rays = rays;
-    const auto segs = section(m.mesh.X, m.mesh.F, z);
-    if (segs.empty()) return g;
-    // Torso centre: the extent of the section near the body's middle. Arms and
-    // hands hang farther out than 15 % of the height from the axis only partly,
-    // so the extent is taken from the points closest to the axis first.
-    const double half = 0.15 * m.height();
-    Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
-    for (const auto& s : segs)
-        for (const auto& p : s)
-            if (std::abs(p.x()) < half && std::abs(p.y()) < half) {
-                lo = lo.cwiseMin(p);
-                hi = hi.cwiseMax(p);
-            }
-    if (lo.x() > hi.x()) return g;
-    g.centre = (lo + hi) / 2;
-    double sum = 0;
-    for (int k = 0; k < rays; ++k) {
-        const double th = 2 * kPi * k / rays;
-        const Eigen::Vector2d d(std::cos(th), std::sin(th));
-        double best = std::numeric_limits<double>::infinity();
-        for (const auto& s : segs) {
-            // Solve centre + t d = a + u (b - a).
-            const Eigen::Vector2d e = s[1] - s[0], w = s[0] - g.centre;
-            const double den = d.x() * (-e.y()) - d.y() * (-e.x());
-            if (std::abs(den) < 1e-15) continue;
-            const double t = (w.x() * (-e.y()) - w.y() * (-e.x())) / den;
-            const double u = (d.x() * w.y() - d.y() * w.x()) / den;
-            if (t > 0 && u >= 0 && u <= 1) best = std::min(best, t);
-        }
-        if (std::isfinite(best)) {
-            ++g.rays_hit;
-            sum += best;
-            g.max_radius = std::max(g.max_radius, best);
-        }
-    }
-    if (g.rays_hit > 0) g.mean_radius = sum / g.rays_hit;
-    return g;
-}
-
-Girth find_waist(const Mannequin& m)
-{
-    const double z0 = m.bounds.min.z(), h = m.height();
-    Girth best;
-    bool have = false;
-    for (int i = 0; i <= 40; ++i) {
-        const double z = z0 + h * (0.56 + 0.10 * i / 40.0);
-        const Girth g = measure_girth(m, z);
-        if (g.rays_hit < g.rays) continue; // not a closed torso section
-        if (!have || g.mean_radius < best.mean_radius) {
-            best = g;
-            have = true;
-        }
-    }
-    if (!have)
-        throw ParameterError(m.path + ": no closed torso section between 56 % and 66 % of the height; "
-                             "is the mannequin standing (up axis)?");
-    return best;
-}
 
 Panel make_annulus(const Eigen::Vector2d& centre, double z, double inner_radius, double outer_radius, int segments,
                    int rings)
@@ -278,7 +156,7 @@ cloth::Positions hang_skirt(const Mannequin& m, const Panel& p, const Eigen::Vec
     return x;
 }
 
-Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const cloth::FabricPreset& fabric, const SkirtOptions& opt)
+Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const fabric::FabricPreset& fabric, const SkirtOptions& opt)
 {
     if (!m) throw ParameterError("skirt: no mannequin");
     if (!(opt.length > 0)) throw ParameterError("skirt: length must be > 0 m (got " + fmt(opt.length) + ")");
@@ -295,8 +173,8 @@ Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const cloth::FabricPr
     if (rings <= 0)
         rings = std::max(2, int(std::ceil(std::log(r_out / r_in) / std::log(1 + 2 * kPi / opt.segments))));
     Panel p = make_annulus(s.waist.centre, zband, r_in, r_out, opt.segments, rings);
-    cloth::FabricParams fp = continuum_of(fabric);
-    s.fabric_name = fp.name;
+    const cloth::FabricParams& fp = fabric.params; // a seed preset's continuum equivalent drapes any mesh
+    s.fabric_name = fabric.name;
     cloth::ClothMesh mesh = cloth::make_triangle_mesh(p.X, p.F, Eigen::Vector3d::UnitX());
     cloth::ClothModel model = cloth::make_model(mesh, fp, fabric.model);
     s.system = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
@@ -307,7 +185,7 @@ Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const cloth::FabricPr
     return s;
 }
 
-Scene make_tablecloth_scene(const cloth::FabricPreset& fabric, const Table& table, int grid, std::uint64_t seed)
+Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& table, int grid, std::uint64_t seed)
 {
     if (!(table.radius > 0) || !(table.height > 0) || !(table.cloth_diameter > 2 * table.radius))
         throw ParameterError("table: need radius > 0, height > 0 and a cloth wider than the top (radius " +
@@ -316,8 +194,8 @@ Scene make_tablecloth_scene(const cloth::FabricPreset& fabric, const Table& tabl
     Scene s;
     s.garment = Garment::Tablecloth;
     s.table = table;
-    cloth::FabricParams fp = continuum_of(fabric);
-    s.fabric_name = fp.name;
+    const cloth::FabricParams& fp = fabric.params; // a seed preset's continuum equivalent drapes any mesh
+    s.fabric_name = fabric.name;
     cloth::ClothMesh mesh = cloth::make_disc(table.cloth_diameter, grid, 0.0);
     cloth::ClothModel model = cloth::make_model(mesh, fp, fabric.model);
     s.system = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
@@ -347,7 +225,7 @@ Scene make_tablecloth_scene(const cloth::FabricPreset& fabric, const Table& tabl
     return s;
 }
 
-cloth::RestOptions demo_rest_options()
+cloth::RestOptions garment_rest_options()
 {
     cloth::RestOptions o;
     o.integrator = cloth::Integrator::Static;
@@ -356,61 +234,4 @@ cloth::RestOptions demo_rest_options()
     return o;
 }
 
-Penetration body_penetration(const Mannequin& m, const cloth::Positions& x)
-{
-    Penetration p;
-    p.min_distance = std::numeric_limits<double>::infinity();
-    for (Eigen::Index i = 0; i < x.rows(); ++i) {
-        const double d = m.collider->signed_distance(x.row(i).transpose());
-        if (d < 0) ++p.inside;
-        if (d < p.min_distance) {
-            p.min_distance = d;
-            p.worst_vertex = int(i);
-        }
-    }
-    return p;
-}
-
-std::vector<FabricChoice> available_fabrics(const std::string& library_path, const std::string& starter_dir,
-                                            std::vector<std::string>* warnings)
-{
-    namespace fs = std::filesystem;
-    std::vector<FabricChoice> out;
-    auto warn = [&](const std::string& w) {
-        if (warnings) warnings->push_back(w);
-    };
-    const std::string lib = library_path.empty() ? library::default_library_path() : library_path;
-    std::error_code ec;
-    if (fs::exists(lib, ec)) {
-        try {
-            library::FabricLibrary L(lib, library::FabricLibrary::Mode::ReadOnly);
-            for (auto& r : L.list()) out.push_back({r.name, "library", r.preset});
-        } catch (const std::exception& e) {
-            warn(std::string("fabric library: ") + e.what());
-        }
-    }
-    if (!starter_dir.empty() && fs::is_directory(starter_dir, ec)) {
-        std::vector<fs::path> files;
-        for (const auto& e : fs::directory_iterator(starter_dir, ec))
-            if (e.path().extension() == ".json") files.push_back(e.path());
-        std::sort(files.begin(), files.end());
-        for (const auto& f : files) {
-            try {
-                cloth::FabricPreset p = cloth::load_fabric(f.string());
-                const std::string name = library::preset_name(p);
-                const bool dup = std::any_of(out.begin(), out.end(), [&](const FabricChoice& c) { return c.name == name; });
-                if (!dup) out.push_back({name, "starter", std::move(p)});
-            } catch (const std::exception& e) {
-                warn(e.what());
-            }
-        }
-    }
-    try {
-        out.push_back({"Seed paper, Table 1", "built-in", cloth::load_fabric("seed-table1")});
-    } catch (const std::exception& e) {
-        warn(e.what());
-    }
-    return out;
-}
-
-} // namespace drape::demo
+} // namespace drape::importers

@@ -1,7 +1,9 @@
 // Preset files: exact round trips (continuum and the seed's 19 parameters),
-// clear errors on bad files, atomic writes.
-#include "engine/cloth/error.hpp"
-#include "engine/cloth/fabric_io.hpp"
+// typed descriptions, presets written before the typed format, clear errors
+// on bad files, atomic writes.
+#include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
+#include "engine/fabric/preset.hpp"
 
 #include <QTemporaryDir>
 #include <QtTest>
@@ -11,6 +13,8 @@
 #include <unistd.h>
 
 using namespace drape::cloth;
+using namespace drape::fabric;
+using drape::read_file;
 using nlohmann::json;
 
 namespace {
@@ -33,7 +37,7 @@ QString error_of(const std::string& path)
 }
 } // namespace
 
-class TestFabricIo : public QObject {
+class TestPreset : public QObject {
     Q_OBJECT
 private slots:
     void seed_table1_is_the_papers_table()
@@ -51,7 +55,9 @@ private slots:
         QCOMPARE(s.ssh_d, 6.0);
         QCOMPARE(s.sfl_du, 8.0);
         const FabricPreset p = load_fabric("seed-table1");
-        QVERIFY(std::holds_alternative<SeedParams>(p.fabric));
+        QVERIFY(p.is_seed());
+        QVERIFY(p.material().grid_springs.has_value());
+        QCOMPARE(p.material().grid_springs->k_shear, 40.0);
     }
 
     void seed_format_round_trips_exactly()
@@ -72,34 +78,44 @@ private slots:
         QTemporaryDir d;
         const std::string path = d.filePath("seed.json").toStdString();
         FabricPreset p;
-        p.fabric = s;
+        p.seed = s;
+        p.params = continuum_from_seed(s);
         p.extra["note"] = "kept";
         save_fabric(p, path);
         const FabricPreset back = load_fabric(path);
-        QCOMPARE(seed_to_json(std::get<SeedParams>(back.fabric)).dump(), j.dump());
+        QVERIFY(back.is_seed());
+        QCOMPARE(seed_to_json(*back.seed).dump(), j.dump());
         QCOMPARE(back.extra["note"].get<std::string>(), std::string("kept"));
     }
 
     void continuum_preset_round_trips()
     {
         FabricParams f;
-        f.name = "wool worsted";
         f[Param::BendWarp] = 1.234567890123e-5;
         f[Param::Shear] = 17.25;
         f[Param::BendStiffeningRadius] = 0.0125;
         FabricPreset p;
-        p.fabric = f;
+        p.name = "wool worsted";
+        p.params = f;
         p.model.edge_contact = false;
-        p.extra["provenance"] = {{"records", {"DL-A01"}}};
+        p.provenance = Provenance{};
+        p.provenance->records = {"DL-A01"};
+        p.provenance->grid = 41;
         QTemporaryDir d;
         const std::string path = d.filePath("f.json").toStdString();
         save_fabric(p, path);
         const FabricPreset back = load_fabric(path);
-        const auto& g = std::get<FabricParams>(back.fabric);
+        const auto& g = back.params;
         for (int i = 0; i < kParamCount; ++i) QCOMPARE(g.values[static_cast<std::size_t>(i)], f.values[static_cast<std::size_t>(i)]);
-        QCOMPARE(g.name, f.name);
+        QCOMPARE(back.name, p.name);
         QCOMPARE(back.model.edge_contact, false);
-        QCOMPARE(back.extra["provenance"]["records"][0].get<std::string>(), std::string("DL-A01"));
+        QVERIFY(back.provenance.has_value());
+        QCOMPARE(back.provenance->records.at(0), std::string("DL-A01"));
+        QCOMPARE(back.provenance->grid, 41);
+        // The file carries the unit-suffixed keys.
+        const json j = json::parse(read_file(path));
+        QVERIFY(j["parameters"].contains("bend_warp_Nm"));
+        QVERIFY(!j["parameters"].contains("bend_warp_N_m"));
     }
 
     void continuum_seed_conversion_inverts_the_mapping()
@@ -119,11 +135,49 @@ private slots:
         QVERIFY(std::abs(model.mass(interior) - s.particle_mass_kg()) < 1e-12);
     }
 
+    void presets_written_before_the_typed_format_still_load()
+    {
+        // Keys before the unit-suffix rule, D as a fraction, a fit without a
+        // reduced chi-square: read as today's preset.
+        QTemporaryDir d;
+        const std::string path = write(d, "old.json", R"({"format":"drapekit-fabric","version":1,"name":"old fit",
+            "parameters":{"bend_warp_N_m":2e-6,"bend_weft_N_m":3e-6,"damp_bend_N_m_s":2e-7,"damp_stretch_N_s_m":0.1},
+            "drape_coefficient":{"value":0.317,"kind":"simulated","simulated_on":"2026-11-22"},
+            "provenance":{"tool":"drape fit","date_utc":"2026-11-22T10:00:00Z","grid":25,"records":[{"id":"DL-A04","source":"x"}]},
+            "fit":{"chi2":40.0,"dof":50,"records":[{"sample_diameter_m":0.3,"disc_diameter_m":0.15}]},
+            "residual":{"exceeds_noise":false}})");
+        const FabricPreset p = load_fabric(path);
+        QCOMPARE(p.name, std::string("old fit"));
+        QCOMPARE(p.params[Param::BendWarp], 2e-6);
+        QCOMPARE(p.params[Param::BendWeft], 3e-6);
+        QCOMPARE(p.params[Param::DampBend], 2e-7);
+        QCOMPARE(p.params[Param::DampStretch], 0.1);
+        QVERIFY(p.drape.has_value());
+        QVERIFY(std::abs(p.drape->percent - 31.7) < 1e-9);
+        QCOMPARE(p.drape->date, std::string("2026-11-22"));
+        QVERIFY(p.provenance && p.provenance->grid == 25 && p.provenance->tool == "drape fit");
+        QCOMPARE(p.provenance->records.at(0), std::string("DL-A04"));
+        QVERIFY(p.fit && p.fit->reduced_chi2 && std::abs(*p.fit->reduced_chi2 - 0.8) < 1e-12);
+        QCOMPARE(p.fit->sample_diameter_m, 0.3);
+        QVERIFY(p.extra.contains("residual"));
+        // Written back in today's format: percent, unit-suffixed keys; nothing lost.
+        const json j = fabric_to_json(p);
+        QCOMPARE(j["drape_coefficient"]["percent"].get<double>(), p.drape->percent);
+        QVERIFY(!j["drape_coefficient"].contains("value"));
+        QVERIFY(j["parameters"].contains("damp_bend_Nms"));
+        QCOMPARE(j["fit"]["records"][0]["sample_diameter_m"].get<double>(), 0.3);
+        QCOMPARE(j["residual"]["exceeds_noise"].get<bool>(), false);
+        const FabricPreset again = fabric_from_json(j, "again");
+        QCOMPARE(fabric_to_json(again).dump(), j.dump());
+    }
+
     void bad_files_give_clear_errors()
     {
         QTemporaryDir d;
         QVERIFY(error_of<drape::FileError>("/nonexistent/f.json").contains("/nonexistent/f.json"));
         QVERIFY(error_of<drape::FileError>(write(d, "bad.json", "{ \"format\": ")).contains("not valid JSON"));
+        QVERIFY(error_of<drape::FileError>(write(d, "deep.json", std::string(5000, '[') + std::string(5000, ']'))).contains("nested deeper"));
+        QVERIFY(error_of<drape::FileError>(write(d, "inf.json", R"({"format":"drapekit-fabric","parameters":{"shear_N_m":1e400}})")).contains("inf.json"));
         QString e = error_of<drape::ParameterError>(write(d, "s.json", R"({"format":"drapekit-fabric","version":1,"parameters":{"shear_N_m":"stiff"}})"));
         QVERIFY2(e.contains("s.json") && e.contains("parameters.shear_N_m") && e.contains("stiff"), qPrintable(e));
         e = error_of<drape::ParameterError>(write(d, "r.json", R"({"format":"drapekit-fabric","parameters":{"bend_warp_N_m":-1}})"));
@@ -140,6 +194,11 @@ private slots:
         QVERIFY2(e.contains("ClothOverMass"), qPrintable(e));
         e = error_of<drape::ParameterError>(write(d, "seed2.json", R"({"format":"seed-19","w":30})"));
         QVERIFY2(e.contains("missing") && e.contains("'h'"), qPrintable(e));
+        // A seed preset whose continuum equivalent is no fabric (1e302 g/m^2) is refused.
+        e = error_of<drape::ParameterError>(write(d, "seed3.json", R"({"format":"seed-19","w":30,"h":30,"u":30,"v":30,"x0":0,"y0":0,"z0":0,"ClothOverMass":1e-300,"SstKu":1,"SstDu":1,"SstKv":1,"SstDv":1,"SshK":1,"SshD":1,"SflKu":1,"SflDu":1,"SflKv":1,"SflDv":1})"));
+        QVERIFY2(e.contains("areal_density_kg_m2") && e.contains("outside"), qPrintable(e));
+        e = error_of<drape::FileError>(write(d, "d.json", R"({"format":"drapekit-fabric","parameters":{},"drape_coefficient":{"percent":150}})"));
+        QVERIFY2(e.contains("drape_coefficient.percent") && e.contains("150"), qPrintable(e));
     }
 
     void failed_save_keeps_the_old_file()
@@ -147,7 +206,6 @@ private slots:
         QTemporaryDir d;
         const std::string path = d.filePath("keep.json").toStdString();
         FabricPreset p;
-        p.fabric = FabricParams();
         save_fabric(p, path);
         const std::string before = read_file(path);
         // A folder with the temporary file's name makes the write fail.
@@ -157,5 +215,5 @@ private slots:
     }
 };
 
-QTEST_APPLESS_MAIN(TestFabricIo)
-#include "tst_fabric_io.moc"
+QTEST_APPLESS_MAIN(TestPreset)
+#include "tst_preset.moc"

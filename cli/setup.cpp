@@ -1,0 +1,91 @@
+#include "cli/setup.hpp"
+
+#include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
+
+namespace drape::cli {
+
+namespace {
+struct FlagName {
+    SetupFlag bit;
+    const char* name;
+    bool is_switch;
+};
+constexpr FlagName kFlags[] = {
+    {kSampleDiameter, "--sample-diameter", false}, {kDiscDiameter, "--disc-diameter", false},
+    {kPedestalHeight, "--pedestal-height", false}, {kEdgeRadius, "--edge-radius", false},
+    {kGrid, "--grid", false},                      {kSeed, "--seed", false},
+    {kFolds, "--folds", false},                    {kPerturbation, "--perturbation", false},
+    {kDiscGrip, "--disc-grip", true},
+};
+} // namespace
+
+std::set<std::string> setup_value_flags(unsigned which)
+{
+    std::set<std::string> out;
+    for (const auto& f : kFlags)
+        if ((which & f.bit) && !f.is_switch) out.insert(f.name);
+    return out;
+}
+
+std::set<std::string> setup_switches(unsigned which)
+{
+    std::set<std::string> out;
+    for (const auto& f : kFlags)
+        if ((which & f.bit) && f.is_switch) out.insert(f.name);
+    return out;
+}
+
+std::set<std::string> operator+(std::set<std::string> a, const std::set<std::string>& b)
+{
+    a.insert(b.begin(), b.end());
+    return a;
+}
+
+cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
+{
+    s.sample_diameter = a.get_length("--sample-diameter", s.sample_diameter);
+    s.disc_diameter = a.get_length("--disc-diameter", s.disc_diameter);
+    s.pedestal_height = a.get_length("--pedestal-height", s.pedestal_height);
+    s.edge_radius = a.get_length("--edge-radius", s.edge_radius);
+    s.grid = a.get_int("--grid", s.grid, 5, 1000);
+    s.seed = static_cast<std::uint64_t>(a.get_int("--seed", static_cast<int>(s.seed), 0, 2000000000));
+    if (a.has("--folds")) s = cloth::on_fold_branch(s, a.get_int("--folds", 0, 2, 16));
+    s.perturbation = a.get_length("--perturbation", s.perturbation);
+    if (a.has("--disc-grip")) s.disc_grip = true;
+    s.validate();
+    return s;
+}
+
+std::set<std::string> fabric_flags() { return {"--fabric", "--set"}; }
+
+fabric::FabricPreset load_fabric_flags(const Args& a)
+{
+    const auto arg = a.get("--fabric");
+    if (!arg) throw UsageError("--fabric is required");
+    fabric::FabricPreset preset = fabric::load_fabric(*arg);
+    const auto overrides = a.get_all("--set");
+    if (overrides.empty()) return preset;
+    cloth::FabricParams p = preset.params;
+    for (const auto& kv : overrides) {
+        const auto eq = kv.find('=');
+        if (eq == std::string::npos) throw UsageError("--set: '" + kv + "' is not KEY=VALUE (e.g. --set bend_warp_Nm=2e-6)");
+        const std::string key = kv.substr(0, eq), text = kv.substr(eq + 1);
+        const cloth::ParamSpec* sp = cloth::find_param(key);
+        if (!sp) {
+            std::string keys;
+            for (const auto& s : cloth::param_table()) keys += (keys.empty() ? "" : ", ") + std::string(s.key);
+            throw UsageError("--set: unknown parameter '" + key + "' (one of " + keys + ")");
+        }
+        double v = 0;
+        if (!parse_number(text, v)) throw UsageError("--set " + key + ": '" + text + "' is not a number (in " + std::string(sp->unit) + ")");
+        if (v < sp->lower || v > sp->upper)
+            throw UsageError("--set " + key + " = " + format_value(v) + " " + std::string(sp->unit) + " is outside [" +
+                             format_value(sp->lower) + ", " + format_value(sp->upper) + "]");
+        p[sp->id] = v;
+    }
+    preset.set_params(p);
+    return preset;
+}
+
+} // namespace drape::cli

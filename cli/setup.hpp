@@ -1,0 +1,49 @@
+#pragma once
+// What several commands read the same way: the drapemeter set-up flags and
+// the fabric (a preset file or a built-in, with --set KEY=VALUE overrides from
+// the parameter table). One parser, so a flag means the same in every command.
+#include "cli/command.hpp"
+
+#include "engine/cloth/drape.hpp"
+#include "engine/fabric/preset.hpp"
+
+#include <set>
+#include <string>
+
+namespace drape::cli {
+
+/// The set-up flags a command takes (each a bit).
+enum SetupFlag : unsigned {
+    kSampleDiameter = 1u << 0, ///< --sample-diameter L
+    kDiscDiameter = 1u << 1,   ///< --disc-diameter L
+    kPedestalHeight = 1u << 2, ///< --pedestal-height L
+    kEdgeRadius = 1u << 3,     ///< --edge-radius L
+    kGrid = 1u << 4,           ///< --grid N
+    kSeed = 1u << 5,           ///< --seed K
+    kFolds = 1u << 6,          ///< --folds N
+    kPerturbation = 1u << 7,   ///< --perturbation L
+    kDiscGrip = 1u << 8,       ///< --disc-grip (a switch)
+    kAllSetup = (1u << 9) - 1,
+};
+
+/// The value flags and switches of `which`, to merge into a command's Args.
+std::set<std::string> setup_value_flags(unsigned which);
+std::set<std::string> setup_switches(unsigned which);
+/// Union of two flag sets (for building a command's Args).
+std::set<std::string> operator+(std::set<std::string> a, const std::set<std::string>& b);
+
+/// The set-up from `defaults` with the flags present in `a` applied (lengths
+/// with units; --folds starts on the n-fold branch with the default lift,
+/// --perturbation then sets the lift). Bad values are UsageErrors naming the
+/// flag; the result is validated (ParameterError on an impossible set-up).
+cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup defaults);
+
+/// `--fabric F` (required) and every `--set KEY=VALUE`: a preset file or a
+/// built-in name, with parameters overridden from the parameter table (KEY a
+/// table key, VALUE a number in the key's unit; e.g. --set bend_warp_Nm=2e-6).
+/// An override turns a seed-19 preset into its continuum equivalent.
+fabric::FabricPreset load_fabric_flags(const Args& a);
+/// The value flags load_fabric_flags reads: --fabric and --set.
+std::set<std::string> fabric_flags();
+
+} // namespace drape::cli

@@ -1,0 +1,23 @@
+#pragma once
+// The photographs of a record, through OpenCV: loading with the checks a
+// received file needs (size declared in meta.json, header read before the
+// pixels are decoded, truncated JPEGs refused) and the camera matrix.
+#include "engine/record/record.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <string>
+
+namespace drape::capture {
+
+/// The photograph of station `camera` (BGR, 8 bit). Throws FileError when the
+/// file is missing, not a decodable image, truncated (no JPEG end marker), or
+/// not of the size declared in meta.json - the size is read from the file's
+/// header before the pixels are decoded, so a header claiming 30000 x 30000 px
+/// costs nothing.
+cv::Mat load_image(const record::Record& rec, const std::string& camera);
+
+/// The intrinsic matrix K of a camera [px].
+cv::Matx33d camera_matrix(const record::Camera& c);
+
+} // namespace drape::capture

@@ -1,0 +1,100 @@
+#pragma once
+// The fit's evaluator: runs the simulations of one parameter point (every
+// record times every perturbation seed, from flat or warm from the best point's
+// rest states), turns them into whitened residuals, keeps the best point, and
+// measures the drape-to-drape spread of every residual term. Internal to the
+// estimate layer (fit.cpp, stages.cpp, uncertainty.cpp).
+#include "engine/estimate/fit.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace drape::estimate::detail {
+
+using Clock = std::chrono::steady_clock;
+
+struct Evaluation {
+    double chi2 = HUGE_VAL;
+    std::vector<ResidualTerm> terms;
+    std::vector<DrapeFeatures> features;               ///< seed-averaged, per record
+    std::vector<std::vector<cloth::DrapeResult>> sims; ///< [record][seed]
+};
+
+/// Thrown out of an evaluation when FitOptions::cancel is set.
+struct CancelledFit {};
+
+/// Where each simulation starts: flat and perturbed by its seed (Cold), or
+/// from its seed's rest state at the best point so far (Best). Warm starts keep
+/// each seed's fold pattern unless the parameters make it unstable.
+enum class Start { Cold, Best };
+
+class Evaluator {
+public:
+    Evaluator(const std::vector<MeasuredDrape>& recs, const FitOptions& opt, std::vector<FitVariable> vars,
+              cloth::FabricParams base);
+
+    /// Set-up of record r's simulation with perturbation seed `seed`: on the
+    /// record's measured fold branch (FitOptions::branch) or from the random mix.
+    cloth::DrapeSetup setup_for(int r, std::uint64_t seed, bool on_branch) const;
+    /// The fold count record r's cold drapes start with (0: random mix).
+    int branch_of(int r) const;
+    /// The full parameter set at search coordinates x (clamped to the table's bounds).
+    cloth::FabricParams params_at(const Eigen::VectorXd& x) const;
+
+    /// Simulates every record and seed at x and scores the result. Throws CancelledFit.
+    Evaluation evaluate(const Eigen::VectorXd& x, Start from);
+    /// Measures the drape-to-drape spread of every residual term at `x` with
+    /// `extra` more perturbation seeds (cold starts), and raises each term's
+    /// sigma to that spread where the default floor was optimistic (the spread
+    /// depends on the fabric and the grid: 0.6 mm for the cos 2theta term of an
+    /// isotropic fabric at grid 25, several mm with 4-5 folds at grid 17).
+    /// Also drapes the preset from the random mix (`cold_*`). Re-scores the best
+    /// point with the new sigmas.
+    void calibrate_spread(const Eigen::VectorXd& x, int extra);
+    /// Objective for the optimizers: evaluates, keeps the best point and its rest states.
+    double objective(const Eigen::VectorXd& x, Start from, const std::string& stage);
+    /// Calls FitOptions::progress with the state so far.
+    void report(const std::string& stage) const;
+
+    const Evaluation& last() const { return m_last; }
+    const std::vector<DrapeFeatures>& measured() const { return m_meas; }
+    const Evaluation& best() const { return m_best; }
+    const Eigen::VectorXd& best_x() const { return m_best_x; }
+    bool spread_calibrated() const { return m_spread_calibrated; }
+    long simulations() const { return m_simulations; }
+    int evaluations() const { return m_evaluations; }
+    double sim_seconds() const { return m_sim_seconds; }
+    long unconverged() const { return m_unconverged; }
+    const std::vector<DrapeFeatures>& cold_features() const { return m_cold; }
+    int cold_seeds(std::size_t r) const { return r < m_cold_seeds.size() ? m_cold_seeds[r] : 0; }
+    void set_planned(int n) { m_planned = n; }
+
+private:
+    /// One cold drape of record r at p (seed, on the branch or not), measured.
+    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch);
+
+    const std::vector<MeasuredDrape>& m_recs;
+    const FitOptions& m_opt;
+    std::vector<FitVariable> m_vars;
+    cloth::FabricParams m_base;
+    std::vector<DrapeFeatures> m_meas;
+    NoiseModel m_noise;
+    std::vector<double> m_sigma_floor; ///< per residual term, from calibrate_spread
+    bool m_spread_calibrated = false;
+    Evaluation m_best, m_last;
+    std::vector<DrapeFeatures> m_cold; ///< per record: mean features of the random-start drapes
+    std::vector<int> m_cold_seeds;     ///< per record: drapes behind m_cold (0 = none)
+    Eigen::VectorXd m_last_x;
+    Eigen::VectorXd m_best_x;
+    std::vector<std::vector<cloth::Positions>> m_states;
+    bool m_have_states = false;
+    long m_simulations = 0, m_unconverged = 0;
+    int m_evaluations = 0;
+    int m_planned = 0;
+    double m_sim_seconds = 0;
+    Clock::time_point m_t0;
+};
+
+} // namespace drape::estimate::detail

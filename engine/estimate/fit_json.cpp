@@ -1,0 +1,145 @@
+#include "engine/estimate/fit.hpp"
+
+#include "engine/fabric/preset.hpp"
+
+#include <cmath>
+#include <ctime>
+#include <limits>
+
+namespace drape::estimate {
+
+using nlohmann::json;
+
+namespace {
+std::string now_utc()
+{
+    const std::time_t t = std::time(nullptr);
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return buf;
+}
+} // namespace
+
+json fit_to_json(const FitResult& r)
+{
+    fabric::FabricPreset preset;
+    preset.name = r.name.empty() ? (r.records.empty() ? std::string("fitted") : r.records.front().measured.id) : r.name;
+    preset.params = r.params;
+    preset.model = r.options.model_options; // what the fit simulated with (edge contact)
+    preset.source = "fitted by drape fit to drape-test records";
+    fabric::Provenance provenance;
+    provenance.tool = "drape fit";
+    provenance.date = now_utc();
+    provenance.grid = r.options.grid;
+    json prov;
+    json recs = json::array();
+    for (const auto& rf : r.records) {
+        recs.push_back({{"id", rf.measured.id}, {"source", rf.measured.source}});
+        provenance.records.push_back(rf.measured.id);
+    }
+    prov["records"] = recs;
+    prov["recentre_contours"] = r.options.recentre_contours;
+    prov["edge_contact"] = r.options.model_options.edge_contact;
+    prov["model"] = to_string(r.options.model);
+    prov["seed"] = r.options.seed;
+    prov["seeds_per_evaluation"] = r.options.seeds_per_evaluation;
+    prov["global_stage_starts"] = r.options.warm_global ? "warm" : "cold";
+    prov["local_stage_starts"] = r.options.warm_local ? "warm" : "cold";
+    prov["channels"] = r.options.channels;
+    prov["fold_branch"] = to_string(r.options.branch);
+    if (r.options.branch == FoldBranch::Measured) prov["fold_branch_lift_m"] = r.options.branch_lift_m;
+    provenance.details = prov;
+    preset.provenance = provenance;
+
+    fabric::FitSummary summary;
+    summary.chi2 = r.chi2;
+    summary.dof = r.dof;
+    summary.reduced_chi2 = r.chi2 / std::max(1, r.dof);
+    summary.grid_bound = r.grid_bound;
+    json fit;
+    fit["evaluations"] = r.evaluations;
+    fit["simulations"] = r.simulations;
+    fit["seconds_per_simulation"] = r.seconds_per_simulation;
+    fit["wall_seconds"] = r.wall_seconds;
+    fit["cancelled"] = r.cancelled;
+    if (r.refinement.from_grid > 0)
+        fit["refinement"] = {{"from_grid", r.refinement.from_grid}, {"to_grid", r.refinement.to_grid},
+                             {"adopted", r.refinement.adopted},   {"coarse_chi2", r.refinement.coarse_chi2},
+                             {"coarse_dof", r.refinement.coarse_dof}, {"fine_chi2", r.refinement.fine_chi2},
+                             {"fine_dof", r.refinement.fine_dof}, {"reason", r.refinement.reason}};
+    json params = json::array();
+    std::vector<std::string> not_identifiable;
+    for (const auto& e : r.estimates) {
+        json p = {{"key", e.key}, {"unit", e.unit}, {"role", e.role}, {"value", e.value}, {"constrained", e.constrained}};
+        if (e.role == "fitted") {
+            p["lower95"] = e.lower95;
+            p["upper95"] = e.upper95;
+            p["sigma_search_coordinate"] = std::isfinite(e.sigma_coord) ? json(e.sigma_coord) : json(nullptr);
+        }
+        if (!e.note.empty()) p["note"] = e.note;
+        if (!e.constrained) not_identifiable.push_back(e.key);
+        params.push_back(p);
+    }
+    fit["parameters"] = params;
+    fit["not_constrained"] = not_identifiable;
+    json corr = json::object();
+    const int n = static_cast<int>(r.variables.size());
+    for (int i = 0; i < n; ++i) {
+        json row = json::object();
+        for (int k = 0; k < n; ++k) {
+            const double c = r.correlation.size() ? r.correlation(i, k) : std::numeric_limits<double>::quiet_NaN();
+            row[r.variables[k].name] = std::isfinite(c) ? json(c) : json(nullptr);
+        }
+        corr[r.variables[i].name] = row;
+    }
+    fit["correlation"] = corr;
+    json per = json::array();
+    for (const auto& rf : r.records) {
+        per.push_back({{"id", rf.measured.id},
+                       {"sample_diameter_m", rf.measured.sample_diameter},
+                       {"disc_diameter_m", rf.measured.disc_diameter},
+                       {"measured_drape_coefficient_percent", rf.measured_features.drape_coefficient_percent},
+                       {"fitted_drape_coefficient_percent", rf.simulated_features.drape_coefficient_percent},
+                       {"dc_error_percent", rf.dc_error_percent},
+                       {"measured_node_count", rf.measured_features.node_count},
+                       {"fitted_node_count", rf.simulated_features.node_count},
+                       {"node_error", rf.node_error},
+                       {"fold_branch", rf.branch_folds > 0 ? json(rf.branch_folds) : json(nullptr)},
+                       {"cold_seeds", rf.cold_seeds},
+                       {"cold_drape_coefficient_percent", rf.cold_seeds ? json(rf.cold_features.drape_coefficient_percent) : json(nullptr)},
+                       {"cold_node_count", rf.cold_seeds ? json(rf.cold_features.node_count) : json(nullptr)},
+                       {"cold_dc_error_percent", rf.cold_seeds ? json(rf.cold_dc_error_percent) : json(nullptr)},
+                       {"cold_node_error", rf.cold_seeds ? json(rf.cold_node_error) : json(nullptr)},
+                       {"node_source", rf.measured.node_source},
+                       {"contours_recentred", rf.measured.recentre_contours},
+                       {"profiler_axis_offset_m", {rf.measured_features.axis_offset_m.x(), rf.measured_features.axis_offset_m.y()}}});
+    }
+    fit["records"] = per;
+    summary.details = fit;
+    if (!r.records.empty()) {
+        summary.sample_diameter_m = r.records.front().measured.sample_diameter;
+        summary.disc_diameter_m = r.records.front().measured.disc_diameter;
+        // The preset's own drape coefficient on its first record's set-up: draped
+        // from flat (as predict, a CAD and the library use it) when the fit ran
+        // those drapes, else as fitted.
+        const RecordFit& rf = r.records.front();
+        fabric::DrapeReference d;
+        const bool cold = rf.cold_seeds > 0 && std::isfinite(rf.cold_features.drape_coefficient_percent);
+        d.percent = cold ? rf.cold_features.drape_coefficient_percent : rf.simulated_features.drape_coefficient_percent;
+        d.kind = "simulated";
+        d.sample_diameter_m = rf.measured.sample_diameter;
+        d.disc_diameter_m = rf.measured.disc_diameter;
+        d.method = cold ? "drape fit: mean of " + std::to_string(rf.cold_seeds) + " drapes from flat (random start) at grid " +
+                              std::to_string(r.options.grid)
+                        : "drape fit: fitted drapes at grid " + std::to_string(r.options.grid);
+        d.date = provenance.date;
+        if (std::isfinite(d.percent)) preset.drape = d;
+    }
+    preset.fit = summary;
+    preset.extra["residual"] = residual_to_json(r.residual);
+    return fabric::fabric_to_json(preset);
+}
+
+} // namespace drape::estimate

@@ -1,0 +1,45 @@
+#pragma once
+// The search stages of a fit, each on the evaluator (evaluator.hpp): the scan
+// of a common bending for the measured D, NLopt's global and local stages, and
+// the warp/weft mirror check. Internal to the estimate layer.
+#include "engine/estimate/evaluator.hpp"
+
+#include <nlopt.hpp>
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace drape::estimate::detail {
+
+/// Search box of each coordinate (lower, upper) in search coordinates.
+using Box = std::vector<std::pair<double, double>>;
+
+/// One NLopt stage from x within `box` (the variables' bounds when empty).
+/// Leaves x at the best point so far. A simulation error (drape::Error) thrown
+/// inside the objective is rethrown here, not swallowed; returns true when the
+/// fit was cancelled.
+bool run_stage(nlopt::algorithm alg, Evaluator& ev, const std::vector<FitVariable>& vars, Eigen::VectorXd& x, int maxeval,
+               Start from, const std::string& stage, std::uint64_t seed, const Box& box = {});
+
+/// Stage 0, "scan": D grows monotonically with bending stiffness, so a root
+/// search on a common bending (warp = weft) for the measured D finds the right
+/// decade: from the start value in steps of a decade until D is bracketed, then
+/// regula falsi (Illinois) in log10 of the bending, stopping within 0.5 points
+/// of D, at most `budget` evaluations. Cold starts, so each seed's fold pattern
+/// is the one a drop at that stiffness forms (a warm chain from a limp start
+/// kept 12 folds up to stiff fabrics). Sets the bending coordinates of x to the
+/// best point and narrows their box to +-0.7 decades around it. Throws CancelledFit.
+void scan_bending(Evaluator& ev, const std::vector<FitVariable>& vars, const std::vector<int>& bend_vars, int budget,
+                  Eigen::VectorXd& x, Box& box);
+
+/// Mirror check: D and the node count do not change when warp and weft swap;
+/// only the signed cos 2theta of the contours tells which axis is stiffer, and
+/// it is weak against the fold noise, so a local stage can end in the mirror
+/// image of the optimum. One evaluation at the swapped point; a second local
+/// stage (`local` evaluations) from there when it is better. Returns true when cancelled.
+bool mirror_check(Evaluator& ev, const std::vector<FitVariable>& vars, const std::vector<int>& bend_vars, Eigen::VectorXd& x,
+                  int local, Start from, std::uint64_t seed);
+
+} // namespace drape::estimate::detail

@@ -1,0 +1,25 @@
+#pragma once
+// What a fit knows about its parameters: the covariance of the search
+// coordinates from the Jacobian of the smooth whitened residuals at the
+// optimum, and one estimate (role, value, 95 % interval, notes) per parameter
+// of the table. Internal to the estimate layer.
+#include "engine/estimate/evaluator.hpp"
+
+#include <vector>
+
+namespace drape::estimate::detail {
+
+/// Central differences of the smooth, fitted whitened residuals at x (warm
+/// re-solves) -> cov = s^2 (J^T J)^-1 with s^2 = max(1, chi2/dof), into
+/// out.covariance and out.correlation. Returns the 1-sigma of each search
+/// coordinate (infinite along directions the data does not see). Throws CancelledFit.
+std::vector<double> coordinate_sigmas(Evaluator& ev, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
+                                      const Evaluation& best, FitResult& out);
+
+/// Fills out.estimates (every parameter of the table) and out.grid_bound from
+/// the optimum x and the coordinate sigmas. `mesh_spacing_m` is the fit's grid
+/// spacing: a fitted bending whose bending length is below it is grid-bound.
+void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
+                         const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m);
+
+} // namespace drape::estimate::detail

@@ -1,0 +1,93 @@
+#pragma once
+// Garment scenes, free of any GUI: a circular skirt generated around a
+// mannequin's waist and a round tablecloth on a round table, as cloth systems
+// ready to drape with a fabric preset. The demo, the widget and `drape garment`
+// use the same functions, so what a test checks is what the user sees.
+//
+// World frame: Drapekit's (z up, metres); the table stands on the floor z = 0.
+#include "importers/body.hpp"
+
+#include "engine/cloth/solver.hpp"
+#include "engine/cloth/system.hpp"
+#include "engine/fabric/preset.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace drape::importers {
+
+/// A flat annulus (circular skirt pattern) in the plane z = `z` [m] around
+/// `centre`: `rings` + 1 circles from `inner_radius` to `outer_radius` [m],
+/// spaced geometrically so triangles keep their shape, `segments` vertices per
+/// circle. Inner circle vertices are marked in `waistband`. Throws
+/// ParameterError on radii <= 0, outer <= inner, segments < 8 or rings < 1.
+struct Panel {
+    cloth::Positions X;
+    cloth::Triangles F;
+    std::vector<int> waistband;
+};
+Panel make_annulus(const Eigen::Vector2d& centre, double z, double inner_radius, double outer_radius, int segments,
+                   int rings);
+
+/// Sizes of the generated skirt, relative to the measured waist.
+struct SkirtOptions;
+
+/// The start shape of a skirt pattern `p` pinned at its waistband (radius
+/// `r_in` [m] around `centre`, height `z_band` [m]): each ring hangs on a
+/// nearly vertical cone (3 degrees) that clears the body, its length gathered
+/// into eight outward folds, so the drape starts outside the body with springs
+/// near their rest length (a flat pattern would cut through arms held away
+/// from the body) and the fabric chooses its own flare. The number of folds is
+/// the start's: the static solver finds the rest state nearest to it.
+cloth::Positions hang_skirt(const Mannequin& m, const Panel& p, const Eigen::Vector2d& centre, double z_band,
+                            double r_in, const SkirtOptions& opt);
+
+/// Garment choice.
+enum class Garment { Skirt, Tablecloth };
+Garment parse_garment(const std::string& name); ///< "skirt" | "tablecloth"; ParameterError otherwise
+std::string to_string(Garment g);
+
+/// A round table standing on the floor.
+struct Table {
+    double radius = 0.45;     ///< [m]
+    double height = 0.75;     ///< [m] top above the floor
+    double cloth_diameter = 1.5; ///< [m] round tablecloth
+};
+
+/// Sizes of the generated skirt, relative to the measured waist.
+struct SkirtOptions {
+    double length = 0.50;       ///< [m] from waistband to hem, flat
+    double ease = 0.012;        ///< [m] waistband radius beyond the waist's farthest point
+    double lift = 0.02;         ///< [m] waistband above the waist
+    int segments = 96;          ///< around
+    int rings = 0;              ///< across; 0 = from segments so triangles are near equilateral
+};
+
+/// A cloth scene ready to drape, plus what the view needs to draw it.
+struct Scene {
+    Garment garment = Garment::Skirt;
+    std::unique_ptr<cloth::ClothSystem> system;
+    std::shared_ptr<const Mannequin> mannequin; ///< skirt only
+    Table table;                                ///< tablecloth only
+    Girth waist;                                ///< skirt only
+    std::string fabric_name;
+};
+
+/// Skirt on the mannequin: annulus around the measured waist, waistband pinned,
+/// colliders = body (MeshCollider) + floor. FabricParams are required; a seed
+/// preset is converted with fabric::continuum_from_seed.
+Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const fabric::FabricPreset& fabric,
+                       const SkirtOptions& opt = {});
+/// Round tablecloth centred on a round table: colliders = table top (a
+/// PedestalCollider: top radius, height) + floor; a small symmetry-breaking
+/// lift as in the drapemeter so folds can form.
+Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& table = {}, int grid = 45,
+                            std::uint64_t seed = 1);
+
+/// Rest options of a garment drape: the static solver (each Newton iteration one
+/// sparse Cholesky) with a residual the eye cannot tell from exact rest.
+cloth::RestOptions garment_rest_options();
+
+} // namespace drape::importers

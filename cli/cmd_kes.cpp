@@ -3,7 +3,7 @@
 #include "cli/command.hpp"
 
 #ifdef HAVE_DRAPE_CAPTURE
-#include "engine/capture/measure.hpp"
+#include "engine/capture/kes.hpp"
 
 #include <cstdio>
 

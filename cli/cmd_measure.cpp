@@ -4,6 +4,7 @@
 #ifdef HAVE_DRAPE_CAPTURE
 #include "engine/capture/export.hpp"
 #include "engine/capture/measure.hpp"
+#include "engine/capture/report.hpp"
 #include "engine/core/error.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -82,7 +83,7 @@ DRAPE_COMMAND({"measure", "measure a drape-lab record (photos, laser contours)",
                "  --mesh FILE.obj  write the surface through the contour levels' Fourier series [m]\n"
                "  --rays N         rays traced around the axis (default 720)\n"
                "  --no-calibrate   use the declared top pose instead of solvePnP on the floor chessboards\n"
-               "  --node-prominence F  a fold crest must rise F x (max r - min r) above its troughs (default 0.15)\n"
+               "  --node-prominence F  a fold crest must rise F x (max r - min r) above its troughs (default 0.10)\n"
                "Files that are missing or unreadable are listed under not_measured; a bad meta.json is an error.",
                run_measure});
 

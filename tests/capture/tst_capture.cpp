@@ -2,6 +2,7 @@
 #include "engine/capture/export.hpp"
 #include "engine/capture/image.hpp"
 #include "engine/capture/measure.hpp"
+#include "engine/capture/report.hpp"
 #include "engine/core/error.hpp"
 #include "synthetic.hpp"
 

@@ -1,6 +1,7 @@
 // The ten set-a lab records: drape coefficient against the lab's drapemeter,
 // node counts against a person's count on the overlays, contour fits.
 #include "engine/capture/measure.hpp"
+#include "engine/capture/report.hpp"
 
 #include <QtTest>
 

@@ -1,0 +1,15 @@
+#pragma once
+// The steps of measure_record, one file each (top_view.cpp, side_view.cpp,
+// contour_levels.cpp). Internal to engine/capture.
+#include "engine/capture/measure.hpp"
+
+namespace drape::capture::detail {
+
+/// Segments the top photo (out.top_image) and traces the outline into out.top.
+void measure_top(const record::Record& rec, const MeasureOptions& opt, const record::ContourStack* stack, Measurement& out);
+/// Traces the hem in the side photo (out.side_image) into out.side; needs out.top.
+void measure_side(const record::Record& rec, Measurement& out);
+/// Fourier series of every contour depth into out.contours.
+void measure_contours(const record::Record& rec, const record::ContourStack& st, Measurement& out);
+
+} // namespace drape::capture::detail

@@ -27,7 +27,7 @@ areal density and thickness from the record) and compares it with the record,
 channel by channel, as `drape fit` does - but fits nothing. Use it to check a
 preset against records it was not fitted to, or to see what a model change does.
 
-  --fabric F            preset file (drapekit-fabric)
+  --fabric F            a drapekit-fabric preset: file, library name or starter (silk, cotton, ...)
   --set KEY=VALUE       override one parameter (a key of the parameter table; repeatable)
   --grid N              nodes across a 300 mm specimen (default 25, scaled with the diameter)
   --seeds S             perturbation seeds averaged (default 2)

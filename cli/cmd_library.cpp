@@ -9,6 +9,7 @@
 #include "engine/core/units.hpp"
 #include "engine/fabric/preset.hpp"
 #include "engine/library/fabric_library.hpp"
+#include "engine/library/resolve.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -91,7 +92,9 @@ int run_library(const std::vector<std::string>& argv)
     const std::string sub = argv.front();
     const std::vector<std::string> rest(argv.begin() + 1, argv.end());
     auto open = [](const cli::Args& a, FabricLibrary::Mode m) {
-        return FabricLibrary(a.get_or("--library", default_library_path()), m);
+        const auto path = a.get("--library");
+        if (path && path->empty()) throw cli::UsageError("--library: the path is empty (leave the flag out for the default library)");
+        return open_library(path.value_or(""), m);
     };
 
     if (sub == "list") {
@@ -169,7 +172,7 @@ int run_library(const std::vector<std::string>& argv)
         if (update ? a.positionals().size() != 2 : a.positionals().size() != 1)
             throw cli::UsageError(update ? "library update needs NAME FILE" : "library add needs one preset FILE (or seed-table1)");
         const std::string file = a.positionals().back();
-        const fabric::FabricPreset p = fabric::load_fabric(file);
+        const fabric::FabricPreset p = resolve_fabric(file, a.get_or("--library", ""));
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
         std::string name = update ? a.positionals().front() : a.get_or("--name", "");
         if (update) {
@@ -288,13 +291,14 @@ DRAPE_COMMAND({"library", "manage the fabric library (SQLite): list, show, add, 
                "usage: drape library SUBCOMMAND [--library PATH] ...\n"
                "  The library file: --library PATH, else $DRAPE_LIBRARY, else\n"
                "  $XDG_DATA_HOME/drapekit/library.sqlite (~/.local/share/drapekit/library.sqlite).\n"
+               "  The default library is created on first use with the starter fabrics (silk, cotton, wool, denim).\n"
                "  Every sub-command takes --json for machine-readable output.\n"
                "\n"
                "  list   [--search TEXT] [--name S] [--composition S] [--weight-min G] [--weight-max G] (g/m^2)\n"
                "         [--d-min D] [--d-max D] (percent: 65 or 65%) [--fit-min Q] [--fit-max Q] (reduced chi-square)\n"
                "         [--since DATE] [--until DATE] (modified, ISO 8601) [--sort name|weight|d|modified|fit] [--desc] [--limit N]\n"
                "  show   NAME                       parameters, composition, D, fit, dates\n"
-               "  add    FILE [--name NAME] [--replace]   a preset JSON (drapekit-fabric or seed-19) or seed-table1\n"
+               "  add    FILE [--name NAME] [--replace]   a preset JSON (drapekit-fabric or seed-19), seed-table1 or a starter (silk, ...)\n"
                "  update NAME FILE                  replace the stored preset, keep the name\n"
                "  rename OLD NEW\n"
                "  remove NAME [NAME ...]\n"

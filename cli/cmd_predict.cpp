@@ -19,7 +19,8 @@ const char* kUsage = R"(usage: drape predict --fabric FABRIC.json --sample-diame
 Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
 360/180 mm from a fit at 300/150. Prints the same keys as `drape simulate`.
 
-  --fabric F            preset file (drapekit-fabric or seed-19 JSON) or seed-table1
+  --fabric F            preset file (drapekit-fabric or seed-19 JSON), seed-table1, a fabric of the
+                        library, or a starter fabric: silk, cotton, wool, denim
   --set KEY=VALUE       override one parameter (a key of the parameter table; repeatable)
   --sample-diameter L   specimen diameter (default 300mm; units mm, cm, m; bare = m)
   --disc-diameter L     pedestal disc diameter (default 150mm)

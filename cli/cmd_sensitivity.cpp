@@ -18,7 +18,7 @@ others by +-50 % of their range) and records D, node count, hem height and the
 harmonic magnitudes of the shadow outline: DIR/sensitivity.csv and two PNG plots
 per parameter.
 
-  --fabric F            drapekit-fabric preset
+  --fabric F            a drapekit-fabric preset: file, library name or starter (silk, cotton, ...)
   --set KEY=VALUE       override one parameter (a key of the parameter table; repeatable)
   --out DIR             output folder
   --params K,K,...      parameter keys (default bend_warp_Nm,bend_weft_Nm,shear_N_m,

@@ -17,7 +17,8 @@ const char* kUsage = R"(usage: drape simulate --fabric FABRIC.json|seed-table1 [
 Drapes a round specimen over the drapemeter pedestal to rest and measures it
 (drape coefficient, nodes, hem height, slices).
 
-  --fabric F            preset file (drapekit-fabric or seed-19 JSON) or seed-table1
+  --fabric F            preset file (drapekit-fabric or seed-19 JSON), seed-table1, a fabric of the
+                        library, or a starter fabric: silk, cotton, wool, denim
   --set KEY=VALUE       override one parameter of the preset (a key of the parameter table in its
                         unit, e.g. --set bend_warp_Nm=2e-6; repeatable)
   --sample-diameter L   specimen diameter (default 300mm; units mm, cm, m; bare = m)

@@ -3,6 +3,10 @@
 #include "engine/core/error.hpp"
 #include "engine/core/units.hpp"
 
+#ifdef HAVE_DRAPE_LIBRARY
+#include "engine/library/resolve.hpp"
+#endif
+
 namespace drape::cli {
 
 namespace {
@@ -63,7 +67,11 @@ fabric::FabricPreset load_fabric_flags(const Args& a)
 {
     const auto arg = a.get("--fabric");
     if (!arg) throw UsageError("--fabric is required");
+#ifdef HAVE_DRAPE_LIBRARY
+    fabric::FabricPreset preset = library::resolve_fabric(*arg);
+#else
     fabric::FabricPreset preset = fabric::load_fabric(*arg);
+#endif
     const auto overrides = a.get_all("--set");
     if (overrides.empty()) return preset;
     cloth::FabricParams p = preset.params;

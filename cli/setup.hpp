@@ -38,8 +38,9 @@ std::set<std::string> operator+(std::set<std::string> a, const std::set<std::str
 /// flag; the result is validated (ParameterError on an impossible set-up).
 cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup defaults);
 
-/// `--fabric F` (required) and every `--set KEY=VALUE`: a preset file or a
-/// built-in name, with parameters overridden from the parameter table (KEY a
+/// `--fabric F` (required) and every `--set KEY=VALUE`: a preset file, a
+/// built-in, a fabric of the default library or a starter fabric by short name
+/// (library::resolve_fabric), with parameters overridden from the parameter table (KEY a
 /// table key, VALUE a number in the key's unit; e.g. --set bend_warp_Nm=2e-6).
 /// An override turns a seed-19 preset into its continuum equivalent.
 fabric::FabricPreset load_fabric_flags(const Args& a);

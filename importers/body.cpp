@@ -1,9 +1,11 @@
 #include "importers/body.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 #include <limits>
 
@@ -11,14 +13,7 @@ namespace drape::importers {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-std::string fmt(double v)
-{
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.4g", v);
-    return buf;
-}
+constexpr double kPi = std::numbers::pi;
 
 /// Segments of the section of triangle mesh (X, F) with the plane z = h, as 2-D points pairs.
 std::vector<std::array<Eigen::Vector2d, 2>> section(const cloth::Positions& X, const cloth::Triangles& F, double h)
@@ -58,7 +53,7 @@ Mannequin load_mannequin(const std::string& path, const ImportOptions& opt)
     const AlignedBox b = m.mesh.bounds();
     const double h = b.max.z() - b.min.z();
     if (!(h > 0.5 && h < 2.5))
-        throw ParameterError(path + ": mannequin is " + fmt(h) + " m tall after conversion (unit " +
+        throw ParameterError(path + ": mannequin is " + format_value(h) + " m tall after conversion (unit " +
                              to_string(opt.unit) + ", up " + to_string(opt.up) +
                              "); expected 0.5..2.5 m: give the file's unit and up axis");
     // Stand it on the floor, centred on the z axis.

@@ -2,11 +2,13 @@
 
 #include "engine/cloth/model.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
 
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 #include <random>
 
@@ -14,14 +16,7 @@ namespace drape::importers {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-std::string fmt(double v)
-{
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.4g", v);
-    return buf;
-}
+constexpr double kPi = std::numbers::pi;
 
 /// Length of the closed curve r(theta) = rc + a (1 + sin(k theta)) [m].
 double fluted_length(double rc, double a, int k)
@@ -42,8 +37,8 @@ Panel make_annulus(const Eigen::Vector2d& centre, double z, double inner_radius,
                    int rings)
 {
     if (!(inner_radius > 0) || !(outer_radius > inner_radius))
-        throw ParameterError("annulus: radii must satisfy 0 < inner < outer (inner " + fmt(inner_radius) + " m, outer " +
-                             fmt(outer_radius) + " m)");
+        throw ParameterError("annulus: radii must satisfy 0 < inner < outer (inner " + format_value(inner_radius) + " m, outer " +
+                             format_value(outer_radius) + " m)");
     if (segments < 8) throw ParameterError("annulus: segments must be >= 8 (got " + std::to_string(segments) + ")");
     if (rings < 1) throw ParameterError("annulus: rings must be >= 1 (got " + std::to_string(rings) + ")");
     Panel p;
@@ -159,7 +154,7 @@ cloth::Positions hang_skirt(const Mannequin& m, const Panel& p, const Eigen::Vec
 Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const fabric::FabricPreset& fabric, const SkirtOptions& opt)
 {
     if (!m) throw ParameterError("skirt: no mannequin");
-    if (!(opt.length > 0)) throw ParameterError("skirt: length must be > 0 m (got " + fmt(opt.length) + ")");
+    if (!(opt.length > 0)) throw ParameterError("skirt: length must be > 0 m (got " + format_value(opt.length) + ")");
     Scene s;
     s.garment = Garment::Skirt;
     s.mannequin = m;
@@ -189,8 +184,8 @@ Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& tab
 {
     if (!(table.radius > 0) || !(table.height > 0) || !(table.cloth_diameter > 2 * table.radius))
         throw ParameterError("table: need radius > 0, height > 0 and a cloth wider than the top (radius " +
-                             fmt(table.radius) + " m, height " + fmt(table.height) + " m, cloth " +
-                             fmt(table.cloth_diameter) + " m)");
+                             format_value(table.radius) + " m, height " + format_value(table.height) + " m, cloth " +
+                             format_value(table.cloth_diameter) + " m)");
     Scene s;
     s.garment = Garment::Tablecloth;
     s.table = table;

@@ -20,13 +20,14 @@ struct DrapeSetup {
     int grid = 60;                  ///< nodes across the specimen diameter
     std::uint64_t seed = 1;         ///< perturbation seed (buckling is a bifurcation)
     /// Amplitude of the symmetry-breaking perturbation [m]: the flat sheet's
-    /// height gets sum_k a_k cos(k theta + phi_k) (r/R1)^2 for k = 2..16 with
-    /// random a_k in [0,1] normalised so the largest lift is this amplitude, and
-    /// random phases, all from `seed`. Small enough not to change a converged D
+    /// height gets sum_k a_k cos(k theta + phi_k) t^2 for k = 2..16, with
+    /// t = (r - R2) / (R1 - R2) on the overhang (0 on the disc), random a_k in
+    /// [0,1] normalised so the largest lift is this amplitude, and random
+    /// phases, all from `seed`. Small enough not to change a converged D
     /// beyond the spread of real repeats, large enough to pick a fold pattern.
     double perturbation = 1.0e-3;
     /// 0: the seeded mix above. n >= 2: start on an n-fold branch - the lift is
-    /// cos(n theta + phi) (r/R1)^2 with a seeded phase phi, plus the seeded mix at
+    /// cos(n theta + phi) t^2 (t as above) with a seeded phase phi, plus the seeded mix at
     /// a tenth of the amplitude so the n-fold symmetry is not exact. Whether the
     /// sheet keeps n folds is then up to the fabric: an unstable branch buckles
     /// into another count on the way to rest.

@@ -105,6 +105,11 @@ FabricLibrary::FabricLibrary(const std::string& path, Mode mode) : m_path(path),
 {
     namespace fs = std::filesystem;
     std::error_code ec;
+    // SQLite reads "" as a temporary and ":memory:" (or a "file:" URI) as a
+    // database in memory: nothing would be stored where the user looks for it.
+    if (path.empty()) throw ParameterError("fabric library: the path is empty");
+    if (path == ":memory:" || path.rfind("file:", 0) == 0)
+        throw ParameterError("fabric library: '" + path + "' is not a file path (a library must be stored in a file)");
     if (mode == Mode::ReadOnly) {
         if (!fs::exists(path, ec)) throw FileError(path + ": no fabric library at this path");
     } else if (const fs::path parent = fs::path(path).parent_path(); !parent.empty()) {

@@ -293,6 +293,26 @@ private slots:
         QVERIFY_THROWS_EXCEPTION(ParameterError, b.import_all(json{{"format", "other"}}, "doc4"));
     }
 
+    /// A preset `drape fit` wrote before the typed format (docs/fit-report, keys
+    /// before the unit-suffix rule) loads, and enters the library with its fit
+    /// quality (the reduced chi-square) - the library used to look for fields
+    /// the fit never wrote.
+    void fittedPresetShowsItsFitQuality()
+    {
+        const fabric::FabricPreset p = fabric::load_fabric(DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json");
+        QVERIFY(p.fit.has_value() && p.fit->reduced_chi2.has_value());
+        QVERIFY(p.provenance.has_value());
+        QCOMPARE(p.provenance->grid, 25);
+        QCOMPARE(p.provenance->tool, std::string("drape fit"));
+        QVERIFY(p.params[cloth::Param::BendWarp] > 0);
+        FabricLibrary lib(tmp("fitted.sqlite"));
+        lib.add(p, "DL-A08 fit");
+        const FabricRecord r = lib.get("DL-A08 fit");
+        QVERIFY(r.fit_quality.has_value());
+        QVERIFY(std::abs(*r.fit_quality - *p.fit->reduced_chi2) < 1e-12);
+        QVERIFY(std::abs(*r.fit_quality - 45.06366551784406 / 65) < 1e-9); // chi2 / dof as the fit reported them
+    }
+
     void migratesVersion1()
     {
         // A library as schema version 1 wrote it: presets only, no derived columns.

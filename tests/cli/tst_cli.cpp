@@ -1,0 +1,197 @@
+// The `drape` command as a user runs it: output locations checked before long
+// work, the shared set-up flags and --set, bad values refused by name, exit codes.
+#include <QDir>
+#include <QJsonArray>
+#include <QJsonDocument>
+#include <QJsonObject>
+#include <QProcess>
+#include <QTemporaryDir>
+#include <QtTest>
+
+class TestCli : public QObject {
+    Q_OBJECT
+
+    struct Run {
+        int code = -1;
+        QString err;
+    };
+    struct Out {
+        int code = -1;
+        QString out, err;
+    };
+    static Out run(const QStringList& args, const QStringList& env = {})
+    {
+        QProcess p;
+        QProcessEnvironment e = QProcessEnvironment::systemEnvironment();
+        for (const auto& kv : env) e.insert(kv.section('=', 0, 0), kv.section('=', 1));
+        p.setProcessEnvironment(e);
+        p.start(QCoreApplication::applicationDirPath() + "/../bin/drape", args);
+        Out r;
+        if (!p.waitForFinished(120000)) {
+            p.kill();
+            return r;
+        }
+        r.code = p.exitCode();
+        r.out = QString::fromUtf8(p.readAllStandardOutput());
+        r.err = QString::fromUtf8(p.readAllStandardError());
+        return r;
+    }
+    static Run drape(const QStringList& args)
+    {
+        const Out o = run(args);
+        return {o.code, o.err};
+    }
+
+private slots:
+    void unwritableOutputFailsBeforeFitting()
+    {
+        const QString record = DRAPE_SOURCE_DIR "/examples/DL-A04";
+        const Run r = drape({"fit", record, "--out", "/proc/drapekit-no-such-folder/fabric.json", "--quiet"});
+        QCOMPARE(r.code, 1);
+        QVERIFY2(r.err.contains("--out /proc/drapekit-no-such-folder/fabric.json") && r.err.contains("cannot create the folder"), qPrintable(r.err));
+        // The check comes before anything else: even before the record is read.
+        const Run first = drape({"fit", "/no-such-record", "--out", "/proc/drapekit-no-such-folder/fabric.json", "--quiet"});
+        QCOMPARE(first.code, 1);
+        QVERIFY2(first.err.contains("--out") && !first.err.contains("no-such-record"), qPrintable(first.err));
+        const Run rep = drape({"fit", record, "--out", QDir::tempPath() + "/drapekit-cli-test.json", "--report", "/proc/drapekit-no-such-report", "--quiet"});
+        QCOMPARE(rep.code, 1);
+        QVERIFY2(rep.err.contains("--report /proc/drapekit-no-such-report"), qPrintable(rep.err));
+    }
+
+    void missingOutputFolderIsCreated()
+    {
+        QTemporaryDir tmp;
+        QVERIFY(tmp.isValid());
+        const QString out = tmp.path() + "/new/sub/fabric.json";
+        // A record that does not exist: the run fails after the output check, quickly.
+        const Run r = drape({"fit", tmp.path() + "/no-such-record", "--out", out, "--quiet"});
+        QVERIFY(r.code != 0);
+        QVERIFY2(r.err.contains("no-such-record"), qPrintable(r.err));
+        QVERIFY(QDir(tmp.path() + "/new/sub").exists());
+        QVERIFY(QDir(tmp.path() + "/new/sub").entryList(QDir::Files | QDir::Hidden).isEmpty()); // no probe file left behind
+    }
+
+    void badBranchAndGridOptionsAreRefusedByName()
+    {
+        const QString record = DRAPE_SOURCE_DIR "/examples/DL-A04";
+        const QString out = QDir::tempPath() + "/drapekit-cli-test.json";
+        const Run branch = drape({"fit", record, "--out", out, "--branch", "sideways", "--quiet"});
+        QCOMPARE(branch.code, 2); // a usage error
+        QVERIFY2(branch.err.contains("--branch") && branch.err.contains("'sideways'") && branch.err.contains("measured, random"),
+                 qPrintable(branch.err));
+        const Run refine = drape({"fit", record, "--out", out, "--refine-grid", "21", "--quiet"});
+        QVERIFY(refine.code != 0);
+        QVERIFY2(refine.err.contains("--refine-grid 21") && refine.err.contains("--grid 25"), qPrintable(refine.err));
+        const Run folds = drape({"simulate", "--fabric", "seed-table1", "--folds", "1", "--quiet"});
+        QVERIFY(folds.code != 0);
+        QVERIFY2(folds.err.contains("--folds") && folds.err.contains("1 is outside [2, 16]"), qPrintable(folds.err));
+        const Run cmp = drape({"compare", record, "--fabric", DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json", "--branch", "x", "--quiet"});
+        QCOMPARE(cmp.code, 2);
+        QVERIFY2(cmp.err.contains("--branch: 'x'"), qPrintable(cmp.err));
+    }
+
+    /// --set KEY=VALUE changes one parameter of the preset by its table key
+    /// (today's key or the one before the unit-suffix rule); bad keys and values
+    /// are usage errors that name them.
+    void setOverridesAParameter()
+    {
+        const QStringList base = {"simulate", "--fabric", DRAPE_SOURCE_DIR "/data/library/denim.json", "--grid", "15", "--json"};
+        const Out stiff = run(base);
+        QCOMPARE(stiff.code, 0);
+        // Bending 50 times denim's, by today's key and by the key before the unit-suffix rule.
+        const Out board = run(base + QStringList{"--set", "bend_warp_Nm=5e-3", "--set", "bend_weft_N_m=5e-3"});
+        QCOMPARE(board.code, 0);
+        const double d_denim = QJsonDocument::fromJson(stiff.out.toUtf8()).object()["drape_coefficient_percent"].toDouble();
+        const double d_board = QJsonDocument::fromJson(board.out.toUtf8()).object()["drape_coefficient_percent"].toDouble();
+        QVERIFY2(d_board > d_denim + 10, qPrintable(QString("D %1 (stiffened) vs %2 (denim)").arg(d_board).arg(d_denim)));
+        Out bad = run(base + QStringList{"--set", "bend_wrap_Nm=1e-7"});
+        QCOMPARE(bad.code, 2);
+        QVERIFY2(bad.err.contains("--set") && bad.err.contains("bend_wrap_Nm"), qPrintable(bad.err));
+        bad = run(base + QStringList{"--set", "bend_warp_Nm=1"});
+        QCOMPARE(bad.code, 2);
+        QVERIFY2(bad.err.contains("bend_warp_Nm") && bad.err.contains("outside"), qPrintable(bad.err));
+        bad = run(base + QStringList{"--set", "bend_warp_Nm=2e-6x"});
+        QCOMPARE(bad.code, 2);
+        QVERIFY2(bad.err.contains("'2e-6x' is not a number"), qPrintable(bad.err));
+        bad = run(base + QStringList{"--set", "shear_N_m"});
+        QCOMPARE(bad.code, 2);
+        QVERIFY2(bad.err.contains("KEY=VALUE"), qPrintable(bad.err));
+    }
+
+    /// The set-up flags mean the same in every command that takes them.
+    void setupFlagsAreSharedAndChecked()
+    {
+        for (const QString cmd : {"simulate", "predict"}) {
+            Out o = run({cmd, "--fabric", "seed-table1", "--sample-diameter", "100mm", "--quiet"});
+            QVERIFY2(o.code != 0 && o.err.contains("sample diameter") && o.err.contains("disc diameter"), qPrintable(cmd + ": " + o.err));
+            o = run({cmd, "--fabric", "seed-table1", "--grid", "3", "--quiet"});
+            QCOMPARE(o.code, 2);
+            QVERIFY2(o.err.contains("--grid") && o.err.contains("outside [5, 1000]"), qPrintable(cmd + ": " + o.err));
+            o = run({cmd, "--fabric", "seed-table1", "--disc-diameter", "15 furlongs", "--quiet"});
+            QCOMPARE(o.code, 2);
+            QVERIFY2(o.err.contains("--disc-diameter") && o.err.contains("furlongs"), qPrintable(cmd + ": " + o.err));
+        }
+        const Out o = run({"simulate", "--fabric", "seed-table1", "--max-time", "inf", "--integrator", "rk4", "--quiet"});
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("--max-time"), qPrintable(o.err));
+    }
+
+    /// The library speaks percent for D, like every other file and command;
+    /// a bare fraction is refused with the percentage it probably meant.
+    void libraryDrapeCoefficientIsInPercent()
+    {
+        QTemporaryDir tmp;
+        const QString lib = tmp.path() + "/lib.sqlite";
+        Out o = run({"library", "import", DRAPE_SOURCE_DIR "/data/library", "--library", lib});
+        QCOMPARE(o.code, 0);
+        o = run({"library", "list", "--library", lib, "--d-min", "60", "--json"});
+        QCOMPARE(o.code, 0);
+        const QJsonArray fabrics = QJsonDocument::fromJson(o.out.toUtf8()).object()["fabrics"].toArray();
+        QCOMPARE(fabrics.size(), 2); // cotton 66.6 %, denim 82 %
+        for (const auto& f : fabrics) QVERIFY(f.toObject()["drape_coefficient_percent"].toDouble() >= 60);
+        o = run({"library", "list", "--library", lib, "--d-min", "0.6"});
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("--d-min") && o.err.contains("percent") && o.err.contains("60"), qPrintable(o.err));
+    }
+
+    /// A brand-new user's library holds the starter fabrics, and every --fabric
+    /// takes a starter's short name; a library path that stores nothing is refused.
+    void firstRunLibraryAndStarterNames()
+    {
+        QTemporaryDir tmp;
+        const QString env = "DRAPE_LIBRARY=" + tmp.path() + "/new/library.sqlite";
+        Out o = run({"library", "list", "--json"}, {env});
+        QCOMPARE(o.code, 0);
+        const QJsonObject j = QJsonDocument::fromJson(o.out.toUtf8()).object();
+        QCOMPARE(j["count"].toInt(), 4);
+        o = run({"simulate", "--fabric", "denim", "--grid", "15", "--json"}, {env});
+        QCOMPARE(o.code, 0);
+        QVERIFY(QJsonDocument::fromJson(o.out.toUtf8()).object()["drape_coefficient_percent"].toDouble() > 50);
+        o = run({"simulate", "--fabric", "Denim (class preset)", "--grid", "15", "--quiet"}, {env}); // by its library name
+        QCOMPARE(o.code, 0);
+        o = run({"simulate", "--fabric", "velvet", "--grid", "15", "--quiet"}, {env});
+        QCOMPARE(o.code, 1);
+        QVERIFY2(o.err.contains("'velvet'") && o.err.contains("silk") && o.err.contains("library"), qPrintable(o.err));
+        for (const QString bad : {"", ":memory:"}) {
+            o = run({"library", "add", "silk", "--library", bad}, {env});
+            QVERIFY2(o.code != 0 && !o.out.contains("stored") && (o.err.contains("--library") || o.err.contains("file path")),
+                     qPrintable(bad + ": " + o.err));
+        }
+    }
+
+    /// Removing several fabrics is all or nothing.
+    void libraryRemoveIsAllOrNothing()
+    {
+        QTemporaryDir tmp;
+        const QString lib = tmp.path() + "/lib.sqlite";
+        QCOMPARE(run({"library", "import", DRAPE_SOURCE_DIR "/data/library", "--library", lib}).code, 0);
+        Out o = run({"library", "remove", "Silk (class preset)", "no such fabric", "--library", lib});
+        QCOMPARE(o.code, 1);
+        QVERIFY2(o.err.contains("no such fabric") && o.err.contains("nothing was removed"), qPrintable(o.err));
+        o = run({"library", "show", "Silk (class preset)", "--library", lib});
+        QCOMPARE(o.code, 0);
+    }
+};
+
+QTEST_GUILESS_MAIN(TestCli)
+#include "tst_cli.moc"

@@ -1,0 +1,171 @@
+// The one record reader: meta.json and contours.csv in SI units, every value
+// inside a physical range, every file the record names inside the record.
+#include "engine/core/error.hpp"
+#include "engine/record/record.hpp"
+
+#include <QtTest>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace drape;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+json minimal_meta()
+{
+    return json::parse(R"({"specimen_id":"T1",
+        "configuration":{"specimen_diameter_D1_mm":300,"support_disc_diameter_D2_mm":150,"pedestal_height_mm":120},
+        "fabric":{"areal_density_g_m2":200,"thickness_mm":0.5},
+        "contours":{"file":"contours.csv","theta_step_deg":10},
+        "lab_drape_coefficient_percent":45.5})");
+}
+
+/// A record folder with meta.json and a contours.csv of `rows` (each "depth,theta,x,y").
+fs::path make_record(const std::string& name, const json& meta, const std::vector<std::string>& rows)
+{
+    const fs::path d = fs::temp_directory_path() / ("drape_tst_record_" + std::to_string(::getpid())) / name;
+    fs::create_directories(d);
+    std::ofstream(d / "meta.json") << meta.dump(1);
+    std::ofstream c(d / "contours.csv");
+    c << "depth_mm,theta_deg,x_mm,y_mm\n";
+    for (const auto& r : rows) c << r << "\n";
+    return d;
+}
+
+std::vector<std::string> ring(double depth, double r, double step = 10)
+{
+    std::vector<std::string> out;
+    for (double th = 0; th < 360 - 1e-9; th += step) {
+        const double a = th * M_PI / 180;
+        out.push_back(std::to_string(depth) + "," + std::to_string(th) + "," + std::to_string(r * std::cos(a)) + "," +
+                      std::to_string(r * std::sin(a)));
+    }
+    return out;
+}
+
+template <class F>
+QString file_error(F&& f)
+{
+    try {
+        f();
+    } catch (const FileError& e) {
+        return QString::fromStdString(e.what());
+    }
+    return {};
+}
+
+} // namespace
+
+class TestRecord : public QObject {
+    Q_OBJECT
+private slots:
+    void cleanupTestCase() { fs::remove_all(fs::temp_directory_path() / ("drape_tst_record_" + std::to_string(::getpid()))); }
+
+    void reads_meta_and_contours_in_si()
+    {
+        auto rows = ring(5, 110);
+        const auto deeper = ring(10, 105);
+        rows.insert(rows.end(), deeper.begin(), deeper.end());
+        const fs::path d = make_record("ok", minimal_meta(), rows);
+        const record::Record rec = record::read_record(d);
+        QCOMPARE(rec.specimen_id, std::string("T1"));
+        QCOMPARE(rec.R1, 0.15);
+        QCOMPARE(rec.R2, 0.075);
+        QCOMPARE(*rec.areal_density, 0.2);
+        QCOMPARE(*rec.lab_drape_coefficient_percent, 45.5);
+        const record::ContourStack st = record::read_contours(rec);
+        QCOMPARE(st.depths.size(), std::size_t(2));
+        QCOMPARE(st.depths[0], 0.005);
+        QCOMPARE(st.profiles[0].size(), 36);
+        QVERIFY(st.profiles[0].complete());
+        QVERIFY(std::abs(st.profiles[1].r[3] - 0.105) < 1e-6);
+    }
+
+    void undeclared_ray_step_is_read_from_the_angles()
+    {
+        json meta = minimal_meta();
+        meta["contours"].erase("theta_step_deg");
+        const fs::path d = make_record("infer", meta, ring(5, 110, 5));
+        const record::ContourStack st = record::read_contours(record::read_record(d));
+        QCOMPARE(st.profiles[0].size(), 72);
+        QVERIFY(st.profiles[0].complete());
+    }
+
+    void files_named_by_a_record_stay_inside_it()
+    {
+        for (const std::string bad : {"../../../../etc/passwd", "/etc/passwd", "sub/../../x.csv"}) {
+            json meta = minimal_meta();
+            meta["contours"]["file"] = bad;
+            const fs::path d = make_record("escape", meta, ring(5, 110));
+            const QString e = file_error([&] { record::read_contours(record::read_record(d)); });
+            QVERIFY2(e.contains(QString::fromStdString(bad)) && (e.contains("absolute") || e.contains("..")), qPrintable(e));
+        }
+        // A symbolic link inside the folder that leads out of it.
+        json meta = minimal_meta();
+        meta["contours"]["file"] = "link.csv";
+        const fs::path d = make_record("symlink", meta, ring(5, 110));
+        fs::remove(d / "link.csv");
+        fs::create_symlink("/etc/passwd", d / "link.csv");
+        const QString e = file_error([&] { record::read_contours(record::read_record(d)); });
+        QVERIFY2(e.contains("leads out of the record folder"), qPrintable(e));
+    }
+
+    void impossible_values_are_refused_by_line_and_field()
+    {
+        struct Case {
+            const char* name;
+            std::vector<std::string> rows;
+            const char* expect;
+        };
+        const std::vector<Case> cases = {
+            {"huge", {"5,0,1e308,0"}, "outside"},
+            {"zero", {"5,0,0,0"}, "outside"},
+            {"depth", {"-5,0,110,0"}, "depth_mm"},
+            {"theta", {"5,1e300,110,0"}, "theta_deg"},
+            {"text", {"5,0,81.5abc,0"}, "'81.5abc' is not a number"},
+            {"offgrid", {"5,3,110,0"}, "not on the regular"},
+            {"twice", {"5,0,110,0", "5,0,111,0"}, "appears twice"},
+        };
+        for (const auto& c : cases) {
+            const fs::path d = make_record(c.name, minimal_meta(), c.rows);
+            const QString e = file_error([&] { record::read_contours(record::read_record(d)); });
+            QVERIFY2(e.contains("contours.csv:") && e.contains(c.expect), qPrintable(QString(c.name) + ": " + e));
+        }
+        // meta.json fields out of their physical range.
+        struct MetaCase {
+            const char* field;
+            json value;
+        };
+        for (const auto& mc : std::vector<MetaCase>{{"lab_drape_coefficient_percent", 1e6},
+                                                    {"configuration.specimen_diameter_D1_mm", -300},
+                                                    {"fabric.areal_density_g_m2", 1e302},
+                                                    {"contours.theta_step_deg", 1e-9},
+                                                    {"contours.repeatability_sigma_mm", -1}}) {
+            json meta = minimal_meta();
+            const std::string f = mc.field;
+            const auto dot = f.find('.');
+            if (dot == std::string::npos) meta[f] = mc.value;
+            else meta[f.substr(0, dot)][f.substr(dot + 1)] = mc.value;
+            const QString e = file_error([&] { record::parse_meta(meta.dump(), "/tmp/x", "x/meta.json"); });
+            QVERIFY2(e.contains("x/meta.json") && e.contains(QString::fromStdString(f)), qPrintable(QString(mc.field) + ": " + e));
+        }
+    }
+
+    void missing_pieces_are_named()
+    {
+        QVERIFY(file_error([] { record::read_record("/nonexistent/record"); }).contains("not a record folder"));
+        const fs::path d = fs::temp_directory_path() / ("drape_tst_record_" + std::to_string(::getpid())) / "empty";
+        fs::create_directories(d);
+        QVERIFY(file_error([&] { record::read_record(d); }).contains("meta.json"));
+        json meta = minimal_meta();
+        meta["configuration"].erase("specimen_diameter_D1_mm");
+        const QString e = file_error([&] { record::parse_meta(meta.dump(), d, "m.json"); });
+        QVERIFY2(e.contains("'configuration.specimen_diameter_D1_mm' is missing"), qPrintable(e));
+    }
+};
+
+QTEST_APPLESS_MAIN(TestRecord)
+#include "tst_record.moc"

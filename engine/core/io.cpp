@@ -1,6 +1,7 @@
 #include "engine/core/io.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -73,9 +74,10 @@ json parse_json(const std::string& text, const std::string& where)
     try {
         return json::parse(text, limit);
     } catch (const json::parse_error& e) {
-        throw FileError(where + ": not valid JSON (" + e.what() + ")");
+        // The message quotes what was last read: raw bytes of the file.
+        throw FileError(where + ": not valid JSON (" + printable(e.what(), 300) + ")");
     } catch (const json::out_of_range& e) {
-        throw FileError(where + ": a number in the JSON is out of range (" + e.what() + ")");
+        throw FileError(where + ": a number in the JSON is out of range (" + printable(e.what(), 300) + ")");
     }
 }
 

@@ -61,11 +61,22 @@ bool meta_number(const aiScene* s, const char* key, double& out)
     }
 }
 
+/// Limits of an imported scene: a scanned body has ~1e5-1e6 vertices; a file
+/// with 20 million is not a mannequin. Coordinates beyond 10 km are a wrong
+/// unit or a corrupt file. Scene graphs nest a few levels.
+constexpr std::size_t kMaxVertices = 20'000'000;
+constexpr std::size_t kMaxTriangles = 40'000'000;
+constexpr double kMaxCoordinateM = 1e4;
+constexpr int kMaxNodeDepth = 1000;
+constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t(1) << 30;
+
 struct Collect {
     const aiScene* scene;
     std::vector<ImportedMesh>* out;
     std::map<std::string, int>* name_uses;
     const std::string* path;
+    std::size_t* vertices;  ///< vertices collected so far (every instance counts)
+    std::size_t* triangles; ///< triangles collected so far
 };
 
 Eigen::Matrix4d to_eigen(const aiMatrix4x4& m)
@@ -78,9 +89,13 @@ Eigen::Matrix4d to_eigen(const aiMatrix4x4& m)
 
 // Transforms are chained in double so that the unit scale and axis swap are
 // exact (assimp keeps matrices in float).
-void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
+void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c, int depth)
 {
+    if (depth > kMaxNodeDepth)
+        throw FileError(*c.path + ": the scene graph is nested deeper than " + std::to_string(kMaxNodeDepth) + " nodes");
     const Eigen::Matrix4d world = parent * to_eigen(node->mTransformation);
+    if (!world.allFinite())
+        throw FileError(*c.path + ": node '" + node->mName.C_Str() + "' has a transform with a non-finite entry");
     for (unsigned k = 0; k < node->mNumMeshes; ++k) {
         const aiMesh* m = c.scene->mMeshes[node->mMeshes[k]];
         std::string name = m->mName.C_Str();
@@ -93,6 +108,13 @@ void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
             name += std::to_string(use + 1);
         }
 
+        // Sizes before allocation: a node graph that instances one big mesh
+        // many times multiplies it.
+        *c.vertices += m->mNumVertices;
+        *c.triangles += m->mNumFaces;
+        if (*c.vertices > kMaxVertices || *c.triangles > kMaxTriangles)
+            throw FileError(*c.path + ": the scene holds more than " + std::to_string(kMaxVertices) + " vertices or " +
+                            std::to_string(kMaxTriangles) + " triangles (every instance counted); larger than a body or garment mesh");
         if (m->mNumVertices == 0 || m->mNumFaces == 0)
             throw FileError(*c.path + ": mesh '" + name + "' has no faces (" + std::to_string(m->mNumVertices) +
                             " vertices, " + std::to_string(m->mNumFaces) + " faces)");
@@ -106,6 +128,10 @@ void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
                                 " has a non-finite coordinate (" + format_double(p0.x) + ", " + format_double(p0.y) +
                                 ", " + format_double(p0.z) + ")");
             const Eigen::Vector4d p = world * Eigen::Vector4d(p0.x, p0.y, p0.z, 1.0);
+            if (!p.head<3>().allFinite() || p.head<3>().cwiseAbs().maxCoeff() > kMaxCoordinateM)
+                throw FileError(*c.path + ": mesh '" + name + "' vertex " + std::to_string(v) + " lies at (" + format_value(p.x()) +
+                                ", " + format_value(p.y()) + ", " + format_value(p.z()) + ") m, more than " +
+                                format_value(kMaxCoordinateM) + " m from the origin (wrong --unit?)");
             im.X.row(v) << p.x(), p.y(), p.z();
         }
         int tris = 0;
@@ -131,7 +157,7 @@ void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
         if (world.topLeftCorner<3, 3>().determinant() < 0) im.F.col(1).swap(im.F.col(2));
         c.out->push_back(std::move(im));
     }
-    for (unsigned ch = 0; ch < node->mNumChildren; ++ch) visit(node->mChildren[ch], world, c);
+    for (unsigned ch = 0; ch < node->mNumChildren; ++ch) visit(node->mChildren[ch], world, c, depth + 1);
 }
 
 AlignedBox box_of(const cloth::Positions& X)
@@ -317,6 +343,9 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
     const auto size = fs::file_size(path, ec);
     if (ec) throw FileError(path + ": cannot read the file size (" + ec.message() + ")");
     if (size == 0) throw FileError(path + ": the file is empty");
+    if (size > kMaxFileBytes)
+        throw FileError(path + ": the file is " + std::to_string(size) + " bytes, more than the " + std::to_string(kMaxFileBytes) +
+                        " a mesh import reads");
     {
         std::ifstream probe(path, std::ios::binary);
         if (!probe) throw FileError(path + ": cannot open the file for reading");
@@ -414,14 +443,15 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
     }
 
     std::map<std::string, int> uses;
-    Collect c{scene, &out.meshes, &uses, &path};
+    std::size_t vertices = 0, triangles = 0;
+    Collect c{scene, &out.meshes, &uses, &path, &vertices, &triangles};
     const Eigen::Matrix4d base = to_engine * to_eigen(root);
     // visit() multiplies by the node's own transform; the root's was adjusted above.
     aiNode* rn = scene->mRootNode;
     const aiMatrix4x4 keep = rn->mTransformation;
     rn->mTransformation = aiMatrix4x4();
     try {
-        visit(rn, base, c);
+        visit(rn, base, c, 0);
     } catch (...) {
         rn->mTransformation = keep;
         throw;

@@ -41,7 +41,7 @@ int run_measure(const std::vector<std::string>& argv)
     }
     if (auto path = a.get("--mesh")) capture::write_obj(capture::contour_surface(rec, m), *path);
     if (a.has("--json")) {
-        std::cout << capture::to_json(m).dump(1) << "\n";
+        std::cout << cli::dump_json(capture::to_json(m), 1) << "\n";
         return 0;
     }
     std::printf("record %s\n", m.specimen_id.c_str());

@@ -2,12 +2,30 @@
 #include "cli/command.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 
 #include <cstdio>
 #include <exception>
 #include <iostream>
 
 namespace {
+/// A message for the terminal: messages quote names, cells and paths from
+/// files a user may have received, so control characters (escape sequences)
+/// and bytes that are not UTF-8 are written as \xNN; line breaks are kept.
+std::string safe(const std::string& message)
+{
+    std::string out;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t nl = message.find('\n', start);
+        out += drape::printable(std::string_view(message).substr(start, nl == std::string::npos ? std::string::npos : nl - start), 4000);
+        if (nl == std::string::npos) break;
+        out += '\n';
+        start = nl + 1;
+    }
+    return out;
+}
+
 void print_overview()
 {
     std::cout << "usage: drape COMMAND [ARGS]\n\ncommands:\n";
@@ -52,13 +70,13 @@ int main(int argc, char** argv)
     try {
         return it->second.run(rest);
     } catch (const UsageError& e) {
-        std::cerr << "drape " << args[0] << ": " << e.what() << "\n\n" << it->second.usage << "\n";
+        std::cerr << "drape " << args[0] << ": " << safe(e.what()) << "\n\n" << it->second.usage << "\n";
         return 2;
     } catch (const drape::Error& e) {
-        std::cerr << "drape " << args[0] << ": error: " << e.what() << "\n";
+        std::cerr << "drape " << args[0] << ": error: " << safe(e.what()) << "\n";
         return 1;
     } catch (const std::exception& e) {
-        std::cerr << "drape " << args[0] << ": internal error: " << e.what() << "\n";
+        std::cerr << "drape " << args[0] << ": internal error: " << safe(e.what()) << "\n";
         return 3;
     }
 }

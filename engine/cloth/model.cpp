@@ -139,9 +139,10 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
         if (len2 <= 0) throw ParameterError("make_model: zero-length edge between vertices " + std::to_string(a) + " and " + std::to_string(b));
         add_spring(m, mesh, a, b, E * A / len2, cs * A / len2, SpringKind::Edge);
         if (tris.size() != 2 || !quadratic) continue;
-        auto opposite = [&](int t) {
+        // The lambda takes copies: clang before 16 cannot capture structured bindings.
+        auto opposite = [&, ea = a, eb = b](int t) {
             for (int c = 0; c < 3; ++c)
-                if (mesh.F(t, c) != a && mesh.F(t, c) != b) return mesh.F(t, c);
+                if (mesh.F(t, c) != ea && mesh.F(t, c) != eb) return mesh.F(t, c);
             return -1;
         };
         const int c = opposite(tris[0]), d = opposite(tris[1]);

@@ -5,8 +5,33 @@
 #include "engine/core/text.hpp"
 
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 #include <exception>
 #include <iostream>
+
+// Defense in depth for the readers Drapekit does not control (assimp, through
+// `drape import` and the garment commands): one allocation of more than
+// kMaxAllocation is refused with std::bad_alloc, which assimp reports as a
+// failed import. A corrupt Collada file made assimp allocate 1.5 GiB, then
+// 3 GiB (12 GB resident) before failing; the cap ends that at the first.
+// Nothing of Drapekit's own allocates that much at once through new (a
+// 20-million-vertex mesh is 480 MB; Eigen, OpenCV and CHOLMOD use malloc).
+namespace {
+constexpr std::size_t kMaxAllocation = std::size_t(1) << 30;
+void* checked_alloc(std::size_t n)
+{
+    if (n > kMaxAllocation) throw std::bad_alloc();
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+} // namespace
+void* operator new(std::size_t n) { return checked_alloc(n); }
+void* operator new[](std::size_t n) { return checked_alloc(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 /// A message for the terminal: messages quote names, cells and paths from
@@ -75,6 +100,10 @@ int main(int argc, char** argv)
     } catch (const drape::Error& e) {
         std::cerr << "drape " << args[0] << ": error: " << safe(e.what()) << "\n";
         return 1;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "drape " << args[0] << ": out of memory (or one allocation above " << (kMaxAllocation >> 20)
+                  << " MiB was refused)\n";
+        return 3;
     } catch (const std::exception& e) {
         std::cerr << "drape " << args[0] << ": internal error: " << safe(e.what()) << "\n";
         return 3;

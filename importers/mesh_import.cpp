@@ -1,10 +1,13 @@
 #include "importers/mesh_import.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 
 #include <Eigen/LU>
+#include <assimp/BaseImporter.h>
 #include <assimp/Importer.hpp>
+#include <assimp/ai_assert.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -15,7 +18,25 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
+#include <stdexcept>
 #include <unordered_map>
+#include <vector>
+
+// Debian's assimp is built with its assertions on, and a failed one calls
+// abort(): a corrupt Collada file killed `drape import` (SIGABRT) in
+// ColladaLoader.cpp:1743 (fuzz_mesh). This definition replaces the library's
+// (ELF symbol interposition: the executable's definition wins) and throws
+// instead; assimp's BaseImporter::ReadFile catches std::exception from a
+// reader and reports a failed import, which import_scene turns into a
+// FileError naming the file.
+namespace Assimp {
+void aiAssertViolation(const char* failed_expression, const char* file, int line)
+{
+    throw std::runtime_error(std::string("assimp's check '") + failed_expression + "' failed (" + file + ":" + std::to_string(line) +
+                             ")");
+}
+} // namespace Assimp
 
 namespace drape::importers {
 
@@ -335,6 +356,121 @@ int weld_vertices(cloth::Positions& X, cloth::Triangles& F)
     return removed;
 }
 
+namespace {
+
+/// The formats a mesh import takes (file extensions), the ones the docs name.
+/// assimp reads forty more, but fuzzing found its ASE reader crashing (SEGV)
+/// and its OFF reader allocating 16 GB for a header claiming 353,535,235,358
+/// vertices (assimp's own test file invalid/OutOfMemory.off) within minutes;
+/// the readers of formats nobody drapes are not offered to received files.
+const char* const kTakenExtensions[] = {"obj", "dae", "zae", "gltf", "glb", "fbx", "ply", "stl"};
+const char* const kTakenFormats = "OBJ, Collada (.dae, .zae), glTF 2 (.gltf, .glb), FBX, PLY and STL";
+
+bool taken(const std::string& ext)
+{
+    return std::any_of(std::begin(kTakenExtensions), std::end(kTakenExtensions), [&](const char* e) { return ext == e; });
+}
+
+/// A PLY header checked before assimp reads the file (fuzz_mesh's findings):
+/// the first line "ply" (NUL bytes after the word made assimp's reader loop
+/// forever), an "end_header" line within the first 64 KiB (a damaged one did
+/// the same), and element counts that fit the file (at least one byte per
+/// element) and the scene limits.
+void check_header(const std::string& path, const std::string& ext, std::uintmax_t size)
+{
+    constexpr std::size_t kHeadBytes = 64 * 1024;
+    std::ifstream in(path, std::ios::binary);
+    std::string head(kHeadBytes, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    auto check = [&](const std::string& what, const std::string& text, double bytes_each, std::size_t limit) {
+        double n = 0;
+        if (!parse_number(text, n) || n < 0 || n != std::floor(n))
+            throw FileError(path + ": the header's " + what + " '" + printable(text, 40) + "' is not a count");
+        if (n * bytes_each > static_cast<double>(size) || n > static_cast<double>(limit))
+            throw FileError(path + ": the header declares " + what + " = " + text + ", more than the file's " + std::to_string(size) +
+                            " bytes can hold (or the " + std::to_string(limit) + " a mesh import takes): a corrupt header");
+    };
+    // A PLY file by its name or by its content (assimp recognises the word
+    // "ply" at the start whatever follows it, NUL bytes included).
+    std::size_t first = 0;
+    while (first < head.size() && std::isspace(static_cast<unsigned char>(head[first]))) ++first;
+    const bool ply = ext == "ply" || lower(head.substr(first, 3)) == "ply";
+    std::istringstream ss(head);
+    if (ply) {
+        std::string line;
+        std::getline(ss, line);
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (line != "ply") throw FileError(path + ": a PLY file must start with the line 'ply', not '" + printable(line, 40) + "'");
+        // Lines are read the way assimp reads them: unknown ones are skipped
+        // (Blender 2.4 wrote its comment without the "comment" keyword).
+        int n = 1;
+        while (std::getline(ss, line)) {
+            ++n;
+            if (!line.empty() && line.back() == '\r') line.pop_back();
+            std::istringstream ls(line);
+            std::string kw;
+            ls >> kw;
+            if (kw == "end_header") return;
+            if (kw != "element") continue;
+            std::vector<std::string> w;
+            for (std::string x; ls >> x;) w.push_back(x);
+            if (w.size() != 2)
+                throw FileError(path + ": PLY header line " + std::to_string(n) + ": '" + printable(line, 60) + "' is not 'element NAME COUNT'");
+            check("element " + printable(w[0], 40), w[1], 1, w[0] == "face" ? kMaxTriangles : kMaxVertices);
+        }
+        throw FileError(path + ": the PLY header has no end_header line in its first " + std::to_string(kHeadBytes) + " bytes");
+    }
+}
+
+/// Text formats are UTF-8 text without control characters besides tab, line
+/// feed and carriage return (XML 1.0 and JSON forbid them; OBJ is lines of
+/// text). Bytes that are neither in a Collada index list made assimp allocate
+/// 12 GB (a 0x1F run, then a lone 0xB3: fuzz_mesh); a UTF-16 file is refused
+/// with the same message (save it as UTF-8).
+void check_text(const std::string& path, const std::string& ext)
+{
+    if (ext != "dae" && ext != "gltf" && ext != "obj") return;
+    std::ifstream in(path, std::ios::binary);
+    std::string buf(1 << 16, '\0');
+    std::string carry; // an incomplete UTF-8 sequence at the end of the previous block
+    std::uintmax_t offset = 0;
+    auto fail = [&](std::uintmax_t at, const std::string& what) {
+        throw FileError(path + ": byte " + std::to_string(at) + " " + what + ", which a ." + ext +
+                        " file (UTF-8 text) cannot hold: a damaged file, or one saved in another encoding");
+    };
+    while (in) {
+        in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+        const auto n = static_cast<std::size_t>(in.gcount());
+        for (std::size_t i = 0; i < n; ++i) {
+            const auto c = static_cast<unsigned char>(buf[i]);
+            if ((c < 0x20 && c != '\t' && c != '\n' && c != '\r') || c == 0x7f)
+                fail(offset + i, "is a control character (" + printable(std::string(1, buf[i])) + ")");
+        }
+        std::string block = carry + buf.substr(0, n);
+        // Keep an incomplete sequence at the end for the next block.
+        std::size_t cut = block.size();
+        for (std::size_t k = 1; k <= 3 && k <= block.size(); ++k) {
+            const auto b = static_cast<unsigned char>(block[block.size() - k]);
+            if ((b & 0xC0) == 0xC0) { // a lead byte: is its sequence complete?
+                const std::size_t len = b >= 0xF0 ? 4 : b >= 0xE0 ? 3 : 2;
+                if (k < len && n == buf.size()) cut = block.size() - k;
+                break;
+            }
+            if ((b & 0x80) == 0) break;
+        }
+        if (const std::size_t bad = first_invalid_utf8(std::string_view(block).substr(0, cut)); bad != std::string_view::npos) {
+            std::string what = printable(block.substr(bad, 1)); // appended, not concatenated: GCC 12's -Wrestrict false positive
+            what += " is not UTF-8 text";
+            fail(offset - carry.size() + bad, what);
+        }
+        carry = block.substr(cut);
+        offset += n;
+    }
+}
+
+} // namespace
+
 ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
 {
     namespace fs = std::filesystem;
@@ -350,8 +486,25 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
         std::ifstream probe(path, std::ios::binary);
         if (!probe) throw FileError(path + ": cannot open the file for reading");
     }
+    std::string ext = lower(fs::path(path).extension().string());
+    if (!ext.empty()) ext.erase(0, 1);
+    if (!taken(ext))
+        throw FileError(path + ": '." + printable(ext, 20) + "' is not a mesh format this import takes (" + kTakenFormats + ")");
+    check_header(path, ext, size);
+    check_text(path, ext);
 
     Assimp::Importer importer;
+    // Only the readers of the formats taken: a file is never handed to another
+    // reader by its content either.
+    for (std::size_t i = importer.GetImporterCount(); i-- > 0;) {
+        const aiImporterDesc* d = importer.GetImporterInfo(i);
+        std::istringstream exts(d && d->mFileExtensions ? d->mFileExtensions : "");
+        bool keep = false;
+        for (std::string e; exts >> e;) keep = keep || taken(lower(e));
+        if (keep) continue;
+        Assimp::BaseImporter* reader = importer.GetImporter(i);
+        if (importer.UnregisterLoader(reader) == AI_SUCCESS) delete reader; // unregistering hands it back
+    }
     // An explicit up axis describes the file's own numbers, so assimp must not
     // rotate Collada's Z_UP into Y_UP first.
     if (opt.up != UpAxis::File) importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);

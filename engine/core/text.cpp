@@ -199,12 +199,16 @@ std::string hex(char32_t c)
 
 } // namespace
 
-bool is_valid_utf8(std::string_view s)
+std::size_t first_invalid_utf8(std::string_view s)
 {
-    for (std::size_t i = 0; i < s.size();)
-        if (decode(s, i) == kInvalid) return false;
-    return true;
+    for (std::size_t i = 0; i < s.size();) {
+        const std::size_t at = i;
+        if (decode(s, i) == kInvalid) return at;
+    }
+    return std::string_view::npos;
 }
+
+bool is_valid_utf8(std::string_view s) { return first_invalid_utf8(s) == std::string_view::npos; }
 
 std::size_t utf8_length(std::string_view s)
 {

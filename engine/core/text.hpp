@@ -13,6 +13,10 @@ namespace drape {
 /// nothing above U+10FFFF).
 bool is_valid_utf8(std::string_view s);
 
+/// Offset of the first byte that does not start a well-formed UTF-8 sequence,
+/// std::string_view::npos when `s` is valid UTF-8.
+std::size_t first_invalid_utf8(std::string_view s);
+
 /// Number of code points of valid UTF-8 text.
 std::size_t utf8_length(std::string_view s);
 

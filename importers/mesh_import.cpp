@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cstdint>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -391,6 +392,23 @@ void check_header(const std::string& path, const std::string& ext, std::uintmax_
             throw FileError(path + ": the header declares " + what + " = " + text + ", more than the file's " + std::to_string(size) +
                             " bytes can hold (or the " + std::to_string(limit) + " a mesh import takes): a corrupt header");
     };
+    // Binary glTF: the lengths its header declares must fit the file (a
+    // 3 KB .glb declaring a 4 GiB JSON chunk made assimp allocate 4 GiB).
+    if (ext == "glb" || head.compare(0, 4, "glTF") == 0) {
+        auto le32 = [&](std::size_t i) -> std::uint64_t {
+            if (i + 4 > head.size()) return 0;
+            return static_cast<std::uint64_t>(static_cast<unsigned char>(head[i])) |
+                   static_cast<std::uint64_t>(static_cast<unsigned char>(head[i + 1])) << 8 |
+                   static_cast<std::uint64_t>(static_cast<unsigned char>(head[i + 2])) << 16 |
+                   static_cast<std::uint64_t>(static_cast<unsigned char>(head[i + 3])) << 24;
+        };
+        if (head.size() >= 20 && head.compare(0, 4, "glTF") == 0) {
+            const std::uint64_t total = le32(8), chunk = le32(12);
+            if (total > size || 20 + chunk > size)
+                throw FileError(path + ": the binary glTF header declares " + std::to_string(total) + " bytes and a first chunk of " +
+                                std::to_string(chunk) + " bytes, more than the file's " + std::to_string(size) + ": a corrupt or cut file");
+        }
+    }
     // A PLY file by its name or by its content (assimp recognises the word
     // "ply" at the start whatever follows it, NUL bytes included).
     std::size_t first = 0;

@@ -141,9 +141,16 @@ FabricLibrary::FabricLibrary(const std::string& path, Mode mode) : m_path(path),
         if (ec) throw FileError(path + ": cannot create the folder " + parent.string() + " (" + ec.message() + ")");
     }
     if (fs::is_directory(path, ec)) throw FileError(path + ": is a folder, not a fabric library file");
-    if (mode == Mode::ReadWrite && fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0)
-        throw FileError(path + ": the fabric library is read-only (no permission to write the file); list, show and export "
-                               "read it, add/update/remove/import need a writable copy");
+    if (mode == Mode::ReadWrite && fs::exists(path, ec)) {
+        if (::access(path.c_str(), W_OK) != 0)
+            throw FileError(path + ": the fabric library is read-only (no permission to write the file); list, show and export "
+                                   "read it, add/update/remove/import need a writable copy");
+        // SQLite keeps its write-ahead log beside the library.
+        const fs::path parent = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+        if (::access(parent.c_str(), W_OK) != 0)
+            throw FileError(path + ": the folder " + parent.string() + " is read-only, and SQLite writes its journal beside the "
+                                   "library; list, show and export read it, add/update/remove/import need a writable folder");
+    }
     const int flags = mode == Mode::ReadOnly ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
     auto open = [&](const std::string& name, int extra) {
         if (sqlite3_open_v2(name.c_str(), &m_db, flags | extra | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {

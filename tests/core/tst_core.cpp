@@ -68,8 +68,8 @@ private slots:
         const std::string deep = std::string(100000, '[') + std::string(100000, ']');
         QString e = error_of<FileError>([&] { parse_json(deep, "deep.json"); });
         QVERIFY2(e.contains("deep.json") && e.contains("nested deeper"), qPrintable(e));
-        e = error_of<FileError>([] { parse_json(R"({"x": 1e400})", "big.json"); });
-        QVERIFY2(e.contains("big.json"), qPrintable(e));
+        e = error_of<FileError>([] { parse_json("{\n  \"x\": 1e400}", "big.json"); });
+        QVERIFY2(e.contains("big.json: line 2, column 8: the number 1e400 is outside the range of a double"), qPrintable(e));
         e = error_of<FileError>([] { parse_json("{\"x\": \"\xff\xfe\"}", "utf.json"); });
         QVERIFY2(e.contains("utf.json") && e.contains("not valid JSON"), qPrintable(e));
         e = error_of<FileError>([] { parse_json("{ \"x\": ", "cut.json"); });

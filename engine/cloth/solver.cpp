@@ -359,6 +359,10 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
 {
     SolverStatus st;
     const auto t0 = Clock::now();
+    SolveProfile prof;
+    SolveProfile* const outer_profile = s.profile;
+    const bool profiling = opt.trace || std::getenv("DRAPE_PROFILE");
+    if (profiling) s.profile = &prof;
     const long f0 = s.force_evaluations;
     const int n = s.vertex_count();
     HessianAssembler H(s);
@@ -414,14 +418,19 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
         if (!analysed) {
             llt.cholmod().print = 0; // numerical outcomes are reported through the status, not stderr
             llt.setMode(Eigen::CholmodSupernodalLLt);
+            ProfileScope timer(profiling ? &prof.analyse : nullptr);
             llt.analyzePattern(H.matrix());
             analysed = true;
             if (opt.trace)
                 std::fprintf(stderr, "static solver: %ld unknowns, %ld Hessian entries, factor %g entries, %g flop per factorisation (method %d)\n", (long)H.matrix().rows(), (long)H.matrix().nonZeros(),
                              llt.cholmod().lnz, llt.cholmod().fl, llt.cholmod().selected);
         }
-        llt.factorize(H.matrix());
+        {
+            ProfileScope timer(profiling ? &prof.factorize : nullptr);
+            llt.factorize(H.matrix());
+        }
         ++st.steps;
+        if (llt.info() != Eigen::Success) ++prof.failed_factorizations;
         if (llt.info() != Eigen::Success && exact) {
             exact_ok = -5; // back off from the exact Hessian for a few iterations
             continue;
@@ -436,7 +445,10 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
             }
             continue;
         }
-        const Eigen::VectorXd dx = llt.solve(flat(f));
+        const Eigen::VectorXd dx = [&] {
+            ProfileScope timer(profiling ? &prof.solve : nullptr);
+            return Eigen::VectorXd(llt.solve(flat(f)));
+        }();
         ++st.newton_iterations;
         const Eigen::Map<const Positions> D(dx.data(), n, 3);
         const double e0 = s.potential_energy(s.x);
@@ -452,6 +464,8 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
         // of the energy sum; there the step is judged by the force residual instead.
         const double e_round = 1e-12 * (std::abs(e0) + e_scale);
         for (int ls = 0; ls < 40; ++ls) {
+            ProfileScope ls_timer(profiling ? &prof.line_search : nullptr);
+            ++prof.line_search_trials;
             trial = s.x + alpha * D;
             const double phi = s.potential_energy(trial) + 0.5 * alpha * alpha * mdx;
             if (phi <= e0 + 1e-4 * alpha * slope) {
@@ -496,6 +510,11 @@ SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
                       "the implicit or an explicit integrator)";
     st.force_evaluations = s.force_evaluations - f0;
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (profiling) {
+        prof.total = st.wall_seconds;
+        prof.print(stderr, "static solver profile (" + std::to_string(n) + " vertices, " + to_string(st.outcome) + ")", st.steps);
+    }
+    s.profile = outer_profile;
     return st;
 }
 

@@ -50,6 +50,7 @@ void for_each_contact(const ClothSystem& s, const Positions& X, F&& f)
 {
     const auto& m = s.model();
     const double off = m.contact_offset;
+    ProfileScope timer(s.profile ? &s.profile->vertex_contact : nullptr);
     for (const auto& c : s.colliders())
         for (int i = 0; i < X.rows(); ++i) {
             if (m.pinned[static_cast<std::size_t>(i)]) continue;
@@ -246,6 +247,7 @@ void for_each_edge_contact(const ClothSystem& s, const Positions& X, F&& f)
     if (!m.edge_contact) return;
     const double off = m.contact_offset;
     const auto& edges = s.edges();
+    ProfileScope timer(s.profile ? &s.profile->edge_contact : nullptr);
     for (const auto& c : s.colliders()) {
         const std::string kind = c->kind();
         if (kind != "pedestal" && kind != "sphere") continue;
@@ -271,6 +273,7 @@ std::vector<int> ClothSystem::edges_in_contact(const Positions& X) const
 
 double ClothSystem::potential_energy(const Positions& X) const
 {
+    ProfileScope timer(profile ? &profile->energy : nullptr);
     double e = 0;
     for (const auto& sp : m_model.springs) {
         const double l = (X.row(sp.i) - X.row(sp.j)).norm();
@@ -312,6 +315,7 @@ Positions ClothSystem::gravity_forces() const
 
 void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
 {
+    ProfileScope timer(profile ? &profile->forces : nullptr);
     f.setZero(X.rows(), 3);
     for (const auto& sp : m_model.springs) {
         const Vec3 u = X.row(sp.i) - X.row(sp.j);
@@ -465,6 +469,7 @@ HessianAssembler::Block HessianAssembler::block(int i, int j) const
 
 void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project)
 {
+    ProfileScope timer(m_s.profile ? &m_s.profile->assemble : nullptr);
     const auto& m = m_s.model();
     double* val = m_H.valuePtr();
     std::fill(val, val + m_H.nonZeros(), 0.0);

@@ -5,6 +5,7 @@
 #include "colliders.hpp"
 #include "mesh.hpp"
 #include "model.hpp"
+#include "profile.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -52,6 +53,9 @@ public:
     void add_damping_forces(const Positions& X, const Positions& V, Positions& f) const;
 
     mutable long force_evaluations = 0;
+    /// When set, forces, energies, contact queries and Hessian assembly add their
+    /// wall time here (see profile.hpp). Not owned.
+    mutable SolveProfile* profile = nullptr;
 
     /// Gravity force per vertex [N] (zero on pinned vertices).
     Positions gravity_forces() const;

@@ -346,6 +346,13 @@ std::vector<int> ClothSystem::edges_in_contact(const Positions& X) const
     return out;
 }
 
+int ClothSystem::vertex_contact_count(const Positions& X) const
+{
+    int k = 0;
+    for_each_contact(*this, X, [&](int, double, const Vec3&, const Collider&) { ++k; });
+    return k;
+}
+
 double ClothSystem::potential_energy(const Positions& X) const
 {
     ProfileScope timer(profile ? &profile->energy : nullptr);

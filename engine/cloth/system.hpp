@@ -89,6 +89,8 @@ public:
     /// Indices into edges() of the edges whose deepest point in a curved
     /// collider is inside the edge and in contact (ModelOptions::edge_contact).
     std::vector<int> edges_in_contact(const Positions& X) const;
+    /// Free vertices in contact with any collider at X (a vertex in two counts once per collider).
+    int vertex_contact_count(const Positions& X) const;
 
     /// Internal (system.cpp): the contacts found at the last positions asked about.
     ContactCache& contact_cache() const { return m_contact_cache.get(); }

@@ -50,9 +50,12 @@ void configure_cholmod(Cholmod& llt)
     auto& c = llt.cholmod();
     c.print = 0; // numerical outcomes are reported through the status, not stderr
     llt.setMode(Eigen::CholmodSupernodalLLt);
-    c.nmethods = 1;
-    c.method[0].ordering = CHOLMOD_METIS;
-    c.postorder = 1;
+    const char* ord = std::getenv("DRAPE_CHOLMOD_ORDERING");
+    if (!(ord && std::string(ord) == "default")) {
+        c.nmethods = 1;
+        c.method[0].ordering = CHOLMOD_METIS;
+        c.postorder = 1;
+    }
 }
 
 } // namespace

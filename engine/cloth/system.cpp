@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 
 namespace drape::cloth {
 
@@ -44,21 +46,6 @@ void ClothSystem::set_mass(int vertex, double mass)
 }
 
 namespace {
-/// Penetration of the offset surface: phi = distance - offset; < 0 in contact.
-template <class F>
-void for_each_contact(const ClothSystem& s, const Positions& X, F&& f)
-{
-    const auto& m = s.model();
-    const double off = m.contact_offset;
-    for (const auto& c : s.colliders())
-        for (int i = 0; i < X.rows(); ++i) {
-            if (m.pinned[static_cast<std::size_t>(i)]) continue;
-            ContactSample cs;
-            if (!c->query(X.row(i).transpose(), off, cs)) continue;
-            const double phi = cs.distance - off;
-            if (phi < 0) f(i, phi, cs.normal, *c);
-        }
-}
 
 /// One edge in contact at an interior point: p(t) = (1 - t) x_a + t x_b is the
 /// point of the edge deepest in the offset surface (phi(p(t)) minimal in t).
@@ -237,6 +224,85 @@ bool edge_deepest_point(const Collider& c, const Vec3& xa, const Vec3& xb, doubl
     return true;
 }
 
+} // namespace
+
+/// A vertex in contact: phi = distance - offset < 0 [m], outward normal n.
+struct VertexContact {
+    int i;
+    double phi;
+    Vec3 n;
+    const Collider* collider;
+};
+
+/// The contacts at one set of positions, for one set of colliders, offset and
+/// pinned vertices: forces, energy and Hessian at the same positions (a Newton
+/// iteration asks for all three) query the colliders once. The key is compared
+/// in full (positions bit for bit), so a stale answer is impossible.
+struct ContactCache {
+    Positions x;
+    double offset = std::numeric_limits<double>::quiet_NaN();
+    std::vector<char> pinned;
+    std::vector<const Collider*> colliders;
+    bool edge_flag = false;
+    bool vertex_valid = false, edge_valid = false;
+    std::vector<VertexContact> vertex;
+    std::vector<EdgeContact> edge;
+
+    void use(const ClothSystem& s, const Positions& X)
+    {
+        const auto& m = s.model();
+        const auto& cs = s.colliders();
+        bool same = x.rows() == X.rows() && offset == m.contact_offset && edge_flag == m.edge_contact && pinned == m.pinned &&
+                    colliders.size() == cs.size();
+        for (std::size_t k = 0; same && k < cs.size(); ++k) same = colliders[k] == cs[k].get();
+        same = same && std::memcmp(x.data(), X.data(), sizeof(double) * static_cast<std::size_t>(X.size())) == 0;
+        if (same) return;
+        x = X;
+        offset = m.contact_offset;
+        edge_flag = m.edge_contact;
+        pinned = m.pinned;
+        colliders.clear();
+        for (const auto& c : cs) colliders.push_back(c.get());
+        vertex_valid = edge_valid = false;
+    }
+};
+
+ContactCacheHolder::ContactCacheHolder() : m_p(std::make_unique<ContactCache>()) {}
+ContactCacheHolder::~ContactCacheHolder() = default;
+ContactCacheHolder::ContactCacheHolder(const ContactCacheHolder&) : m_p(std::make_unique<ContactCache>()) {}
+ContactCacheHolder& ContactCacheHolder::operator=(const ContactCacheHolder&)
+{
+    m_p = std::make_unique<ContactCache>();
+    return *this;
+}
+
+namespace {
+
+/// Calls f(i, phi, n, collider) for every free vertex inside a collider's offset
+/// surface (phi = distance - offset < 0), collider by collider.
+template <class F>
+void for_each_contact(const ClothSystem& s, const Positions& X, F&& f)
+{
+    ContactCache& cc = s.contact_cache();
+    cc.use(s, X);
+    if (!cc.vertex_valid) {
+        ProfileScope timer(s.profile ? &s.profile->vertex_contact : nullptr);
+        const auto& m = s.model();
+        const double off = m.contact_offset;
+        cc.vertex.clear();
+        for (const auto& c : s.colliders())
+            for (int i = 0; i < X.rows(); ++i) {
+                if (m.pinned[static_cast<std::size_t>(i)]) continue;
+                ContactSample cs;
+                if (!c->query(X.row(i).transpose(), off, cs)) continue;
+                const double phi = cs.distance - off;
+                if (phi < 0) cc.vertex.push_back({i, phi, cs.normal, c.get()});
+            }
+        cc.vertex_valid = true;
+    }
+    for (const auto& c : cc.vertex) f(c.i, c.phi, c.n, *c.collider);
+}
+
 /// Calls f(EdgeContact) for every mesh edge whose deepest point in a curved
 /// collider is inside the edge and in contact.
 template <class F>
@@ -244,20 +310,31 @@ void for_each_edge_contact(const ClothSystem& s, const Positions& X, F&& f)
 {
     const auto& m = s.model();
     if (!m.edge_contact) return;
-    const double off = m.contact_offset;
-    const auto& edges = s.edges();
-    for (const auto& c : s.colliders()) {
-        const std::string kind = c->kind();
-        if (kind != "pedestal" && kind != "sphere") continue;
-        for (std::size_t ei = 0; ei < edges.size(); ++ei) {
-            const int a = edges[ei][0], b = edges[ei][1];
-            if (m.pinned[static_cast<std::size_t>(a)] && m.pinned[static_cast<std::size_t>(b)]) continue;
-            EdgeContact ec;
-            if (!edge_deepest_point(*c, X.row(a).transpose(), X.row(b).transpose(), off, ec)) continue;
-            ec.edge = static_cast<int>(ei);
-            ec.k = 0.5 * (m.contact_stiffness(a) + m.contact_stiffness(b));
-            f(ec);
+    ContactCache& cc = s.contact_cache();
+    cc.use(s, X);
+    if (!cc.edge_valid) {
+        ProfileScope timer(s.profile ? &s.profile->edge_contact : nullptr);
+        const double off = m.contact_offset;
+        const auto& edges = s.edges();
+        cc.edge.clear();
+        for (const auto& c : s.colliders()) {
+            const std::string kind = c->kind();
+            if (kind != "pedestal" && kind != "sphere") continue;
+            for (std::size_t ei = 0; ei < edges.size(); ++ei) {
+                const int a = edges[ei][0], b = edges[ei][1];
+                if (m.pinned[static_cast<std::size_t>(a)] && m.pinned[static_cast<std::size_t>(b)]) continue;
+                EdgeContact ec;
+                if (!edge_deepest_point(*c, X.row(a).transpose(), X.row(b).transpose(), off, ec)) continue;
+                ec.edge = static_cast<int>(ei);
+                cc.edge.push_back(ec);
+            }
         }
+        cc.edge_valid = true;
+    }
+    for (auto& ec : cc.edge) {
+        const auto& e = s.edges()[static_cast<std::size_t>(ec.edge)];
+        ec.k = 0.5 * (m.contact_stiffness(e[0]) + m.contact_stiffness(e[1]));
+        f(static_cast<const EdgeContact&>(ec));
     }
 }
 } // namespace
@@ -269,8 +346,16 @@ std::vector<int> ClothSystem::edges_in_contact(const Positions& X) const
     return out;
 }
 
+int ClothSystem::vertex_contact_count(const Positions& X) const
+{
+    int k = 0;
+    for_each_contact(*this, X, [&](int, double, const Vec3&, const Collider&) { ++k; });
+    return k;
+}
+
 double ClothSystem::potential_energy(const Positions& X) const
 {
+    ProfileScope timer(profile ? &profile->energy : nullptr);
     double e = 0;
     for (const auto& sp : m_model.springs) {
         const double l = (X.row(sp.i) - X.row(sp.j)).norm();
@@ -312,6 +397,7 @@ Positions ClothSystem::gravity_forces() const
 
 void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
 {
+    ProfileScope timer(profile ? &profile->forces : nullptr);
     f.setZero(X.rows(), 3);
     for (const auto& sp : m_model.springs) {
         const Vec3 u = X.row(sp.i) - X.row(sp.j);
@@ -465,6 +551,7 @@ HessianAssembler::Block HessianAssembler::block(int i, int j) const
 
 void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project)
 {
+    ProfileScope timer(m_s.profile ? &m_s.profile->assemble : nullptr);
     const auto& m = m_s.model();
     double* val = m_H.valuePtr();
     std::fill(val, val + m_H.nonZeros(), 0.0);

@@ -52,8 +52,8 @@ DrapeController::DrapeController(QObject* parent) : QObject(parent)
     connect(m_worker, &DrapeWorker::resultsSaved, this, &DrapeController::resultsSaved);
     m_thread.setObjectName(QStringLiteral("drape-sim"));
     m_thread.start();
-    toWorker([w = m_worker, integ = cloth::parse_integrator(m_integrator.toStdString())] { w->setIntegrator(integ); });
-    toWorker([w = m_worker, s = m_restSpeed, r = m_restResidual] { w->setRestCriteria(s, r); });
+    toWorker([w = m_worker, integ = cloth::parse_integrator(m_settings.integrator.toStdString())] { w->setIntegrator(integ); });
+    toWorker([w = m_worker, s = m_settings.restSpeed, r = m_settings.restResidual] { w->setRestCriteria(s, r); });
 
     connect(&m_job, &LongJob::started, this, [this](const QString& n) {
         emit jobStarted(n);
@@ -91,7 +91,7 @@ void DrapeController::fail(const QString& message)
 
 void DrapeController::setFabricPreset(const QString& preset)
 {
-    if (preset == m_fabricPreset) return;
+    if (preset == m_settings.fabricPreset) return;
     applyFabricPreset(preset);
 }
 
@@ -107,9 +107,9 @@ bool DrapeController::applyFabricPreset(const QString& preset)
         return false;
     }
     m_preset = std::move(p);
-    const bool changed = preset != m_fabricPreset;
-    m_fabricPreset = preset;
-    if (changed) emit fabricPresetChanged(m_fabricPreset);
+    const bool changed = preset != m_settings.fabricPreset;
+    m_settings.fabricPreset = preset;
+    if (changed) emit fabricPresetChanged(m_settings.fabricPreset);
     emit fabricParametersChanged();
     scheduleRebuild();
     return true;
@@ -117,55 +117,55 @@ bool DrapeController::applyFabricPreset(const QString& preset)
 
 void DrapeController::setSampleDiameter(double mm)
 {
-    if (mm == m_sampleDiameterMm) return;
+    if (mm == m_settings.sampleDiameter) return;
     if (!(mm > 0) || !std::isfinite(mm)) {
         fail(QStringLiteral("sampleDiameter: %1 mm is not a positive length").arg(mm));
         return;
     }
-    m_sampleDiameterMm = mm;
+    m_settings.sampleDiameter = mm;
     emit sampleDiameterChanged(mm);
     scheduleRebuild();
 }
 
 void DrapeController::setDiscDiameter(double mm)
 {
-    if (mm == m_discDiameterMm) return;
+    if (mm == m_settings.discDiameter) return;
     if (!(mm > 0) || !std::isfinite(mm)) {
         fail(QStringLiteral("discDiameter: %1 mm is not a positive length").arg(mm));
         return;
     }
-    m_discDiameterMm = mm;
+    m_settings.discDiameter = mm;
     emit discDiameterChanged(mm);
     scheduleRebuild();
 }
 
 void DrapeController::setGridSize(int n)
 {
-    if (n == m_gridSize) return;
+    if (n == m_settings.gridSize) return;
     if (n < 5 || n > 1000) {
         fail(QStringLiteral("gridSize: %1 nodes across is outside [5, 1000]").arg(n));
         return;
     }
-    m_gridSize = n;
+    m_settings.gridSize = n;
     emit gridSizeChanged(n);
     scheduleRebuild();
 }
 
 void DrapeController::setClothShape(const QString& shape)
 {
-    if (shape == m_shape) return;
+    if (shape == m_settings.clothShape) return;
     if (shape != QLatin1String("disc") && shape != QLatin1String("square")) {
         fail(QStringLiteral("clothShape: '%1' is not a shape (use disc or square)").arg(shape));
         return;
     }
-    m_shape = shape;
+    m_settings.clothShape = shape;
     emit clothShapeChanged(shape);
     scheduleRebuild();
 }
 
 void DrapeController::setIntegrator(const QString& name)
 {
-    if (name == m_integrator) return;
+    if (name == m_settings.integrator) return;
     cloth::Integrator integ;
     try {
         integ = cloth::parse_integrator(name.toStdString());
@@ -173,14 +173,14 @@ void DrapeController::setIntegrator(const QString& name)
         fail(QStringLiteral("integrator '%1': %2").arg(name, QString::fromUtf8(e.what())));
         return;
     }
-    m_integrator = name;
+    m_settings.integrator = name;
     emit integratorChanged(name);
     toWorker([w = m_worker, integ] { w->setIntegrator(integ); });
 }
 
 void DrapeController::setTexture(const QString& path)
 {
-    if (path == m_texture) return;
+    if (path == m_settings.texture) return;
     if (!path.isEmpty()) {
         QImageReader reader(path);
         reader.setAutoTransform(true);
@@ -194,8 +194,8 @@ void DrapeController::setTexture(const QString& path)
     } else {
         m_hasTexture = false;
     }
-    m_texture = path;
-    emit textureChanged(m_texture);
+    m_settings.texture = path;
+    emit textureChanged(m_settings.texture);
 }
 
 bool DrapeController::setTextureImage(const QImage& image)
@@ -206,8 +206,8 @@ bool DrapeController::setTextureImage(const QImage& image)
     }
     uploadTexture(image);
     m_hasTexture = true;
-    m_texture.clear(); // an in-memory image has no path
-    emit textureChanged(m_texture);
+    m_settings.texture.clear(); // an in-memory image has no path
+    emit textureChanged(m_settings.texture);
     return true;
 }
 
@@ -224,8 +224,8 @@ void DrapeController::uploadTexture(const QImage& image)
 
 void DrapeController::setRunning(bool on)
 {
-    if (on == m_running) return;
-    m_running = on;
+    if (on == m_settings.running) return;
+    m_settings.running = on;
     emit runningChanged(on);
     if (on) {
         if (!m_rebuildPending) toWorker([w = m_worker] { w->play(); }); // else rebuildNow() plays
@@ -237,50 +237,50 @@ void DrapeController::setRunning(bool on)
 
 void DrapeController::onWorkerRunning(bool on)
 {
-    if (on == m_running) return;
-    m_running = on;
+    if (on == m_settings.running) return;
+    m_settings.running = on;
     emit runningChanged(on);
 }
 
 void DrapeController::setTimeStep(double dt)
 {
-    if (dt == m_timeStep) return;
+    if (dt == m_settings.timeStep) return;
     if (!(dt >= 0) || !std::isfinite(dt) || dt > 1.0) {
         fail(QStringLiteral("timeStep: %1 s is outside [0, 1] (0 = automatic)").arg(dt));
         return;
     }
-    m_timeStep = dt;
+    m_settings.timeStep = dt;
     emit timeStepChanged(dt);
     toWorker([w = m_worker, dt] { w->setTimeStep(dt); });
 }
 
 void DrapeController::setRestSpeed(double v)
 {
-    if (v == m_restSpeed) return;
+    if (v == m_settings.restSpeed) return;
     if (!(v > 0) || !std::isfinite(v)) {
         fail(QStringLiteral("restSpeed: %1 m/s must be positive").arg(v));
         return;
     }
-    m_restSpeed = v;
+    m_settings.restSpeed = v;
     emit restSpeedChanged(v);
-    toWorker([w = m_worker, s = m_restSpeed, r = m_restResidual] { w->setRestCriteria(s, r); });
+    toWorker([w = m_worker, s = m_settings.restSpeed, r = m_settings.restResidual] { w->setRestCriteria(s, r); });
 }
 
 void DrapeController::setRestResidual(double r)
 {
-    if (r == m_restResidual) return;
+    if (r == m_settings.restResidual) return;
     if (!(r > 0) || !std::isfinite(r)) {
         fail(QStringLiteral("restResidual: %1 must be positive").arg(r));
         return;
     }
-    m_restResidual = r;
+    m_settings.restResidual = r;
     emit restResidualChanged(r);
-    toWorker([w = m_worker, s = m_restSpeed, rr = m_restResidual] { w->setRestCriteria(s, rr); });
+    toWorker([w = m_worker, s = m_settings.restSpeed, rr = m_settings.restResidual] { w->setRestCriteria(s, rr); });
 }
 
 void DrapeController::setViewPreset(const QString& name)
 {
-    if (name == m_viewPreset) return;
+    if (name == m_settings.viewPreset) return;
     if (name == QLatin1String("top"))
         m_camera.setPreset(OrbitCamera::Preset::Top);
     else if (name == QLatin1String("side"))
@@ -293,36 +293,36 @@ void DrapeController::setViewPreset(const QString& name)
         fail(QStringLiteral("viewPreset: '%1' is not a view (use top, side, iso, close or free)").arg(name));
         return;
     }
-    m_viewPreset = name;
+    m_settings.viewPreset = name;
     emit viewPresetChanged(name);
     emit cameraChanged();
 }
 
 void DrapeController::setClothColor(const QColor& c)
 {
-    if (c == m_clothColor) return;
-    m_clothColor = c;
+    if (c == m_settings.clothColor) return;
+    m_settings.clothColor = c;
     emit clothColorChanged(c);
 }
 
 void DrapeController::setBackgroundColor(const QColor& c)
 {
-    if (c == m_backgroundColor) return;
-    m_backgroundColor = c;
+    if (c == m_settings.backgroundColor) return;
+    m_settings.backgroundColor = c;
     emit backgroundColorChanged(c);
 }
 
 void DrapeController::setShowColliders(bool on)
 {
-    if (on == m_showColliders) return;
-    m_showColliders = on;
+    if (on == m_settings.showColliders) return;
+    m_settings.showColliders = on;
     emit showCollidersChanged(on);
 }
 
 void DrapeController::setShowOutlines(bool on)
 {
-    if (on == m_showOutlines) return;
-    m_showOutlines = on;
+    if (on == m_settings.showOutlines) return;
+    m_settings.showOutlines = on;
     emit showOutlinesChanged(on);
     toWorker([w = m_worker, on] { w->setOutlineWanted(on); });
     if (!on) m_simOutline->clearPolygon();
@@ -330,15 +330,15 @@ void DrapeController::setShowOutlines(bool on)
 
 void DrapeController::setLabFloor(bool on)
 {
-    if (on == m_labFloor) return;
-    m_labFloor = on;
+    if (on == m_settings.labFloor) return;
+    m_settings.labFloor = on;
     emit labFloorChanged(on);
 }
 
 void DrapeController::setPickEnabled(bool on)
 {
-    if (on == m_pickEnabled) return;
-    m_pickEnabled = on;
+    if (on == m_settings.pickEnabled) return;
+    m_settings.pickEnabled = on;
     emit pickEnabledChanged(on);
 }
 
@@ -385,14 +385,14 @@ void DrapeController::rebuildNow()
     m_rebuildPending = false;
     auto spec = std::make_shared<DrapeSpec>();
     spec->preset = m_preset;
-    spec->presetName = m_fabricPreset;
-    spec->shape = m_shape;
-    spec->setup.sample_diameter = m_sampleDiameterMm * 1e-3;
-    spec->setup.disc_diameter = m_discDiameterMm * 1e-3;
-    spec->setup.grid = m_gridSize;
+    spec->presetName = m_settings.fabricPreset;
+    spec->shape = m_settings.clothShape;
+    spec->setup.sample_diameter = m_settings.sampleDiameter * 1e-3;
+    spec->setup.disc_diameter = m_settings.discDiameter * 1e-3;
+    spec->setup.grid = m_settings.gridSize;
     m_worker->requestCancel(); // a running static solve gives way to the rebuild
     toWorker([w = m_worker, spec = std::shared_ptr<const DrapeSpec>(spec)] { w->rebuild(spec); });
-    if (m_running) toWorker([w = m_worker] { w->play(); });
+    if (m_settings.running) toWorker([w = m_worker] { w->play(); });
 }
 
 void DrapeController::onMesh(const DrapeMeshPtr& mesh)
@@ -434,7 +434,7 @@ void DrapeController::rebuildColliderList()
     m_colliders = list;
     if (hasFloor != m_hasFloor) {
         m_hasFloor = hasFloor;
-        emit labFloorChanged(m_labFloor);
+        emit labFloorChanged(m_settings.labFloor);
     }
     emit collidersChanged();
 }
@@ -447,7 +447,7 @@ void DrapeController::onFrame(const DrapeFramePtr& frame)
     }
     m_frame = frame;
     m_cloth->setFrame(frame);
-    if (m_showOutlines && !frame->outline.empty()) m_simOutline->setPolygon(frame->outline, kOutlineHeight);
+    if (m_settings.showOutlines && !frame->outline.empty()) m_simOutline->setPolygon(frame->outline, kOutlineHeight);
     updatePinnedPositions();
     m_worker->frameConsumed();
     emit progress(frame->simTime, frame->maxSpeed);
@@ -482,7 +482,7 @@ void DrapeController::pause()
 
 void DrapeController::step()
 {
-    if (m_running) setRunning(false);
+    if (m_settings.running) setRunning(false);
     toWorker([w = m_worker] { w->stepOnce(); });
 }
 
@@ -507,9 +507,9 @@ void DrapeController::clearExtraColliders()
 void DrapeController::orbit(double dxPixels, double dyPixels)
 {
     m_camera.orbit(-dxPixels * 0.01, dyPixels * 0.01); // [rad per pixel]
-    if (m_viewPreset != QLatin1String("free")) {
-        m_viewPreset = QStringLiteral("free");
-        emit viewPresetChanged(m_viewPreset);
+    if (m_settings.viewPreset != QLatin1String("free")) {
+        m_settings.viewPreset = QStringLiteral("free");
+        emit viewPresetChanged(m_settings.viewPreset);
     }
     emit cameraChanged();
 }
@@ -518,9 +518,9 @@ void DrapeController::pan(double dxPixels, double dyPixels, double viewHeight)
 {
     if (!(viewHeight > 0)) return;
     m_camera.pan(dxPixels / viewHeight, dyPixels / viewHeight);
-    if (m_viewPreset != QLatin1String("free")) {
-        m_viewPreset = QStringLiteral("free");
-        emit viewPresetChanged(m_viewPreset);
+    if (m_settings.viewPreset != QLatin1String("free")) {
+        m_settings.viewPreset = QStringLiteral("free");
+        emit viewPresetChanged(m_settings.viewPreset);
     }
     emit cameraChanged();
 }
@@ -652,7 +652,7 @@ void DrapeController::addSphereCollider(const QVector3D& centreMetres, double ra
 
 void DrapeController::saveResults(const QString& jsonPath)
 {
-    toWorker([w = m_worker, jsonPath, integ = m_integrator] { w->saveResults(jsonPath, integ); });
+    toWorker([w = m_worker, jsonPath, integ = m_settings.integrator] { w->saveResults(jsonPath, integ); });
 }
 
 bool DrapeController::saveFabricPreset(const QString& path)

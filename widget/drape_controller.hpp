@@ -10,6 +10,7 @@
 // at the pedestal top centre).
 #include "widget/cloth_geometry.hpp"
 #include "widget/drape_frame.hpp"
+#include "widget/drape_properties.hpp"
 #include "widget/floor_boards.hpp"
 #include "widget/line_geometry.hpp"
 #include "widget/long_job.hpp"
@@ -37,29 +38,8 @@ class DrapeWorker;
 
 class DrapeController : public QObject {
     Q_OBJECT
-    // ---- designable (DrapeView mirrors these) -------------------------------
-    /// Fabric preset: a preset JSON file, a built-in name ("seed-table1"), or
-    /// empty for the parameter table's defaults.
-    Q_PROPERTY(QString fabricPreset READ fabricPreset WRITE setFabricPreset NOTIFY fabricPresetChanged)
-    Q_PROPERTY(double sampleDiameter READ sampleDiameter WRITE setSampleDiameter NOTIFY sampleDiameterChanged) ///< [mm]
-    Q_PROPERTY(double discDiameter READ discDiameter WRITE setDiscDiameter NOTIFY discDiameterChanged)         ///< [mm]
-    Q_PROPERTY(int gridSize READ gridSize WRITE setGridSize NOTIFY gridSizeChanged) ///< nodes across the specimen
-    Q_PROPERTY(QString clothShape READ clothShape WRITE setClothShape NOTIFY clothShapeChanged) ///< "disc" | "square"
-    Q_PROPERTY(QString integrator READ integrator WRITE setIntegrator NOTIFY integratorChanged)
-    Q_PROPERTY(QString texture READ texture WRITE setTexture NOTIFY textureChanged) ///< BMP/PNG/JPEG path, empty = plain colour
-    Q_PROPERTY(bool running READ running WRITE setRunning NOTIFY runningChanged)
-    Q_PROPERTY(double timeStep READ timeStep WRITE setTimeStep NOTIFY timeStepChanged)       ///< [s], 0 = automatic
-    Q_PROPERTY(double restSpeed READ restSpeed WRITE setRestSpeed NOTIFY restSpeedChanged)   ///< [m/s]
-    Q_PROPERTY(double restResidual READ restResidual WRITE setRestResidual NOTIFY restResidualChanged) ///< relative force residual [-]
-    Q_PROPERTY(QString viewPreset READ viewPreset WRITE setViewPreset NOTIFY viewPresetChanged) ///< "top" | "side" | "iso" (lab stations), "close", "free"
-    Q_PROPERTY(QColor clothColor READ clothColor WRITE setClothColor NOTIFY clothColorChanged)
-    Q_PROPERTY(QColor backgroundColor READ backgroundColor WRITE setBackgroundColor NOTIFY backgroundColorChanged)
-    Q_PROPERTY(bool showColliders READ showColliders WRITE setShowColliders NOTIFY showCollidersChanged)
-    Q_PROPERTY(bool showOutlines READ showOutlines WRITE setShowOutlines NOTIFY showOutlinesChanged)
-    Q_PROPERTY(bool pickEnabled READ pickEnabled WRITE setPickEnabled NOTIFY pickEnabledChanged)
-    /// Draws the lab's four calibration chessboards on the floor (drape-lab README), so
-    /// the top and iso views can be laid next to the photos.
-    Q_PROPERTY(bool labFloor READ labFloor WRITE setLabFloor NOTIFY labFloorChanged)
+    // ---- designable (drape_properties.hpp; DrapeView has the same) ---------------
+    DRAPE_VIEW_PROPERTIES(DRAPE_DECLARE_Q_PROPERTY)
     // ---- for the QML scene ----------------------------------------------------
     Q_PROPERTY(drape::widget::ClothGeometry* clothGeometry READ clothGeometry CONSTANT)
     Q_PROPERTY(drape::widget::LineGeometry* simulatedOutline READ simulatedOutline CONSTANT)
@@ -83,44 +63,15 @@ public:
     explicit DrapeController(QObject* parent = nullptr);
     ~DrapeController() override;
 
-    QString fabricPreset() const { return m_fabricPreset; }
-    void setFabricPreset(const QString& preset);
-    double sampleDiameter() const { return m_sampleDiameterMm; }
-    void setSampleDiameter(double mm);
-    double discDiameter() const { return m_discDiameterMm; }
-    void setDiscDiameter(double mm);
-    int gridSize() const { return m_gridSize; }
-    void setGridSize(int n);
-    QString clothShape() const { return m_shape; }
-    void setClothShape(const QString& shape);
-    QString integrator() const { return m_integrator; }
-    void setIntegrator(const QString& name);
-    QString texture() const { return m_texture; }
-    void setTexture(const QString& path);
-    bool running() const { return m_running; }
-    void setRunning(bool on);
-    double timeStep() const { return m_timeStep; }
-    void setTimeStep(double dt);
-    double restSpeed() const { return m_restSpeed; }
-    void setRestSpeed(double v);
-    double restResidual() const { return m_restResidual; }
-    void setRestResidual(double r);
-    QString viewPreset() const { return m_viewPreset; }
-    void setViewPreset(const QString& name);
-    QColor clothColor() const { return m_clothColor; }
-    void setClothColor(const QColor& c);
-    QColor backgroundColor() const { return m_backgroundColor; }
-    void setBackgroundColor(const QColor& c);
-    bool showColliders() const { return m_showColliders; }
-    void setShowColliders(bool on);
-    bool showOutlines() const { return m_showOutlines; }
-    void setShowOutlines(bool on);
-    bool pickEnabled() const { return m_pickEnabled; }
-    void setPickEnabled(bool on);
-    bool labFloor() const { return m_labFloor; }
-    void setLabFloor(bool on);
+    // Getters and setters of the designable properties: fabricPreset() /
+    // setFabricPreset(const QString&), sampleDiameter() / setSampleDiameter(double) ...
+#define DRAPE_CONTROLLER_ACCESSORS(Type, Arg, name, setter, init) \
+    Type name() const { return m_settings.name; }                 \
+    void setter(Arg value);
+    DRAPE_VIEW_PROPERTIES(DRAPE_CONTROLLER_ACCESSORS)
+#undef DRAPE_CONTROLLER_ACCESSORS
     FloorBoardsGeometry* floorBoards() const { return m_floorBoards; }
-    bool floorBoardsVisible() const { return m_labFloor && m_hasFloor; }
+    bool floorBoardsVisible() const { return m_settings.labFloor && m_hasFloor; }
 
     ClothGeometry* clothGeometry() const { return m_cloth; }
     LineGeometry* simulatedOutline() const { return m_simOutline; }
@@ -200,42 +151,16 @@ public:
     Q_INVOKABLE bool setTextureImage(const QImage& image);
 
 signals:
-    void fabricPresetChanged(const QString& preset);
-    void sampleDiameterChanged(double mm);
-    void discDiameterChanged(double mm);
-    void gridSizeChanged(int n);
-    void clothShapeChanged(const QString& shape);
-    void integratorChanged(const QString& name);
-    void textureChanged(const QString& path);
-    void runningChanged(bool running);
-    void timeStepChanged(double dt);
-    void restSpeedChanged(double v);
-    void restResidualChanged(double r);
-    void viewPresetChanged(const QString& name);
-    void clothColorChanged(const QColor& c);
-    void backgroundColorChanged(const QColor& c);
-    void showCollidersChanged(bool on);
-    void showOutlinesChanged(bool on);
-    void pickEnabledChanged(bool on);
-    void labFloorChanged(bool on);
+    DRAPE_VIEW_PROPERTIES(DRAPE_DECLARE_CHANGED_SIGNAL)
+    DRAPE_VIEW_SIGNALS(DRAPE_DECLARE_SIGNAL)
     void collidersChanged();
     void pinnedChanged();
     void cameraChanged();
     void meshChanged();
     void frameApplied();
     void fabricParametersChanged();
-    void jobRunningChanged();
-
-    /// Simulation progress: simulated time [s] and the fastest free vertex [m/s].
-    void progress(double simulatedTime, double maxSpeed);
-    /// The cloth came to rest (speed and residual below restSpeed / restResidual).
-    void restReached();
-    /// Bad input or engine trouble, as a readable message. The view stays usable.
-    void errorOccurred(const QString& message);
-    void resultsSaved(const QString& jsonPath, const QString& objPath);
     void jobStarted(const QString& name);
-    void jobProgress(double fraction, const QString& message);
-    void jobFinished(bool ok, const QString& message);
+    void jobRunningChanged();
 
 private:
     bool applyFabricPreset(const QString& preset);
@@ -251,30 +176,10 @@ private:
     template <class F>
     void toWorker(F&& f);
 
-    QString m_fabricPreset;
+    DrapeSettings m_settings;
     fabric::FabricPreset m_preset;
-    double m_sampleDiameterMm = 300;
-    double m_discDiameterMm = 150;
-    int m_gridSize = 40;
-    QString m_shape = QStringLiteral("disc");
-    // Semi-implicit Euler: cheap steps, so a small cloth drapes live; "implicit"
-    // and "static" are there for large or stiff cloths.
-    QString m_integrator = QStringLiteral("symplectic");
-    QString m_texture;
-    bool m_running = false;
-    double m_timeStep = 0;
-    double m_restSpeed = 1e-3;
-    double m_restResidual = 1e-3;
-    QString m_viewPreset = QStringLiteral("iso");
-    QColor m_clothColor{0xb0, 0x3a, 0x48};
-    QColor m_backgroundColor{0x2b, 0x2f, 0x36};
-    bool m_showColliders = true;
-    bool m_showOutlines = false;
-    bool m_pickEnabled = true;
-    bool m_labFloor = true;
     bool m_hasTexture = false;
     bool m_rebuildPending = false;
-    bool m_playAfterBuild = false;
 
     OrbitCamera m_camera;
     ClothGeometry* m_cloth = nullptr;

@@ -28,31 +28,15 @@ DrapeView::DrapeView(QWidget* parent) : QWidget(parent)
         emit errorOccurred(QStringLiteral("scene: %1").arg(e.toString()));
     layout->addWidget(m_quick);
 
+    // Every property's ...Changed signal and the other public signals, as the controller emits them.
     auto* c = m_controller;
-    connect(c, &DrapeController::fabricPresetChanged, this, &DrapeView::fabricPresetChanged);
-    connect(c, &DrapeController::sampleDiameterChanged, this, &DrapeView::sampleDiameterChanged);
-    connect(c, &DrapeController::discDiameterChanged, this, &DrapeView::discDiameterChanged);
-    connect(c, &DrapeController::gridSizeChanged, this, &DrapeView::gridSizeChanged);
-    connect(c, &DrapeController::clothShapeChanged, this, &DrapeView::clothShapeChanged);
-    connect(c, &DrapeController::integratorChanged, this, &DrapeView::integratorChanged);
-    connect(c, &DrapeController::textureChanged, this, &DrapeView::textureChanged);
-    connect(c, &DrapeController::runningChanged, this, &DrapeView::runningChanged);
-    connect(c, &DrapeController::timeStepChanged, this, &DrapeView::timeStepChanged);
-    connect(c, &DrapeController::restSpeedChanged, this, &DrapeView::restSpeedChanged);
-    connect(c, &DrapeController::restResidualChanged, this, &DrapeView::restResidualChanged);
-    connect(c, &DrapeController::viewPresetChanged, this, &DrapeView::viewPresetChanged);
-    connect(c, &DrapeController::clothColorChanged, this, &DrapeView::clothColorChanged);
-    connect(c, &DrapeController::backgroundColorChanged, this, &DrapeView::backgroundColorChanged);
-    connect(c, &DrapeController::showCollidersChanged, this, &DrapeView::showCollidersChanged);
-    connect(c, &DrapeController::showOutlinesChanged, this, &DrapeView::showOutlinesChanged);
-    connect(c, &DrapeController::pickEnabledChanged, this, &DrapeView::pickEnabledChanged);
-    connect(c, &DrapeController::labFloorChanged, this, &DrapeView::labFloorChanged);
-    connect(c, &DrapeController::progress, this, &DrapeView::progress);
-    connect(c, &DrapeController::restReached, this, &DrapeView::restReached);
-    connect(c, &DrapeController::errorOccurred, this, &DrapeView::errorOccurred);
-    connect(c, &DrapeController::resultsSaved, this, &DrapeView::resultsSaved);
-    connect(c, &DrapeController::jobProgress, this, &DrapeView::jobProgress);
-    connect(c, &DrapeController::jobFinished, this, &DrapeView::jobFinished);
+#define DRAPE_FORWARD_CHANGED(Type, Arg, name, setter, init) \
+    connect(c, &DrapeController::name##Changed, this, &DrapeView::name##Changed);
+    DRAPE_VIEW_PROPERTIES(DRAPE_FORWARD_CHANGED)
+#undef DRAPE_FORWARD_CHANGED
+#define DRAPE_FORWARD_SIGNAL(name, params) connect(c, &DrapeController::name, this, &DrapeView::name);
+    DRAPE_VIEW_SIGNALS(DRAPE_FORWARD_SIGNAL)
+#undef DRAPE_FORWARD_SIGNAL
 }
 
 DrapeView::~DrapeView()

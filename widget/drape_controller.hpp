@@ -1,36 +1,33 @@
 #pragma once
-// DrapeController: the state and commands of a drape view, shared by the
+// DrapeController: the drapemeter view's state and commands, shared by the
 // QWidget (DrapeView) and the QML scene (Drapekit.DrapeScene). It owns the
-// worker thread that runs the engine, the Qt Quick 3D geometry objects, the
-// orbit camera, the texture and the long-job runner.
+// worker thread that runs the engine and the long-job runner, and it is a
+// client of a Scene: the cloth is a SceneMesh the worker's frames update, the
+// colliders are primitives, the outlines and floor boards geometry items, the
+// pins markers.
 //
 // Units: sampleDiameter and discDiameter are in millimetres (the lab's and a
 // CAD user's unit); everything else is SI (timeStep [s], restSpeed [m/s],
 // masses [kg], collider positions [m] in Drapekit's world frame: z up, origin
 // at the pedestal top centre).
-#include "widget/cloth_geometry.hpp"
 #include "widget/drape_frame.hpp"
 #include "widget/drape_properties.hpp"
 #include "widget/floor_boards.hpp"
 #include "widget/line_geometry.hpp"
 #include "widget/long_job.hpp"
-#include "widget/orbit_camera.hpp"
+#include "widget/scene.hpp"
 
 #include "engine/fabric/preset.hpp"
 
-#include <QColor>
 #include <QImage>
 #include <QObject>
 #include <QPointF>
 #include <QPolygonF>
-#include <QQuick3DTextureData>
-#include <QQuaternion>
 #include <QSet>
 #include <QThread>
 #include <QVariantList>
-#include <QVector3D>
 
-#include <memory>
+#include <vector>
 
 namespace drape::widget {
 
@@ -40,14 +37,11 @@ class DrapeController : public QObject {
     Q_OBJECT
     // ---- designable (drape_properties.hpp; DrapeView has the same) ---------------
     DRAPE_VIEW_PROPERTIES(DRAPE_DECLARE_Q_PROPERTY)
-    // ---- for the QML scene ----------------------------------------------------
-    Q_PROPERTY(drape::widget::ClothGeometry* clothGeometry READ clothGeometry CONSTANT)
+    // ---- what the view draws and reports --------------------------------------
+    Q_PROPERTY(drape::widget::Scene* scene READ scene CONSTANT)
+    Q_PROPERTY(drape::widget::MeshGeometry* clothGeometry READ clothGeometry CONSTANT)
     Q_PROPERTY(drape::widget::LineGeometry* simulatedOutline READ simulatedOutline CONSTANT)
     Q_PROPERTY(drape::widget::LineGeometry* measuredOutline READ measuredOutline CONSTANT)
-    Q_PROPERTY(QQuick3DTextureData* textureData READ textureData CONSTANT)
-    Q_PROPERTY(drape::widget::FloorBoardsGeometry* floorBoards READ floorBoards CONSTANT)
-    /// labFloor and the scene has a horizontal floor to draw the boards on.
-    Q_PROPERTY(bool floorBoardsVisible READ floorBoardsVisible NOTIFY labFloorChanged)
     Q_PROPERTY(bool hasTexture READ hasTexture NOTIFY textureChanged)
     Q_PROPERTY(QVariantList colliders READ colliders NOTIFY collidersChanged)
     Q_PROPERTY(QVariantList pinnedPositions READ pinnedPositions NOTIFY pinnedChanged)
@@ -70,26 +64,24 @@ public:
     void setter(Arg value);
     DRAPE_VIEW_PROPERTIES(DRAPE_CONTROLLER_ACCESSORS)
 #undef DRAPE_CONTROLLER_ACCESSORS
-    FloorBoardsGeometry* floorBoards() const { return m_floorBoards; }
-    bool floorBoardsVisible() const { return m_settings.labFloor && m_hasFloor; }
 
-    ClothGeometry* clothGeometry() const { return m_cloth; }
+    Scene* scene() const { return m_scene; }
+    MeshGeometry* clothGeometry() const { return m_cloth->meshGeometry(); }
     LineGeometry* simulatedOutline() const { return m_simOutline; }
     LineGeometry* measuredOutline() const { return m_measOutline; }
-    QQuick3DTextureData* textureData() const { return m_textureData; }
-    bool hasTexture() const { return m_hasTexture; }
+    bool hasTexture() const { return m_cloth->textured(); }
     QVariantList colliders() const { return m_colliders; }
     QVariantList pinnedPositions() const { return m_pinnedPositions; }
-    QVector3D cameraPosition() const { return m_camera.scenePosition(); }
-    QQuaternion cameraRotation() const { return m_camera.sceneRotation(); }
-    double fieldOfView() const { return m_camera.fovYDegrees(); }
+    QVector3D cameraPosition() const { return m_scene->cameraPosition(); }
+    QQuaternion cameraRotation() const { return m_scene->cameraRotation(); }
+    double fieldOfView() const { return m_scene->fieldOfView(); }
     int vertexCount() const;
     double simulatedTime() const;
     QString statusText() const;
     bool jobRunning() const { return m_job.running(); }
 
-    const OrbitCamera& camera() const { return m_camera; }
-    OrbitCamera& camera() { return m_camera; }
+    const OrbitCamera& camera() const { return m_scene->camera(); }
+    OrbitCamera& camera() { return m_scene->camera(); }
     /// Latest frame shown (may be null before the first one).
     DrapeFramePtr currentFrame() const { return m_frame; }
     DrapeMeshPtr currentMesh() const { return m_mesh; }
@@ -119,9 +111,9 @@ public slots:
 
 public:
     // ---- interaction (QML-callable) -------------------------------------------
-    Q_INVOKABLE void orbit(double dxPixels, double dyPixels);
-    Q_INVOKABLE void pan(double dxPixels, double dyPixels, double viewHeight);
-    Q_INVOKABLE void zoom(double wheelDelta);
+    Q_INVOKABLE void orbit(double dxPixels, double dyPixels) { m_scene->orbit(dxPixels, dyPixels); }
+    Q_INVOKABLE void pan(double dxPixels, double dyPixels, double viewHeight) { m_scene->pan(dxPixels, dyPixels, viewHeight); }
+    Q_INVOKABLE void zoom(double wheelDelta) { m_scene->zoom(wheelDelta); }
     /// Vertex under view point (x, y) of a w x h view, or -1.
     Q_INVOKABLE int pickVertex(double x, double y, double w, double h) const;
     /// Pins the vertex under the point, or unpins it when pinned. Returns it (-1 = none).
@@ -164,32 +156,35 @@ signals:
 
 private:
     bool applyFabricPreset(const QString& preset);
-    void uploadTexture(const QImage& image);
-    void rebuildColliderList();
     void scheduleRebuild();
     void rebuildNow();
     void onMesh(const DrapeMeshPtr& mesh);
     void onFrame(const DrapeFramePtr& frame);
     void onWorkerRunning(bool on);
+    void showColliders(const std::vector<ColliderShape>& shapes);
+    void updateVisibility();
     void updatePinnedPositions();
     void fail(const QString& message);
+    QObject* workerObject() const;
+    /// Runs `f` on the worker's thread, after the commands sent before.
     template <class F>
-    void toWorker(F&& f);
+    void toWorker(F&& f)
+    {
+        QMetaObject::invokeMethod(workerObject(), std::forward<F>(f), Qt::QueuedConnection);
+    }
 
     DrapeSettings m_settings;
     fabric::FabricPreset m_preset;
-    bool m_hasTexture = false;
     bool m_rebuildPending = false;
 
-    OrbitCamera m_camera;
-    ClothGeometry* m_cloth = nullptr;
+    Scene* m_scene = nullptr;
+    SceneMesh* m_cloth = nullptr;
     LineGeometry* m_simOutline = nullptr;
     LineGeometry* m_measOutline = nullptr;
-    QQuick3DTextureData* m_textureData = nullptr;
     FloorBoardsGeometry* m_floorBoards = nullptr;
     bool m_hasFloor = false;
+    QStringList m_colliderItems; ///< scene item names of the drawn colliders
     QVariantList m_colliders;
-    std::vector<ColliderShape> m_colliderShapes;
     QVariantList m_pinnedPositions;
     QSet<int> m_pinned;
     DrapeMeshPtr m_mesh;

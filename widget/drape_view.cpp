@@ -1,32 +1,16 @@
 #include "widget/drape_view.hpp"
 
-#include "widget/drape_qml.hpp"
-
-#include <QQmlContext>
-#include <QQmlEngine>
-#include <QQuickItem>
-#include <QQuickWidget>
 #include <QVBoxLayout>
 
 namespace drape::widget {
 
 DrapeView::DrapeView(QWidget* parent) : QWidget(parent)
 {
-    registerDrapeQmlTypes();
     m_controller = new DrapeController(this);
+    m_view = new SceneWidget(m_controller->scene(), this);
     auto* layout = new QVBoxLayout(this);
     layout->setContentsMargins(0, 0, 0, 0);
-    m_quick = new QQuickWidget(this);
-    m_quick->setObjectName(QStringLiteral("drapeQuickWidget"));
-    m_quick->setResizeMode(QQuickWidget::SizeRootObjectToView);
-    m_quick->setFocusPolicy(Qt::StrongFocus);
-    // The scene reads its controller from this context property (set before the
-    // QML is created, so no binding ever sees a null controller).
-    m_quick->rootContext()->setContextProperty(QStringLiteral("drapeViewController"), m_controller);
-    m_quick->setSource(QUrl(QStringLiteral("qrc:/drapekit/qml/DrapeViewRoot.qml")));
-    for (const QQmlError& e : m_quick->errors())
-        emit errorOccurred(QStringLiteral("scene: %1").arg(e.toString()));
-    layout->addWidget(m_quick);
+    layout->addWidget(m_view);
 
     // Every property's ...Changed signal and the other public signals, as the controller emits them.
     auto* c = m_controller;
@@ -41,14 +25,9 @@ DrapeView::DrapeView(QWidget* parent) : QWidget(parent)
 
 DrapeView::~DrapeView()
 {
-    // The scene references the controller's geometry: take it down first.
-    delete m_quick;
-    m_quick = nullptr;
-}
-
-QImage DrapeView::grabFrame()
-{
-    return m_quick ? m_quick->grabFramebuffer() : QImage();
+    // The view draws the controller's scene: take it down first.
+    delete m_view;
+    m_view = nullptr;
 }
 
 } // namespace drape::widget

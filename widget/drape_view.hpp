@@ -1,18 +1,18 @@
 #pragma once
-// DrapeView: the embeddable drape widget. A QWidget hosting a QQuickWidget with
-// the Qt Quick 3D scene (DrapeScene.qml); the engine runs on a worker thread
-// (see DrapeController), so the host's UI never waits for the simulation.
+// DrapeView: the embeddable drape widget. A QWidget showing its controller's
+// Scene (a SceneWidget: qml/SceneView.qml in a QQuickWidget); the engine runs on
+// a worker thread (see DrapeController), so the host's UI never waits for the
+// simulation. Its designable properties and signals are the controller's,
+// generated from one list (drape_properties.hpp) and forwarded.
 //
 // Mouse: left-drag orbits, right/middle-drag (or shift+left) pans, the wheel
 // zooms, a left click (no drag) pins the vertex under the cursor or unpins it.
 //
 // Units: sampleDiameter and discDiameter in millimetres; timeStep [s];
 // restSpeed [m/s]; restResidual is relative to the cloth's weight.
-//
-// Its designable properties and signals are the controller's, generated from
-// one list (drape_properties.hpp) and forwarded.
 #include "widget/drape_controller.hpp"
 #include "widget/drape_properties.hpp"
+#include "widget/scene_widget.hpp"
 
 #include <QImage>
 #include <QWidget>
@@ -30,9 +30,10 @@ public:
     ~DrapeView() override;
 
     DrapeController* controller() const { return m_controller; }
-    QQuickWidget* quickWidget() const { return m_quick; }
+    SceneWidget* sceneWidget() const { return m_view; }
+    QQuickWidget* quickWidget() const { return m_view->quickWidget(); }
     /// The rendered view as an image (renders now; for screenshots and tests).
-    QImage grabFrame();
+    QImage grabFrame() { return m_view->grabFrame(); }
 
     QSize sizeHint() const override { return {480, 360}; }
     QSize minimumSizeHint() const override { return {120, 90}; }
@@ -61,7 +62,7 @@ signals:
 
 private:
     DrapeController* m_controller = nullptr;
-    QQuickWidget* m_quick = nullptr;
+    SceneWidget* m_view = nullptr;
 };
 
 } // namespace drape::widget

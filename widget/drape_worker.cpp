@@ -5,8 +5,6 @@
 #include "engine/cloth/colliders.hpp"
 #include "engine/core/error.hpp"
 
-#include <Eigen/Geometry>
-
 #include <QTimer>
 
 #include <cmath>
@@ -72,29 +70,10 @@ void DrapeWorker::emitMesh()
     mesh->generation = ++m_generation;
     mesh->vertexCount = m_sys->vertex_count();
     mesh->F = cm.F;
-    mesh->indexData.resize(cm.F.size() * qsizetype(sizeof(quint32)));
-    auto* idx = reinterpret_cast<quint32*>(mesh->indexData.data());
-    for (Eigen::Index t = 0; t < cm.F.rows(); ++t)
-        for (int k = 0; k < 3; ++k) idx[3 * t + k] = quint32(cm.F(t, k));
-    // Material coordinates [m] -> [0, 1] over the specimen, so an image (e.g. the
-    // record's top photo cropped to the specimen) covers the cloth once.
-    mesh->texcoord.assign(std::size_t(2 * mesh->vertexCount), 0.0f);
-    if (cm.uv.rows() == mesh->vertexCount && mesh->vertexCount > 0) {
-        const Eigen::Vector2d lo = cm.uv.colwise().minCoeff(), hi = cm.uv.colwise().maxCoeff();
-        const double span = std::max({hi.x() - lo.x(), hi.y() - lo.y(), 1e-12});
-        for (int i = 0; i < mesh->vertexCount; ++i) {
-            mesh->texcoord[std::size_t(2 * i)] = float((cm.uv(i, 0) - lo.x()) / span);
-            mesh->texcoord[std::size_t(2 * i + 1)] = float((cm.uv(i, 1) - lo.y()) / span);
-        }
-    }
+    mesh->texcoord = texcoordsFromMaterial(cm.uv, mesh->vertexCount);
     mesh->boundary = cm.boundary;
-    mesh->floorZ = std::nan("");
-    for (const auto& c : m_sys->colliders()) {
-        if (!c) continue;
-        describeColliders(*c, mesh->colliders);
-        if (auto* pl = dynamic_cast<const cloth::PlaneCollider*>(c.get()); pl && pl->normal.z() > 0.99)
-            mesh->floorZ = pl->point.z();
-    }
+    for (const auto& c : m_sys->colliders())
+        if (c) describeColliders(*c, mesh->colliders);
     mesh->sampleRadius = 0.5 * m_spec->setup.sample_diameter;
     mesh->discRadius = 0.5 * m_spec->setup.disc_diameter;
     mesh->description = QStringLiteral("%1, %2 vertices, %3 triangles")
@@ -377,33 +356,8 @@ void DrapeWorker::publish(bool force)
     f->simTime = m_sys->time;
     f->steps = m_steps;
     f->maxSpeed = maxFreeSpeed(*m_sys);
-    // Smooth normals: area-weighted sum of the incident triangles' normals.
     const cloth::Triangles& F = m_sys->mesh().F;
-    cloth::Positions nrm = cloth::Positions::Zero(n, 3);
-    for (Eigen::Index t = 0; t < F.rows(); ++t) {
-        const int a = F(t, 0), b = F(t, 1), c = F(t, 2);
-        const Eigen::Vector3d fa = (f->x.row(b) - f->x.row(a)).cross(f->x.row(c) - f->x.row(a));
-        nrm.row(a) += fa;
-        nrm.row(b) += fa;
-        nrm.row(c) += fa;
-    }
-    f->vertexData.resize(qsizetype(n) * kFloatsPerVertex * qsizetype(sizeof(float)));
-    auto* out = reinterpret_cast<float*>(f->vertexData.data());
-    QVector3D lo(1e9f, 1e9f, 1e9f), hi(-1e9f, -1e9f, -1e9f);
-    for (int i = 0; i < n; ++i) {
-        const QVector3D p = toScene(f->x(i, 0), f->x(i, 1), f->x(i, 2));
-        const double len = nrm.row(i).norm();
-        const QVector3D q = len > 0 ? toScene(nrm(i, 0) / len, nrm(i, 1) / len, nrm(i, 2) / len) : QVector3D(0, 1, 0);
-        float* o = out + std::ptrdiff_t(i) * kFloatsPerVertex;
-        o[0] = p.x(); o[1] = p.y(); o[2] = p.z();
-        o[3] = q.x(); o[4] = q.y(); o[5] = q.z();
-        o[6] = m_texcoord[std::size_t(2 * i)];
-        o[7] = m_texcoord[std::size_t(2 * i + 1)];
-        lo = QVector3D(std::min(lo.x(), p.x()), std::min(lo.y(), p.y()), std::min(lo.z(), p.z()));
-        hi = QVector3D(std::max(hi.x(), p.x()), std::max(hi.y(), p.y()), std::max(hi.z(), p.z()));
-    }
-    f->boundsMin = lo;
-    f->boundsMax = hi;
+    f->vertices = packVertices(f->x, F, m_texcoord);
     for (int i = 0; i < n; ++i)
         if (m_sys->pinned(i)) f->pinned.push_back(i);
     f->mass = std::make_shared<const Eigen::VectorXd>(m_sys->model().mass);

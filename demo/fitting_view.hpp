@@ -1,82 +1,23 @@
 #pragma once
-// FittingView: one 3-D view of a fitting (mannequin or table, and the draped
-// garment). The drape runs on a worker thread (widget's LongJob), frames come
-// back as immutable copies, so the window stays live and can be cancelled.
-//
-// The widget library's DrapeView is built around the drapemeter (a specimen on
-// a pedestal); a fitting needs an imported body and a generated garment, so
-// this view reuses DrapeView's building blocks (ClothGeometry, OrbitCamera,
-// LongJob, the z-up -> y-up convention) with its own small scene.
+// FittingView: one 3-D view of a fitting - the widget library's SceneWidget,
+// filled with the floor, the mannequin or the round table, and the garment that
+// importers::make_skirt_scene / make_tablecloth_scene build. The drape runs in
+// the library's RestJob (the static solver on a worker thread, frames shown as
+// it goes, cancel), so the window stays live.
 #include "engine/library/fabric_choices.hpp"
 #include "importers/garment_scene.hpp"
 
-#include "widget/cloth_geometry.hpp"
-#include "widget/long_job.hpp"
 #include "widget/orbit_camera.hpp"
+#include "widget/rest_job.hpp"
+#include "widget/scene_widget.hpp"
 
 #include <QColor>
-#include <QImage>
-#include <QMutex>
-#include <QObject>
-#include <QQuaternion>
-#include <QVector3D>
-#include <QWidget>
 
 #include <memory>
 
-class QQuickWidget;
-
 namespace drape::demo {
 
-/// What the QML scene binds to.
-class FittingSceneState : public QObject {
-    Q_OBJECT
-    Q_PROPERTY(drape::widget::ClothGeometry* bodyGeometry READ bodyGeometry CONSTANT)
-    Q_PROPERTY(drape::widget::ClothGeometry* clothGeometry READ clothGeometry CONSTANT)
-    Q_PROPERTY(bool bodyVisible READ bodyVisible NOTIFY sceneChanged)
-    Q_PROPERTY(bool tableVisible READ tableVisible NOTIFY sceneChanged)
-    Q_PROPERTY(QVector3D tablePosition READ tablePosition NOTIFY sceneChanged)
-    Q_PROPERTY(QVector3D tableScale READ tableScale NOTIFY sceneChanged)
-    Q_PROPERTY(QColor clothColor READ clothColor NOTIFY sceneChanged)
-    Q_PROPERTY(QString title READ title NOTIFY sceneChanged)
-    Q_PROPERTY(QString status READ status NOTIFY statusChanged)
-    Q_PROPERTY(QVector3D cameraPosition READ cameraPosition NOTIFY cameraChanged)
-    Q_PROPERTY(QQuaternion cameraRotation READ cameraRotation NOTIFY cameraChanged)
-    Q_PROPERTY(double fieldOfView READ fieldOfView NOTIFY cameraChanged)
-public:
-    explicit FittingSceneState(QObject* parent = nullptr);
-    ~FittingSceneState() override;
-    widget::ClothGeometry* bodyGeometry() const { return m_body; }
-    widget::ClothGeometry* clothGeometry() const { return m_cloth; }
-    bool bodyVisible() const { return m_bodyVisible; }
-    bool tableVisible() const { return m_tableVisible; }
-    QVector3D tablePosition() const { return m_tablePosition; }
-    QVector3D tableScale() const { return m_tableScale; }
-    QColor clothColor() const { return m_clothColor; }
-    QString title() const { return m_title; }
-    QString status() const { return m_status; }
-    QVector3D cameraPosition() const { return camera.scenePosition(); }
-    QQuaternion cameraRotation() const { return camera.sceneRotation(); }
-    double fieldOfView() const { return camera.fovYDegrees(); }
-
-    Q_INVOKABLE void orbit(double dxPixels, double dyPixels);
-    Q_INVOKABLE void zoom(double wheelDelta);
-
-    widget::OrbitCamera camera;
-    widget::ClothGeometry* m_body = nullptr;
-    widget::ClothGeometry* m_cloth = nullptr;
-    bool m_bodyVisible = false, m_tableVisible = false;
-    QVector3D m_tablePosition, m_tableScale;
-    QColor m_clothColor{0xb0, 0x3a, 0x48};
-    QString m_title, m_status;
-
-signals:
-    void sceneChanged();
-    void statusChanged();
-    void cameraChanged();
-};
-
-class FittingView : public QWidget {
+class FittingView : public widget::SceneWidget {
     Q_OBJECT
 public:
     explicit FittingView(QWidget* parent = nullptr);
@@ -85,26 +26,23 @@ public:
     /// Shows this body (null hides it). Takes effect for the next skirt drape.
     void setMannequin(std::shared_ptr<const importers::Mannequin> m);
     std::shared_ptr<const importers::Mannequin> mannequin() const { return m_mannequin; }
-    /// Builds the scene on the GUI thread (fast) and drapes it on a worker
-    /// thread. Returns false with `error` set when the scene cannot be built
-    /// (bad fabric, no mannequin) or a drape is already running.
+    /// Builds the garment scene on the GUI thread (fast) and drapes it on a
+    /// worker thread. Returns false with `error` set when the scene cannot be
+    /// built (bad fabric, no mannequin) or a drape is already running.
     bool drape(importers::Garment garment, const library::FabricChoice& fabric, QString* error = nullptr);
-    void cancel();
+    void cancel() { m_job.cancel(); }
     bool busy() const { return m_job.running(); }
 
     void setClothColor(const QColor& c);
-    /// Frames the camera on the current scene (body or table).
+    /// Frames the camera on the current garment (body or table).
     void resetCamera();
-    widget::OrbitCamera& camera() { return m_state->camera; }
-    void cameraChanged() { emit m_state->cameraChanged(); }
-
-    /// Renders now and returns the image.
-    QImage grabFrame();
+    widget::OrbitCamera& camera();
 
     /// Results of the last finished drape (valid after finished(true, ...)).
-    const cloth::SolverStatus& lastStatus() const { return m_status; }
+    const cloth::SolverStatus& lastStatus() const { return m_job.status(); }
     cloth::Positions lastPositions() const;
-    const importers::Scene* scene() const { return m_scene.get(); }
+    /// The garment scene of the last drape (null before the first).
+    const importers::Scene* garmentScene() const { return m_garment.get(); }
     QString fabricName() const { return m_fabricName; }
 
     QSize sizeHint() const override { return {560, 640}; }
@@ -116,17 +54,13 @@ signals:
 
 private:
     void showBody();
-    void showPositions(const cloth::Positions& x, bool cloth);
-    QQuickWidget* m_quick = nullptr;
-    FittingSceneState* m_state = nullptr;
+    bool tablecloth() const { return m_garment && m_garment->garment == importers::Garment::Tablecloth; }
+
     std::shared_ptr<const importers::Mannequin> m_mannequin;
-    std::unique_ptr<importers::Scene> m_scene;
-    widget::LongJob m_job;
-    cloth::SolverStatus m_status;
+    std::unique_ptr<importers::Scene> m_garment;
     QString m_fabricName;
-    int m_generation = 0;
-    int m_clothGeneration = -1;
-    std::vector<float> m_clothTex;
+    QColor m_clothColor{0xb0, 0x3a, 0x48};
+    widget::RestJob m_job; ///< last: joined before the garment scene it solves goes
 };
 
 } // namespace drape::demo

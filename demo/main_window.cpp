@@ -290,7 +290,7 @@ void MainWindow::onViewFinished()
 {
     setBusy(false);
     QString text = m_lastMessage;
-    if (auto* s = m_viewA->scene(); s && s->mannequin && m_allOk) {
+    if (auto* s = m_viewA->garmentScene(); s && s->mannequin && m_allOk) {
         const importers::Penetration p = importers::body_penetration(*s->mannequin, m_viewA->lastPositions());
         text += tr("; closest cloth vertex %1 mm from the body").arg(p.min_distance * 1000, 0, 'f', 1);
     }
@@ -406,7 +406,7 @@ QByteArray MainWindow::summaryJson() const
     QJsonObject root;
     QJsonArray views;
     for (FittingView* v : {m_viewA, m_viewB}) {
-        const importers::Scene* s = v->scene();
+        const importers::Scene* s = v->garmentScene();
         if (!s || (v == m_viewB && !m_compare->isChecked())) continue;
         QJsonObject o;
         const cloth::SolverStatus& st = v->lastStatus();

@@ -5,8 +5,9 @@
 //   import Drapekit 1.0
 //   DrapeScene { anchors.fill: parent; controller: DrapeController { gridSize: 40; running: true } }
 //
-// Types: DrapeController (creatable), DrapeScene (the Qt Quick 3D scene with
-// camera and mouse handling), ClothGeometry and LineGeometry (uncreatable).
+// Types: DrapeController (creatable); SceneView (the Qt Quick 3D view of a
+// Scene: items, camera, mouse) and DrapeScene (a SceneView of a controller's
+// scene); Scene, SceneItem, MeshGeometry and LineGeometry (uncreatable).
 namespace drape::widget {
 
 /// Registers the "Drapekit 1.0" QML module. Safe to call more than once.

@@ -5,9 +5,8 @@
 // with signals carrying immutable copies (DrapeMeshPtr, DrapeFramePtr), so the
 // GUI thread never waits for a time step.
 #include "widget/drape_frame.hpp"
+#include "widget/drape_setup.hpp"
 
-#include "engine/cloth/drape.hpp"
-#include "engine/fabric/preset.hpp"
 #include "engine/cloth/solver.hpp"
 
 #include <QElapsedTimer>
@@ -21,19 +20,6 @@
 class QTimer;
 
 namespace drape::widget {
-
-/// Everything needed to build a cloth scene.
-struct DrapeSpec {
-    fabric::FabricPreset preset;
-    QString presetName;          ///< as given by the user (path or built-in name)
-    cloth::DrapeSetup setup;     ///< diameters [m], grid, floor ...
-    QString shape = "disc";      ///< "disc" (drapemeter specimen) or "square" (sheet of side sample diameter)
-};
-
-struct SphereSpec {
-    Eigen::Vector3d centre; ///< world [m]
-    double radius;          ///< [m]
-};
 
 class DrapeWorker : public QObject {
     Q_OBJECT
@@ -81,6 +67,7 @@ private:
     void makeStepper();
     void fail(const QString& what, const std::exception& e);
     void emitMesh();
+    bool remakeStepper(); ///< makeStepper, reporting a failure as errorOccurred
 
     std::unique_ptr<cloth::ClothSystem> m_sys;
     std::unique_ptr<cloth::Stepper> m_stepper;
@@ -104,8 +91,5 @@ private:
     std::atomic<bool> m_cancel{false};
     std::atomic<bool> m_uiReady{true};
 };
-
-/// Drawable shapes of a collider tree (pedestal, planes, spheres, groups).
-void describeColliders(const cloth::Collider& c, std::vector<ColliderShape>& out);
 
 } // namespace drape::widget

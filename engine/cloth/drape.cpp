@@ -180,15 +180,20 @@ std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const Dra
                     model.anchors.push_back({i, Eigen::Vector3d(mesh.X(i, 0), mesh.X(i, 1), 0.0), weight / 1e-4});
     }
     auto sys = std::make_unique<ClothSystem>(std::move(mesh), std::move(model));
-    // Start flat, just above the pedestal top (offset by half the thickness).
-    sys->x.col(2).setConstant(sys->model().contact_offset + 1e-6);
-    perturb(sys->x, setup);
-    const double R2 = setup.disc_diameter / 2;
-    sys->add_collider(std::make_shared<PedestalCollider>(Eigen::Vector3d::Zero(), R2, setup.pedestal_height,
-                                                         std::min(setup.edge_radius, 0.5 * R2)));
-    if (setup.floor)
-        sys->add_collider(std::make_shared<PlaneCollider>(Eigen::Vector3d(0, 0, -setup.pedestal_height), Eigen::Vector3d::UnitZ()));
+    place_on_drapemeter(*sys, setup);
     return sys;
+}
+
+void place_on_drapemeter(ClothSystem& sys, const DrapeSetup& setup)
+{
+    // Start flat, just above the pedestal top (offset by half the thickness).
+    sys.x.col(2).setConstant(sys.model().contact_offset + 1e-6);
+    perturb(sys.x, setup);
+    const double R2 = setup.disc_diameter / 2;
+    sys.add_collider(std::make_shared<PedestalCollider>(Eigen::Vector3d::Zero(), R2, setup.pedestal_height,
+                                                        std::min(setup.edge_radius, 0.5 * R2)));
+    if (setup.floor)
+        sys.add_collider(std::make_shared<PlaneCollider>(Eigen::Vector3d(0, 0, -setup.pedestal_height), Eigen::Vector3d::UnitZ()));
 }
 
 DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const MetricOptions& mopt)

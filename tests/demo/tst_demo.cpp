@@ -138,7 +138,7 @@ void TstDemo::skirtDrapesOnBody()
     QVERIFY2(st.outcome == cloth::SolverStatus::Outcome::Converged ||
                  st.outcome == cloth::SolverStatus::Outcome::NotConverged,
              cloth::to_string(st.outcome).c_str());
-    const importers::Scene* s = v->scene();
+    const importers::Scene* s = v->garmentScene();
     QVERIFY(s && s->mannequin);
     const cloth::Positions x = v->lastPositions();
     QCOMPARE(int(x.rows()), s->system->vertex_count());

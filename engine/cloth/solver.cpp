@@ -1,64 +1,18 @@
 #include "engine/cloth/solver.hpp"
 
+#include "engine/cloth/solver_detail.hpp"
+#include "engine/cloth/sparse_cholesky.hpp"
 #include "engine/core/error.hpp"
 
-#include <Eigen/CholmodSupport>
-
-#include <chrono>
-#include <cstdio>
-#include <cstdlib>
-#include <cmath>
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <limits>
 #include <memory>
-#include <mutex>
-#include <vector>
-
-// OpenMP's runtime, when CHOLMOD brought it into the process (weak: null otherwise).
-extern "C" void omp_set_max_active_levels(int) __attribute__((weak));
 
 namespace drape::cloth {
 
-using SpMat = Eigen::SparseMatrix<double>;
-using Cholmod = Eigen::CholmodDecomposition<SpMat, Eigen::Upper>;
-
-namespace {
-
-/// CHOLMOD settings for the cloth Hessians, before analyzePattern.
-///
-/// Threads: Debian's CHOLMOD 3.0 (SuiteSparse 5.12) runs the copy loops of its
-/// supernodal factorisation in OpenMP regions with a compiled-in
-/// num_threads(4) (CHOLMOD_OMP_NUM_THREADS), whatever OMP_NUM_THREADS says.
-/// On this 2-core machine that made every factorisation wait on futexes: 167 ms
-/// instead of 59 ms at 23,004 unknowns (41 s of system time in a 113 s drape).
-/// The numerical work is BLAS, which keeps its own threads; the regions are
-/// made inactive process-wide (the project has no other OpenMP code) unless the
-/// user chose through OMP_MAX_ACTIVE_LEVELS or OMP_THREAD_LIMIT.
-///
-/// Ordering: METIS nested dissection instead of CHOLMOD's default AMD (METIS is
-/// tried by default only when AMD's fill looks poor, and it did not here): on the
-/// 100 x 100 disc 1.0 Gflop and 3.7 M factor entries instead of 1.7 Gflop and
-/// 4.4 M, factorisation 43 ms instead of 59 ms; the analysis (once per mesh) costs
-/// 50 ms instead of 15 ms.
-void configure_cholmod(Cholmod& llt)
-{
-    static std::once_flag once;
-    std::call_once(once, [] {
-        if (omp_set_max_active_levels && !std::getenv("OMP_MAX_ACTIVE_LEVELS") && !std::getenv("OMP_THREAD_LIMIT"))
-            omp_set_max_active_levels(0);
-    });
-    auto& c = llt.cholmod();
-    c.print = 0; // numerical outcomes are reported through the status, not stderr
-    llt.setMode(Eigen::CholmodSupernodalLLt);
-    const char* ord = std::getenv("DRAPE_CHOLMOD_ORDERING");
-    if (!(ord && std::string(ord) == "default")) {
-        c.nmethods = 1;
-        c.method[0].ordering = CHOLMOD_METIS;
-        c.postorder = 1;
-    }
-}
-
-} // namespace
+using namespace detail;
 
 Integrator parse_integrator(const std::string& name)
 {
@@ -98,69 +52,12 @@ std::string to_string(SolverStatus::Outcome o)
 
 namespace {
 
-Eigen::Map<Eigen::VectorXd> flat(Positions& P) { return {P.data(), P.size()}; }
-Eigen::Map<const Eigen::VectorXd> flat(const Positions& P) { return {P.data(), P.size()}; }
-
-void mask_pinned(const ClothSystem& s, Positions& f)
-{
-    for (int i = 0; i < s.vertex_count(); ++i)
-        if (s.pinned(i)) f.row(i).setZero();
-}
-
-double weight_norm(const ClothSystem& s)
-{
-    const Positions g = s.gravity_forces();
-    const double w = flat(g).norm();
-    return w > 0 ? w : 1.0;
-}
-
 /// Damping "energy" 1/2 V^T D V for the implicit step (D = dashpots + air).
 double damping_quadratic(const ClothSystem& s, const Positions& X, const Positions& V)
 {
     Positions f = Positions::Zero(X.rows(), 3);
     s.add_damping_forces(X, V, f);
     return -0.5 * flat(V).dot(flat(f));
-}
-
-/// The last symbolic analysis made on this thread, kept for the next static
-/// solve of the same sparsity pattern: a warm re-solve (a fit's next
-/// evaluation, simulate_drape_from) builds a new system on the same mesh, and
-/// METIS costs 50 ms at 23k unknowns, about one Newton iteration. The factor's
-/// memory (30 MB at 23k unknowns) stays with the thread until a solve of
-/// another pattern replaces it. A solve takes the object out while it runs.
-struct AnalysedPattern {
-    std::vector<int> outer, inner;
-    std::unique_ptr<Cholmod> llt;
-    bool matches(const SpMat& A) const
-    {
-        return llt && outer.size() == static_cast<std::size_t>(A.outerSize() + 1) && inner.size() == static_cast<std::size_t>(A.nonZeros()) &&
-               std::equal(outer.begin(), outer.end(), A.outerIndexPtr()) && std::equal(inner.begin(), inner.end(), A.innerIndexPtr());
-    }
-};
-thread_local AnalysedPattern t_last_analysis;
-
-/// A Cholesky object analysed for A's pattern: this thread's last one when the
-/// pattern matches (`reused` true), a fresh analysis otherwise.
-std::unique_ptr<Cholmod> take_analysed(const SpMat& A, bool& reused)
-{
-    AnalysedPattern& last = t_last_analysis;
-    reused = last.matches(A);
-    if (reused) return std::move(last.llt);
-    last.llt.reset(); // free the old factor before the new analysis
-    auto llt = std::make_unique<Cholmod>();
-    configure_cholmod(*llt);
-    llt->analyzePattern(A);
-    return llt;
-}
-
-/// Keeps `llt` (analysed for A's pattern) for this thread's next solve.
-void keep_analysed(std::unique_ptr<Cholmod> llt, const SpMat& A)
-{
-    if (!llt) return;
-    AnalysedPattern& last = t_last_analysis;
-    last.outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
-    last.inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
-    last.llt = std::move(llt);
 }
 
 } // namespace
@@ -178,8 +75,7 @@ double relative_residual(const ClothSystem& s)
 struct Stepper::Impl {
     explicit Impl(const ClothSystem& s) : H(s) {}
     HessianAssembler H;
-    Cholmod llt;
-    bool analysed = false;
+    std::unique_ptr<Cholmod> llt; ///< analysed on the first implicit step
     long solves = 0;
     Positions f, k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v, xt, vt;
 };
@@ -326,14 +222,13 @@ bool Stepper::step(double dt)
             mask_pinned(s, g);
             if (flat(g).norm() < 1e-9 * wn) break;
             I.H.assemble(y, md, 1.0 / dt);
-            if (!I.analysed) {
-                configure_cholmod(I.llt);
-                I.llt.analyzePattern(I.H.matrix());
-                I.analysed = true;
+            if (!I.llt) {
+                bool reused = false;
+                I.llt = take_analysed(I.H.matrix(), reused);
             }
-            I.llt.factorize(I.H.matrix());
-            if (I.llt.info() != Eigen::Success) return false;
-            Eigen::VectorXd dx = I.llt.solve(flat(g));
+            I.llt->factorize(I.H.matrix());
+            if (I.llt->info() != Eigen::Success) return false;
+            Eigen::VectorXd dx = I.llt->solve(flat(g));
             ++I.solves;
             Positions D = Eigen::Map<Positions>(dx.data(), n, 3);
             const double p0 = phi(y);
@@ -434,192 +329,11 @@ SolverStatus run_dynamic(ClothSystem& s, const RestOptions& opt)
     return st;
 }
 
-/// Static solver: the rest state as a minimum of the potential energy, found by
-/// Newton's method regularised with a proximal mass term M/h^2 (a fully damped
-/// implicit step of pseudo-time h). h grows while full Newton steps are
-/// accepted and shrinks when the line search cuts them, so the method behaves
-/// like damped dynamics far from rest (the folds form as they would in a real
-/// fall) and like pure Newton near it. The proximal term also removes the
-/// neutral modes of a frictionless contact (sliding and spinning on the disc).
-SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
-{
-    SolverStatus st;
-    const auto t0 = Clock::now();
-    SolveProfile prof;
-    SolveProfile* const outer_profile = s.profile;
-    const bool profiling = opt.trace || std::getenv("DRAPE_PROFILE");
-    if (profiling) s.profile = &prof;
-    const long f0 = s.force_evaluations;
-    const int n = s.vertex_count();
-    HessianAssembler H(s);
-    std::unique_ptr<Cholmod> llt_p;
-    const auto& mass = s.model().mass;
-    const double wn = weight_norm(s);
-    double h = opt.dt > 0 ? opt.dt : 0.02;
-    const double h_max = 50.0, h_min = 1e-6;
-    Positions f, trial;
-    s.v.setZero();
-    int exact_ok = 1;
-    double e_x = std::numeric_limits<double>::quiet_NaN(); // potential energy at s.x, when known
-    auto last_report = t0;
-    // Energy scale for rounding: the whole cloth lowered by 1 m [J].
-    const double e_scale = s.model().total_mass() * 9.81;
-    while (true) {
-        s.conservative_forces(s.x, f);
-        ++s.force_evaluations;
-        mask_pinned(s, f);
-        st.residual = flat(f).norm() / wn;
-        if (!std::isfinite(st.residual)) {
-            st.outcome = SolverStatus::Outcome::Diverged;
-            st.message = "non-finite force at iteration " + std::to_string(st.steps);
-            break;
-        }
-        if (st.residual < opt.residual) {
-            st.outcome = SolverStatus::Outcome::Converged;
-            break;
-        }
-        if (st.steps >= opt.max_newton) {
-            st.outcome = SolverStatus::Outcome::NotConverged;
-            st.message = "residual " + std::to_string(st.residual) + " after " + std::to_string(st.steps) + " Newton iterations";
-            break;
-        }
-        st.force_evaluations = s.force_evaluations - f0;
-        const auto now = Clock::now();
-        st.wall_seconds = std::chrono::duration<double>(now - t0).count();
-        // The cancel flag is read every iteration, the progress callback at most
-        // five times a second (a terminal or a log needs no more).
-        const bool report = st.steps == 0 || now - last_report > std::chrono::milliseconds(200);
-        if (report) last_report = now;
-        if ((opt.cancel && opt.cancel->load()) || (report && opt.progress && !opt.progress(st))) {
-            st.outcome = SolverStatus::Outcome::Cancelled;
-            break;
-        }
-        const Eigen::VectorXd md = mass / (h * h);
-        // The exact Hessian (compressed springs' negative stiffness, the contact
-        // normal's turning) whenever it is positive definite: it halves the
-        // iterations against the projected one, which is the fallback for a few
-        // iterations after a failed factorisation.
-        const bool exact = exact_ok > 0;
-        H.assemble(s.x, md, 0.0, !exact);
-        if (!llt_p) {
-            bool reused = false;
-            {
-                ProfileScope timer(profiling ? &prof.analyse : nullptr);
-                llt_p = take_analysed(H.matrix(), reused);
-            }
-            if (opt.trace)
-                std::fprintf(stderr, "static solver: %ld unknowns, %ld Hessian entries, factor %g entries, %g flop per factorisation (ordering %s%s)\n",
-                             (long)H.matrix().rows(), (long)H.matrix().nonZeros(), llt_p->cholmod().lnz, llt_p->cholmod().fl,
-                             llt_p->cholmod().method[llt_p->cholmod().selected].ordering == CHOLMOD_METIS ? "METIS" : "other",
-                             reused ? ", analysis reused" : "");
-        }
-        Cholmod& llt = *llt_p;
-        {
-            ProfileScope timer(profiling ? &prof.factorize : nullptr);
-            llt.factorize(H.matrix());
-        }
-        ++st.steps;
-        if (llt.info() != Eigen::Success) ++prof.failed_factorizations;
-        if (llt.info() != Eigen::Success && exact) {
-            exact_ok = -5; // back off from the exact Hessian for a few iterations
-            continue;
-        }
-        if (exact_ok <= 0) ++exact_ok;
-        if (llt.info() != Eigen::Success) {
-            h *= 0.25;
-            if (h < h_min) {
-                st.outcome = SolverStatus::Outcome::Diverged;
-                st.message = "Hessian not positive definite even with strong regularisation";
-                break;
-            }
-            continue;
-        }
-        const Eigen::VectorXd dx = [&] {
-            ProfileScope timer(profiling ? &prof.solve : nullptr);
-            return Eigen::VectorXd(llt.solve(flat(f)));
-        }();
-        ++st.newton_iterations;
-        const Eigen::Map<const Positions> D(dx.data(), n, 3);
-        // The energy at s.x is known from the line search that accepted it.
-        if (std::isnan(e_x)) e_x = s.potential_energy(s.x);
-        const double e0 = e_x;
-        double e_trial = e0;
-        const double slope = -flat(f).dot(dx);
-        const double mdx = [&] {
-            double q = 0;
-            for (int i = 0; i < n; ++i) q += md(i) * D.row(i).squaredNorm();
-            return q;
-        }();
-        double alpha = 1;
-        bool accepted = false;
-        // Near rest the predicted energy decrease falls below the rounding error
-        // of the energy sum; there the step is judged by the force residual instead.
-        const double e_round = 1e-12 * (std::abs(e0) + e_scale);
-        for (int ls = 0; ls < 40; ++ls) {
-            ProfileScope ls_timer(profiling ? &prof.line_search : nullptr);
-            ++prof.line_search_trials;
-            trial = s.x + alpha * D;
-            e_trial = s.potential_energy(trial);
-            const double phi = e_trial + 0.5 * alpha * alpha * mdx;
-            if (phi <= e0 + 1e-4 * alpha * slope) {
-                accepted = true;
-                break;
-            }
-            if (-alpha * slope < e_round) {
-                Positions ft;
-                s.conservative_forces(trial, ft);
-                mask_pinned(s, ft);
-                if (flat(ft).norm() < flat(f).norm()) {
-                    accepted = true;
-                    break;
-                }
-            }
-            alpha *= 0.5;
-        }
-        if (!accepted) {
-            h *= 0.25;
-            if (h < h_min) {
-                st.outcome = SolverStatus::Outcome::NotConverged;
-                st.message = "line search failed at residual " + std::to_string(st.residual);
-                break;
-            }
-            continue;
-        }
-        s.x = trial;
-        e_x = e_trial;
-        if (opt.trace)
-        {
-            int imax = 0;
-            f.rowwise().norm().maxCoeff(&imax);
-            std::fprintf(stderr, "it %ld res %.3e h %.3g alpha %.3g E %.9g  worst v%d r=%.4f z=%.5f |f|/mg=%.3g %s, contacts %d vertex %zu edge\n",
-                         st.steps, st.residual, h, alpha, e0, imax, std::hypot(s.x(imax, 0), s.x(imax, 1)), s.x(imax, 2),
-                         f.row(imax).norm() / (mass(imax) * 9.81), exact ? "exact" : "projected", s.vertex_contact_count(s.x),
-                         s.edges_in_contact(s.x).size());
-        }
-        if (alpha == 1.0) h = std::min(h * 2.0, h_max);
-        else if (alpha < 0.25) h = std::max(h * 0.5, h_min);
-    }
-    st.max_speed = 0;
-    if (s.model().friction > 0)
-        st.message += std::string(st.message.empty() ? "" : "; ") +
-                      "the static solver treats contact as frictionless (a rest state with friction depends on the path: use "
-                      "the implicit or an explicit integrator)";
-    keep_analysed(std::move(llt_p), H.matrix());
-    st.force_evaluations = s.force_evaluations - f0;
-    st.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (profiling) {
-        prof.total = st.wall_seconds;
-        prof.print(stderr, "static solver profile (" + std::to_string(n) + " vertices, " + to_string(st.outcome) + ")", st.steps);
-    }
-    s.profile = outer_profile;
-    return st;
-}
-
 } // namespace
 
 SolverStatus run_to_rest(ClothSystem& s, const RestOptions& opt)
 {
-    if (opt.integrator == Integrator::Static) return run_static(s, opt);
+    if (opt.integrator == Integrator::Static) return detail::run_static(s, opt);
     return run_dynamic(s, opt);
 }
 

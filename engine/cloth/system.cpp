@@ -359,7 +359,9 @@ double ClothSystem::potential_energy(const Positions& X) const
     double e = 0;
     for (const auto& sp : m_model.springs) {
         const double l = (X.row(sp.i) - X.row(sp.j)).norm();
-        e += 0.5 * sp.k * (l - sp.rest) * (l - sp.rest);
+        double es, de, d2e;
+        sp.law(l, es, de, d2e);
+        e += es;
     }
     const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening;
     for (const auto& b : m_model.bends) {
@@ -371,7 +373,7 @@ double ClothSystem::potential_energy(const Positions& X) const
     }
     for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
     for (const auto& a : m_model.anchors) {
-        const Vec3 d = X.row(a.vertex).transpose() - a.target;
+        const Vec3 d = a.point(X) - a.target;
         e += 0.5 * a.k * (d.x() * d.x() + d.y() * d.y());
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3&, const Collider&) { e += 0.5 * m_model.contact_stiffness(i) * phi * phi; });
@@ -403,7 +405,9 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         const Vec3 u = X.row(sp.i) - X.row(sp.j);
         const double l = u.norm();
         if (l <= 1e-300) continue;
-        const Vec3 fi = -sp.k * (l - sp.rest) / l * u;
+        double es, de, d2e;
+        sp.law(l, es, de, d2e);
+        const Vec3 fi = -de / l * u;
         f.row(sp.i) += fi.transpose();
         f.row(sp.j) -= fi.transpose();
     }
@@ -417,9 +421,12 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
     }
     for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();
     for (const auto& a : m_model.anchors) {
-        const Vec3 d = X.row(a.vertex).transpose() - a.target;
-        f(a.vertex, 0) -= a.k * d.x();
-        f(a.vertex, 1) -= a.k * d.y();
+        const Vec3 d = a.point(X) - a.target;
+        for (int i = 0; i < a.n; ++i) {
+            const auto k = static_cast<std::size_t>(i);
+            f(a.v[k], 0) -= a.k * a.w[k] * d.x();
+            f(a.v[k], 1) -= a.k * a.w[k] * d.y();
+        }
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3& n, const Collider&) { f.row(i) -= (m_model.contact_stiffness(i) * phi * n).transpose(); });
     for_each_edge_contact(*this, X, [&](const EdgeContact& c) {
@@ -496,6 +503,9 @@ HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
         for (int p = 0; p < b.n; ++p)
             for (int q = p + 1; q < b.n; ++q) link(b.v[p], b.v[q]);
     for (const auto& e : s.edges()) link(e[0], e[1]);
+    for (const auto& a : m.anchors)
+        for (int p = 0; p < a.n; ++p)
+            for (int q = p + 1; q < a.n; ++q) link(a.v[static_cast<std::size_t>(p)], a.v[static_cast<std::size_t>(q)]);
     std::vector<int> colptr(static_cast<std::size_t>(3 * n + 1), 0);
     long nnz = 0;
     for (int j = 0; j < n; ++j) {
@@ -549,8 +559,9 @@ HessianAssembler::Block HessianAssembler::block(int i, int j) const
     return bl;
 }
 
-void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project)
+void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, Projection projection)
 {
+    const bool project_springs = projection != Projection::None, project_contacts = projection == Projection::All;
     ProfileScope timer(m_s.profile ? &m_s.profile->assemble : nullptr);
     const auto& m = m_s.model();
     double* val = m_H.valuePtr();
@@ -573,9 +584,13 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         if (l <= 1e-300) continue;
         u /= l;
         const Eigen::Matrix3d nn = u * u.transpose();
-        double t = 1.0 - sp.rest / l;
-        if (project && t < 0) t = 0;
-        Eigen::Matrix3d K = sp.k * (nn + t * (I - nn));
+        // E''(l) along the spring, E'(l) / l across it (negative in compression:
+        // the projected form drops it).
+        double es, de, d2e;
+        sp.law(l, es, de, d2e);
+        double t = de / l;
+        if (project_springs && t < 0) t = 0;
+        Eigen::Matrix3d K = d2e * nn + t * (I - nn);
         if (damping_scale != 0) K += damping_scale * sp.d * nn;
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.i)], K);
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.j)], K);
@@ -607,16 +622,25 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         if (damping_scale != 0) d += damping_scale * m.air_damping * m.mass(i);
         if (d != 0) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], d * I);
     }
-    for (const auto& a : m.anchors) {
-        Eigen::Matrix3d K = Eigen::Matrix3d::Zero();
-        K(0, 0) = K(1, 1) = a.k;
-        add_diag(m_diag_blocks[static_cast<std::size_t>(a.vertex)], K);
+    for (std::size_t ai = 0; ai < m.anchors.size(); ++ai) {
+        const auto& a = m.anchors[ai];
+        Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
+        P(0, 0) = P(1, 1) = a.k;
+        for (int i = 0; i < a.n; ++i) {
+            const auto ki = static_cast<std::size_t>(i);
+            add_diag(m_diag_blocks[static_cast<std::size_t>(a.v[ki])], a.w[ki] * a.w[ki] * P);
+            for (int j = i + 1; j < a.n; ++j) {
+                const auto kj = static_cast<std::size_t>(j);
+                // Off-diagonal blocks are stored once, (min, max); P is symmetric.
+                add_off(block(std::min(a.v[ki], a.v[kj]), std::max(a.v[ki], a.v[kj])), a.w[ki] * a.w[kj] * P);
+            }
+        }
     }
     for_each_contact(m_s, X, [&](int i, double phi, const Vec3& nrm, const Collider& c) {
         Eigen::Matrix3d K = nrm * nrm.transpose();
         // Exact: the normal turns as the point moves (curved collider surfaces);
         // with phi < 0 this term is negative, so the projected form drops it.
-        if (!project) K += phi * c.distance_hessian(X.row(i).transpose());
+        if (!project_contacts) K += phi * c.distance_hessian(X.row(i).transpose());
         add_diag(m_diag_blocks[static_cast<std::size_t>(i)], m.contact_stiffness(i) * K);
     });
     for_each_edge_contact(m_s, X, [&](const EdgeContact& c) {
@@ -625,7 +649,7 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         const auto& ed = m_s.edges()[static_cast<std::size_t>(c.edge)];
         Eigen::Matrix<double, 6, 1> grad;
         Eigen::Matrix<double, 6, 6> K;
-        edge_gradients(c, grad, &K, !project);
+        edge_gradients(c, grad, &K, !project_contacts);
         K *= c.k;
         add_diag(m_diag_blocks[static_cast<std::size_t>(ed[0])], K.block<3, 3>(0, 0));
         add_diag(m_diag_blocks[static_cast<std::size_t>(ed[1])], K.block<3, 3>(3, 3));

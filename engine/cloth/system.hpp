@@ -114,9 +114,19 @@ private:
 class HessianAssembler {
 public:
     explicit HessianAssembler(const ClothSystem& s);
-    /// H = d2E/dx2 (projected if `project`) + diag(extra_diag_i I) + damping_scale * D(X),
+    /// Which terms of the Hessian are projected to positive semidefinite.
+    enum class Projection {
+        None,     ///< the exact Hessian
+        Springs,  ///< compressed springs lose their negative transverse stiffness; contact exact
+        All,      ///< springs and contact (the Gauss-Newton n n^T term only)
+    };
+    /// H = d2E/dx2 (with `projection`) + diag(extra_diag_i I) + damping_scale * D(X),
     /// with D the dashpot and air damping matrix. Pinned rows and columns become identity.
-    void assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project = true);
+    void assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, Projection projection);
+    void assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project = true)
+    {
+        assemble(X, extra_diag, damping_scale, project ? Projection::All : Projection::None);
+    }
     const Eigen::SparseMatrix<double>& matrix() const { return m_H; }
 
 private:

@@ -304,6 +304,14 @@ void DrapeWorker::runStatic(long maxNewton)
                 computeResults(st);
                 emit restReached(m_sys->time, st.residual);
             }
+        } else if (st.outcome == cloth::SolverStatus::Outcome::NotConverged && maxNewton < 0) {
+            // Stopped at the iteration budget: the shape is still worth reading back
+            // (its status says so), and the error below says why it is not at rest.
+            computeResults(st);
+            emit errorOccurred(QStringLiteral("static solver: %1 after %2 iterations (residual %3)")
+                                   .arg(QString::fromStdString(cloth::to_string(st.outcome)))
+                                   .arg(st.newton_iterations)
+                                   .arg(st.residual, 0, 'g', 3));
         } else if (st.outcome != cloth::SolverStatus::Outcome::Cancelled && maxNewton < 0) {
             emit errorOccurred(QStringLiteral("static solver: %1 after %2 iterations (residual %3)%4")
                                    .arg(QString::fromStdString(cloth::to_string(st.outcome)))

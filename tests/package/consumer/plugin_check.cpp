@@ -3,7 +3,9 @@
 //   plugin_check PLUGIN.so INSTALL_ROOT
 #include <QApplication>
 #include <QFile>
+#include <QMetaProperty>
 #include <QPluginLoader>
+#include <QWidget>
 #include <QtUiPlugin/QDesignerCustomWidgetInterface>
 
 #include <cstdio>

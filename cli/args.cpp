@@ -217,10 +217,10 @@ void Progress::update(double fraction, const std::string& detail)
     std::fflush(stderr);
 }
 
-void Progress::finish(const std::string& detail)
+void Progress::finish(const std::string& detail, bool complete)
 {
     if (m_quiet) return;
-    const std::string s = line(1.0, detail.empty() ? "done" : detail);
+    const std::string s = line(complete ? 1.0 : m_fraction, detail.empty() ? "done" : detail);
     if (m_tty) std::fprintf(stderr, "\r%-100s\n", s.c_str());
     else std::fprintf(stderr, "%s\n", s.c_str());
     m_open = false;

@@ -119,7 +119,7 @@ int run(const std::vector<std::string>& argv)
     auto old = std::signal(SIGINT, on_sigint);
     estimate::FitResult r = estimate::fit_fabric(recs, fo);
     std::signal(SIGINT, old);
-    progress.finish(r.cancelled ? "cancelled" : "done");
+    progress.finish(r.cancelled ? "cancelled" : "done", !r.cancelled);
     r.name = a.get_or("--name", recs.front().id);
     nlohmann::json preset = estimate::fit_to_json(r);
     drape::write_file_atomic(*out, preset.dump(2) + "\n");

@@ -63,7 +63,7 @@ int run(const std::vector<std::string>& argv)
     Progress progress("predict", quiet);
     if (!quiet) ro.progress = progress.solver_callback(ro);
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
-    progress.finish(to_string(r.status.outcome));
+    progress.finish(to_string(r.status.outcome), r.status.converged());
     if (json) {
         std::cout << cloth::drape_summary_json(r, setup, ro.integrator).dump(2) << "\n";
     } else {

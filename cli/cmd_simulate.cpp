@@ -79,7 +79,7 @@ int run(const std::vector<std::string>& argv)
     Progress progress("simulate", quiet);
     if (!quiet) ro.progress = progress.solver_callback(ro);
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
-    progress.finish(to_string(r.status.outcome));
+    progress.finish(to_string(r.status.outcome), r.status.converged());
     const auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
     if (const auto out = a.get("--out")) {
         auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // for the mesh topology

@@ -20,8 +20,9 @@ public:
     /// fraction in [0, 1], or negative when unknown; `detail` is the rest of the
     /// line ("Newton iteration 12, residual 3e-04"). Cheap when nothing is printed.
     void update(double fraction, const std::string& detail);
-    /// The last line: done, with the total time.
-    void finish(const std::string& detail = {});
+    /// The last line, with the total time: at 100 % when `complete`, else at the
+    /// last fraction reached (a solve that stopped short).
+    void finish(const std::string& detail = {}, bool complete = true);
 
     /// For RestOptions::progress: the residual's way from its first value down
     /// to `target` on a log scale as the fraction (never going back), or

@@ -1,5 +1,6 @@
 // `drape measure RECORD_DIR`: a drape-lab record -> calibrated measurements.
 #include "cli/command.hpp"
+#include "cli/progress.hpp"
 
 #ifdef HAVE_DRAPE_CAPTURE
 #include "engine/capture/export.hpp"
@@ -28,7 +29,11 @@ int run_measure(const std::vector<std::string>& argv)
     opt.metrics.relative_prominence = a.get_double("--node-prominence", opt.metrics.relative_prominence);
     if (!(opt.metrics.relative_prominence >= 0 && opt.metrics.relative_prominence < 1))
         throw cli::UsageError("--node-prominence must be in [0, 1)");
+    // One measurement is one step (a second or two): a line when it starts and one when it is done.
+    cli::Progress progress("measure " + rec.specimen_id, a.has("--json"));
+    progress.update(-1, "photos, calibration, contours");
     const capture::Measurement m = capture::measure_record(rec, opt);
+    progress.finish();
     if (auto path = a.get("--overlay")) {
         if (m.top_image.empty()) throw FileError(*path + ": no overlay: the record has no readable top photo");
         if (!cv::imwrite(*path, capture::draw_top_overlay(rec, m))) throw FileError(*path + ": cannot write the overlay");

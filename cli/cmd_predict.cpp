@@ -1,5 +1,6 @@
 // drape predict: simulate a fitted preset on another drape set-up.
 #include "cli/command.hpp"
+#include "cli/progress.hpp"
 #include "cli/setup.hpp"
 
 #include "engine/cloth/drape_io.hpp"
@@ -59,13 +60,10 @@ int run(const std::vector<std::string>& argv)
     cloth::single_threaded_blas();
     cloth::RestOptions ro;
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
-    if (!quiet)
-        ro.progress = [](const cloth::SolverStatus& st) {
-            std::fprintf(stderr, "\r  %-8ld iterations  residual %.2e  wall %.1fs   ", st.steps, st.residual, st.wall_seconds);
-            return true;
-        };
+    Progress progress("predict", quiet);
+    if (!quiet) ro.progress = progress.solver_callback(ro);
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
-    if (!quiet) std::fprintf(stderr, "\n");
+    progress.finish(to_string(r.status.outcome), r.status.converged());
     if (json) {
         std::cout << cloth::drape_summary_json(r, setup, ro.integrator).dump(2) << "\n";
     } else {

@@ -24,14 +24,15 @@ DrapeController::DrapeController(QObject* parent) : QObject(parent)
 {
     qRegisterMetaType<DrapeMeshPtr>();
     qRegisterMetaType<DrapeFramePtr>();
+    qRegisterMetaType<DrapeResultsPtr>();
 
     m_scene = new Scene(this);
     m_scene->setBackgroundColor(m_settings.backgroundColor);
     m_scene->camera().setPreset(OrbitCamera::Preset::Iso);
     connect(m_scene, &Scene::cameraChanged, this, &DrapeController::cameraChanged);
     connect(m_scene, &Scene::cameraMoved, this, [this] {
-        if (m_settings.viewPreset == QLatin1String("free")) return;
-        m_settings.viewPreset = QStringLiteral("free");
+        if (m_settings.viewPreset == Drape::Free) return;
+        m_settings.viewPreset = Drape::Free;
         emit viewPresetChanged(m_settings.viewPreset);
     });
     connect(m_scene, &Scene::clicked, this, [this](double x, double y, double w, double h) {
@@ -63,9 +64,10 @@ DrapeController::DrapeController(QObject* parent) : QObject(parent)
     connect(m_worker, &DrapeWorker::restReached, this, [this](double, double) { emit restReached(); });
     connect(m_worker, &DrapeWorker::errorOccurred, this, &DrapeController::fail);
     connect(m_worker, &DrapeWorker::resultsSaved, this, &DrapeController::resultsSaved);
+    connect(m_worker, &DrapeWorker::resultsReady, this, &DrapeController::onResults);
     m_thread.setObjectName(QStringLiteral("drape-sim"));
     m_thread.start();
-    toWorker([w = m_worker, integ = cloth::parse_integrator(m_settings.integrator.toStdString())] { w->setIntegrator(integ); });
+    toWorker([w = m_worker, integ = toEngine(m_settings.integrator)] { w->setIntegrator(integ); });
     toWorker([w = m_worker, s = m_settings.restSpeed, r = m_settings.restResidual] { w->setRestCriteria(s, r); });
 
     connect(&m_job, &LongJob::started, this, [this](const QString& n) {
@@ -112,6 +114,7 @@ double DrapeController::simulatedTime() const
 QString DrapeController::statusText() const
 {
     if (!m_mesh || !m_frame) return QStringLiteral("no cloth");
+    if (!m_frame->status.isEmpty()) return QStringLiteral("%1 | %2").arg(m_mesh->description, m_frame->status);
     return QStringLiteral("%1 | t = %2 s, %3 steps, max speed %4 m/s%5")
         .arg(m_mesh->description)
         .arg(m_frame->simTime, 0, 'f', 3)
@@ -144,6 +147,10 @@ void DrapeController::rebuildNow()
     spec->preset = m_preset;
     spec->presetName = m_settings.fabricPreset;
     spec->shape = m_settings.clothShape;
+    spec->body = m_body;
+    spec->bodyFile = m_settings.bodyFile;
+    spec->garment = m_garment;
+    spec->garmentFile = m_settings.garmentFile;
     spec->setup.sample_diameter = m_settings.sampleDiameter * 1e-3;
     spec->setup.disc_diameter = m_settings.discDiameter * 1e-3;
     spec->setup.grid = m_settings.gridSize;
@@ -157,8 +164,12 @@ void DrapeController::onMesh(const DrapeMeshPtr& mesh)
     m_mesh = mesh;
     m_frame.reset();
     m_cloth->setTopology(mesh->F, mesh->vertexCount, mesh->texcoord); // drawn again with the next frame
-    m_pinned.clear(); // a new system starts without pins
+    m_pinned.clear(); // a new system starts with the pins it was built with (garments)
+    for (int i : mesh->pinnedAtStart) m_pinned.insert(i);
+    m_results.reset();
+    showBody(mesh->body);
     showColliders(mesh->colliders);
+    applyViewPreset();
     emit meshChanged();
     updatePinnedPositions();
 }
@@ -203,7 +214,9 @@ void DrapeController::updateVisibility()
 {
     for (const QString& name : std::as_const(m_colliderItems))
         if (SceneItem* item = m_scene->item(name)) item->setVisible(m_settings.showColliders);
-    m_scene->item(QStringLiteral("floorBoards"))->setVisible(m_settings.showColliders && m_settings.labFloor && m_hasFloor);
+    const bool drapemeter = !m_mesh || isDrapemeter(m_mesh->shape);
+    m_scene->item(QStringLiteral("floorBoards"))->setVisible(m_settings.showColliders && m_settings.labFloor && m_hasFloor && drapemeter);
+    if (SceneItem* body = m_scene->item(QStringLiteral("body"))) body->setVisible(m_settings.showColliders);
     m_scene->item(QStringLiteral("simulatedOutline"))->setVisible(m_settings.showOutlines);
     m_scene->item(QStringLiteral("measuredOutline"))->setVisible(m_settings.showOutlines);
 }
@@ -216,10 +229,12 @@ void DrapeController::onFrame(const DrapeFramePtr& frame)
     }
     m_frame = frame;
     m_cloth->setVertices(frame->vertices);
+    m_progressFraction = frame->fraction;
     if (m_settings.showOutlines && !frame->outline.empty()) m_simOutline->setPolygon(frame->outline, kOutlineHeight);
     updatePinnedPositions(); // and the status line
     m_worker->frameConsumed();
     emit progress(frame->simTime, frame->maxSpeed);
+    if (frame->fraction >= 0 || !frame->status.isEmpty()) emit drapeProgress(frame->fraction, frame->status);
     emit frameApplied();
 }
 
@@ -364,7 +379,121 @@ void DrapeController::addSphereCollider(const QVector3D& centreMetres, double ra
 
 void DrapeController::saveResults(const QString& jsonPath)
 {
-    toWorker([w = m_worker, jsonPath, integ = m_settings.integrator] { w->saveResults(jsonPath, integ); });
+    toWorker([w = m_worker, jsonPath, integ = toString(m_settings.integrator)] { w->saveResults(jsonPath, integ); });
+}
+
+// ---- bodies, garments, rest, results ------------------------------------------------
+
+void DrapeController::showBody(const std::shared_ptr<const importers::Mannequin>& body)
+{
+    if (body == m_drawnBody) return;
+    m_drawnBody = body;
+    if (!body) {
+        m_scene->removeItem(QStringLiteral("body"));
+        return;
+    }
+    SceneItem* item = m_scene->addMesh(QStringLiteral("body"), body->mesh.X, body->mesh.F);
+    item->setColor(QColor(0xd9, 0xc7, 0xb8));
+    item->setMaterial(true, true, 0.8, 0.15);
+    item->setVisible(m_settings.showColliders);
+}
+
+void DrapeController::applyViewPreset()
+{
+    OrbitCamera& cam = m_scene->camera();
+    switch (m_settings.viewPreset) {
+    case Drape::Top: cam.setPreset(OrbitCamera::Preset::Top); break;
+    case Drape::Side: cam.setPreset(OrbitCamera::Preset::Side); break;
+    case Drape::Iso: cam.setPreset(OrbitCamera::Preset::Iso); break;
+    case Drape::Close: cam.setPreset(OrbitCamera::Preset::Close); break;
+    case Drape::Free: return; // where the user left it
+    }
+    if (m_mesh && !isDrapemeter(m_mesh->shape)) {
+        // The lab's stations look at the pedestal: a garment is framed from the
+        // same direction, at a distance that shows it and its body whole.
+        const Eigen::Vector3d lo = m_mesh->boundsMin, hi = m_mesh->boundsMax;
+        cam.target = 0.5 * (lo + hi);
+        const double radius = 0.5 * (hi - lo).norm();
+        cam.distance = std::clamp(1.1 * radius / std::sin(0.5 * cam.fovY), 0.05, 50.0);
+    }
+    m_scene->cameraUpdated();
+}
+
+void DrapeController::onResults(const DrapeResultsPtr& results)
+{
+    if (!results || !m_mesh || results->generation != m_mesh->generation) return;
+    m_results = results;
+    emit resultsReady();
+}
+
+void DrapeController::drapeToRest()
+{
+    if (m_rebuildPending) rebuildNow();
+    m_worker->requestCancel(); // a running static solve gives way
+    toWorker([w = m_worker] { w->pause(); });
+    toWorker([w = m_worker] { w->drapeToRest(); });
+}
+
+void DrapeController::cancel()
+{
+    setRunning(false);
+    m_worker->requestCancel();
+}
+
+double DrapeController::drapeCoefficient() const
+{
+    return m_results && m_results->drape ? m_results->drape->metrics.drape_coefficient_percent
+                                         : std::numeric_limits<double>::quiet_NaN();
+}
+
+int DrapeController::nodeCount() const
+{
+    return m_results && m_results->drape ? m_results->drape->metrics.node_count : -1;
+}
+
+cloth::Positions DrapeController::positions() const
+{
+    return m_frame ? m_frame->x : cloth::Positions();
+}
+
+QList<QVector3D> DrapeController::vertexPositions() const
+{
+    QList<QVector3D> out;
+    if (!m_frame) return out;
+    out.reserve(m_frame->x.rows());
+    for (Eigen::Index i = 0; i < m_frame->x.rows(); ++i)
+        out.push_back(QVector3D(float(m_frame->x(i, 0)), float(m_frame->x(i, 1)), float(m_frame->x(i, 2))));
+    return out;
+}
+
+QVariantMap DrapeController::results() const
+{
+    QVariantMap m;
+    if (!m_results) return m;
+    const DrapeResults& r = *m_results;
+    m[QStringLiteral("vertices")] = int(r.x.rows());
+    m[QStringLiteral("outcome")] = QString::fromStdString(cloth::to_string(r.status.outcome));
+    m[QStringLiteral("newtonIterations")] = qlonglong(r.status.newton_iterations);
+    m[QStringLiteral("residual")] = r.status.residual;
+    m[QStringLiteral("wallSeconds")] = r.status.wall_seconds;
+    if (r.x.rows() > 0) {
+        m[QStringLiteral("minZM")] = r.x.col(2).minCoeff();
+        m[QStringLiteral("maxZM")] = r.x.col(2).maxCoeff();
+    }
+    if (r.drape) {
+        const cloth::DrapeMetrics& d = r.drape->metrics;
+        m[QStringLiteral("drapeCoefficientPercent")] = d.drape_coefficient_percent;
+        m[QStringLiteral("nodeCount")] = d.node_count;
+        m[QStringLiteral("shadowAreaM2")] = d.shadow_area_m2;
+        m[QStringLiteral("meanRadiusM")] = d.mean_radius_m;
+        m[QStringLiteral("hemMinZM")] = r.drape->hem.min_z;
+        m[QStringLiteral("hemMaxZM")] = r.drape->hem.max_z;
+    }
+    if (r.penetration) {
+        m[QStringLiteral("minBodyDistanceM")] = r.penetration->min_distance;
+        m[QStringLiteral("verticesInsideBody")] = r.penetration->inside;
+    }
+    return m;
 }
 
 void DrapeController::showMeasuredOutline(const QPolygonF& outlineMetres)

@@ -1,17 +1,29 @@
 #pragma once
-// DrapeController: the drapemeter view's state and commands, shared by the
-// QWidget (DrapeView) and the QML scene (Drapekit.DrapeScene). It owns the
-// worker thread that runs the engine and the long-job runner, and it is a
-// client of a Scene: the cloth is a SceneMesh the worker's frames update, the
-// colliders are primitives, the outlines and floor boards geometry items, the
-// pins markers.
+// DrapeController: the drape view's state and commands, shared by the QWidget
+// (DrapeView) and the QML scene (Drapekit.DrapeScene). It owns the worker
+// thread that runs the engine and the long-job runner, and it is a client of a
+// Scene: the cloth is a SceneMesh the worker's frames update, the body a
+// SceneMesh, the colliders primitives, the outlines and floor boards geometry
+// items, the pins markers.
+//
+// What drapes (clothShape): the drapemeter specimen (Disc) or a square sheet;
+// the built-in circle skirt on a body; a round tablecloth; or a host's garment
+// mesh with its pinned (waist) vertices on a body (bodyFile or setBody). The
+// fabric: a typed preset (setFabric) or a name (fabricPreset: a file, a
+// fabric-library name, a starter). Run with `running` (the chosen integrator)
+// or drapeToRest() (the static solver, with a progress fraction); cancel();
+// read back positions() and the metrics (drapeCoefficient, results()).
 //
 // Units: sampleDiameter and discDiameter are in millimetres (the lab's and a
 // CAD user's unit); everything else is SI (timeStep [s], restSpeed [m/s],
-// masses [kg], collider positions [m] in Drapekit's world frame: z up, origin
-// at the pedestal top centre).
+// masses [kg], positions [m] in Drapekit's world frame: z up, origin at the
+// pedestal top centre; bodies stand on the floor z = 0).
+#include "widget/drape_widget_export.hpp"
+#include <QtQml/qqmlregistration.h>
+#include "widget/drape_enums.hpp"
 #include "widget/drape_frame.hpp"
 #include "widget/drape_properties.hpp"
+#include "widget/drape_setup.hpp"
 #include "widget/floor_boards.hpp"
 #include "widget/line_geometry.hpp"
 #include "widget/long_job.hpp"
@@ -26,6 +38,7 @@
 #include <QSet>
 #include <QThread>
 #include <QVariantList>
+#include <QVariantMap>
 
 #include <vector>
 
@@ -33,8 +46,9 @@ namespace drape::widget {
 
 class DrapeWorker;
 
-class DrapeController : public QObject {
+class DRAPE_WIDGET_EXPORT DrapeController : public QObject {
     Q_OBJECT
+    QML_ELEMENT
     // ---- designable (drape_properties.hpp; DrapeView has the same) ---------------
     DRAPE_VIEW_PROPERTIES(DRAPE_DECLARE_Q_PROPERTY)
     // ---- what the view draws and reports --------------------------------------
@@ -52,6 +66,12 @@ class DrapeController : public QObject {
     Q_PROPERTY(double simulatedTime READ simulatedTime NOTIFY frameApplied) ///< [s]
     Q_PROPERTY(QString statusText READ statusText NOTIFY frameApplied)
     Q_PROPERTY(bool jobRunning READ jobRunning NOTIFY jobRunningChanged)
+    /// A drape to rest: progress in [0, 1] (negative = none running or unknown).
+    Q_PROPERTY(double progressFraction READ progressFraction NOTIFY frameApplied)
+    /// The last rest state's drape coefficient [%] (drapemeter shapes; NaN before the first rest).
+    Q_PROPERTY(double drapeCoefficient READ drapeCoefficient NOTIFY resultsReady)
+    Q_PROPERTY(int nodeCount READ nodeCount NOTIFY resultsReady) ///< folds at rest (drapemeter), -1 before
+    Q_PROPERTY(bool hasResults READ hasResults NOTIFY resultsReady)
 
 public:
     explicit DrapeController(QObject* parent = nullptr);
@@ -79,6 +99,28 @@ public:
     double simulatedTime() const;
     QString statusText() const;
     bool jobRunning() const { return m_job.running(); }
+    double progressFraction() const { return m_progressFraction; }
+    double drapeCoefficient() const;
+    int nodeCount() const;
+    bool hasResults() const { return m_results != nullptr; }
+
+    // ---- the fabric, the body, the garment (C++) -----------------------------------
+    /// Drapes this typed preset (e.g. one a CAD keeps in its own material list).
+    /// `label` is what fabricPreset then reads (default: the preset's name).
+    void setFabric(const fabric::FabricPreset& preset, const QString& label = {});
+    /// A body the host already has (importers::load_mannequin, or its own mesh
+    /// as a Mannequin): drawn, and the garment shapes collide with it. Null = none
+    /// (bodyFile is used again). Takes effect at the next build.
+    void setBody(std::shared_ptr<const importers::Mannequin> body);
+    std::shared_ptr<const importers::Mannequin> body() const;
+    /// A garment mesh (positions [m] world frame, triangles, pinned vertices);
+    /// switches clothShape to GarmentMesh.
+    void setGarmentMesh(const GarmentMesh& garment);
+    /// Positions of the cloth as last shown [m], n x 3 (empty before the first frame).
+    cloth::Positions positions() const;
+    /// The last rest state (null before one): positions, solver status, the
+    /// engine's drape metrics (drapemeter) and the body clearance.
+    DrapeResultsPtr lastResults() const { return m_results; }
 
     const OrbitCamera& camera() const { return m_scene->camera(); }
     OrbitCamera& camera() { return m_scene->camera(); }
@@ -108,6 +150,11 @@ public slots:
     void clearMeasuredOutline();
     void clearPins();
     void clearExtraColliders();
+    /// Brings the cloth to rest with the static solver whatever the integrator,
+    /// with drapeProgress(fraction, status); resultsReady and restReached follow.
+    void drapeToRest();
+    /// Stops a running drape or simulation where it is (running becomes false).
+    void cancel();
 
 public:
     // ---- interaction (QML-callable) -------------------------------------------
@@ -141,6 +188,13 @@ public:
     Q_INVOKABLE void setMeasuredOutline(const QVariantList& points);
     /// Uses an in-memory image as texture (e.g. the record's top photo).
     Q_INVOKABLE bool setTextureImage(const QImage& image);
+    /// The cloth's positions [m] for QML (world frame, z up).
+    Q_INVOKABLE QList<QVector3D> vertexPositions() const;
+    /// The last rest state for QML: {vertices, outcome, newtonIterations,
+    /// residual, wallSeconds, drapeCoefficientPercent, nodeCount, shadowAreaM2,
+    /// meanRadiusM, hemMinZM, hemMaxZM, minBodyDistanceM, verticesInsideBody}
+    /// (the drapemeter's and body's entries when they apply); empty before one.
+    Q_INVOKABLE QVariantMap results() const;
 
 signals:
     DRAPE_VIEW_PROPERTIES(DRAPE_DECLARE_CHANGED_SIGNAL)
@@ -160,6 +214,9 @@ private:
     void rebuildNow();
     void onMesh(const DrapeMeshPtr& mesh);
     void onFrame(const DrapeFramePtr& frame);
+    void onResults(const DrapeResultsPtr& results);
+    void showBody(const std::shared_ptr<const importers::Mannequin>& body);
+    void applyViewPreset();
     void onWorkerRunning(bool on);
     void showColliders(const std::vector<ColliderShape>& shapes);
     void updateVisibility();
@@ -176,6 +233,11 @@ private:
     DrapeSettings m_settings;
     fabric::FabricPreset m_preset;
     bool m_rebuildPending = false;
+    std::shared_ptr<const importers::Mannequin> m_body;       ///< the host's (setBody)
+    std::shared_ptr<const importers::Mannequin> m_drawnBody;  ///< the one in the scene
+    std::shared_ptr<const GarmentMesh> m_garment;
+    DrapeResultsPtr m_results;
+    double m_progressFraction = -1;
 
     Scene* m_scene = nullptr;
     SceneMesh* m_cloth = nullptr;

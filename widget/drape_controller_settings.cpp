@@ -8,6 +8,7 @@
 
 #include "engine/cloth/params.hpp"
 #include "engine/core/error.hpp"
+#include "engine/library/resolve.hpp"
 
 #include <QImageReader>
 
@@ -36,9 +37,11 @@ bool DrapeController::applyFabricPreset(const QString& preset)
 {
     fabric::FabricPreset p;
     try {
-        // Presets are small JSON files: reading them here lets the property
-        // reject a bad file at once (the previous fabric stays in use).
-        if (!preset.isEmpty()) p = fabric::load_fabric(preset.toStdString());
+        // A file, a built-in, a fabric of the library or a starter, as every
+        // --fabric of the command line (library::resolve_fabric). Presets are
+        // small and a library lookup is one indexed query: reading here lets the
+        // property reject a bad name at once (the previous fabric stays in use).
+        if (!preset.isEmpty()) p = library::resolve_fabric(preset.toStdString(), m_settings.libraryPath.toStdString());
     } catch (const std::exception& e) {
         fail(QStringLiteral("fabric preset '%1': %2").arg(preset, QString::fromUtf8(e.what())));
         return false;
@@ -50,6 +53,71 @@ bool DrapeController::applyFabricPreset(const QString& preset)
     emit fabricParametersChanged();
     scheduleRebuild();
     return true;
+}
+
+void DrapeController::setFabric(const fabric::FabricPreset& preset, const QString& label)
+{
+    try {
+        preset.params.validate("fabric '" + preset.name + "'");
+    } catch (const std::exception& e) {
+        return fail(QString::fromUtf8(e.what()));
+    }
+    m_preset = preset;
+    const QString name = label.isEmpty() ? QString::fromStdString(preset.name) : label;
+    if (name != m_settings.fabricPreset) {
+        m_settings.fabricPreset = name;
+        emit fabricPresetChanged(name);
+    }
+    emit fabricParametersChanged();
+    scheduleRebuild();
+}
+
+void DrapeController::setLibraryPath(const QString& path)
+{
+    if (path == m_settings.libraryPath) return;
+    m_settings.libraryPath = path;
+    emit libraryPathChanged(path);
+}
+
+void DrapeController::setBodyFile(const QString& path)
+{
+    if (path == m_settings.bodyFile) return;
+    m_settings.bodyFile = path; // imported on the worker at the next build; a bad file emits errorOccurred then
+    emit bodyFileChanged(path);
+    if (!isDrapemeter(m_settings.clothShape)) scheduleRebuild();
+}
+
+void DrapeController::setBody(std::shared_ptr<const importers::Mannequin> body)
+{
+    m_body = std::move(body);
+    if (!isDrapemeter(m_settings.clothShape)) scheduleRebuild();
+}
+
+std::shared_ptr<const importers::Mannequin> DrapeController::body() const
+{
+    return m_mesh ? m_mesh->body : nullptr;
+}
+
+void DrapeController::setGarmentFile(const QString& path)
+{
+    if (path == m_settings.garmentFile) return;
+    m_settings.garmentFile = path;
+    emit garmentFileChanged(path);
+    if (m_settings.clothShape == Drape::GarmentMesh) scheduleRebuild();
+}
+
+void DrapeController::setGarmentMesh(const GarmentMesh& garment)
+{
+    if (garment.X.rows() == 0 || garment.F.rows() == 0)
+        return fail(QStringLiteral("garment mesh: %1 vertices, %2 triangles: nothing to drape")
+                        .arg(garment.X.rows())
+                        .arg(garment.F.rows()));
+    m_garment = std::make_shared<const GarmentMesh>(garment);
+    if (m_settings.clothShape != Drape::GarmentMesh) {
+        m_settings.clothShape = Drape::GarmentMesh;
+        emit clothShapeChanged(m_settings.clothShape);
+    }
+    scheduleRebuild();
 }
 
 void DrapeController::setSampleDiameter(double mm)
@@ -79,11 +147,10 @@ void DrapeController::setGridSize(int n)
     scheduleRebuild();
 }
 
-void DrapeController::setClothShape(const QString& shape)
+void DrapeController::setClothShape(Drape::ClothShape shape)
 {
     if (shape == m_settings.clothShape) return;
-    if (shape != QLatin1String("disc") && shape != QLatin1String("square"))
-        return fail(QStringLiteral("clothShape: '%1' is not a shape (use disc or square)").arg(shape));
+    if (toString(shape).isEmpty()) return fail(QStringLiteral("clothShape: %1 is not a shape").arg(int(shape)));
     m_settings.clothShape = shape;
     emit clothShapeChanged(shape);
     scheduleRebuild();
@@ -91,17 +158,13 @@ void DrapeController::setClothShape(const QString& shape)
 
 // ---- the solver (sent to the worker) -------------------------------------------
 
-void DrapeController::setIntegrator(const QString& name)
+void DrapeController::setIntegrator(Drape::Integrator integrator)
 {
-    if (name == m_settings.integrator) return;
-    cloth::Integrator integ;
-    try {
-        integ = cloth::parse_integrator(name.toStdString());
-    } catch (const std::exception& e) {
-        return fail(QStringLiteral("integrator '%1': %2").arg(name, QString::fromUtf8(e.what())));
-    }
-    m_settings.integrator = name;
-    emit integratorChanged(name);
+    if (integrator == m_settings.integrator) return;
+    if (toString(integrator).isEmpty()) return fail(QStringLiteral("integrator: %1 is not an integrator").arg(int(integrator)));
+    const cloth::Integrator integ = toEngine(integrator);
+    m_settings.integrator = integrator;
+    emit integratorChanged(integrator);
     toWorker([w = m_worker, integ] { w->setIntegrator(integ); });
 }
 
@@ -178,23 +241,13 @@ bool DrapeController::setTextureImage(const QImage& image)
     return true;
 }
 
-void DrapeController::setViewPreset(const QString& name)
+void DrapeController::setViewPreset(Drape::ViewPreset view)
 {
-    if (name == m_settings.viewPreset) return;
-    OrbitCamera& cam = m_scene->camera();
-    if (name == QLatin1String("top"))
-        cam.setPreset(OrbitCamera::Preset::Top);
-    else if (name == QLatin1String("side"))
-        cam.setPreset(OrbitCamera::Preset::Side);
-    else if (name == QLatin1String("iso"))
-        cam.setPreset(OrbitCamera::Preset::Iso);
-    else if (name == QLatin1String("close"))
-        cam.setPreset(OrbitCamera::Preset::Close);
-    else if (name != QLatin1String("free"))
-        return fail(QStringLiteral("viewPreset: '%1' is not a view (use top, side, iso, close or free)").arg(name));
-    m_settings.viewPreset = name;
-    emit viewPresetChanged(name);
-    m_scene->cameraUpdated();
+    if (view == m_settings.viewPreset) return;
+    if (toString(view).isEmpty()) return fail(QStringLiteral("viewPreset: %1 is not a view").arg(int(view)));
+    m_settings.viewPreset = view;
+    emit viewPresetChanged(view);
+    applyViewPreset();
 }
 
 void DrapeController::setClothColor(const QColor& c)

@@ -2,17 +2,22 @@
 // Data the drapemeter worker hands to the UI thread. Every object is built by
 // the worker and never touched again after it is emitted (shared_ptr<const>),
 // so the UI reads a private copy while the worker keeps simulating.
+#include "widget/drape_enums.hpp"
 #include "widget/frame_packer.hpp"
 #include "widget/world_frame.hpp"
 
+#include "engine/cloth/drape.hpp"
 #include "engine/cloth/mesh.hpp"
 #include "engine/cloth/metrics.hpp"
+#include "engine/cloth/solver.hpp"
+#include "importers/body.hpp"
 
 #include <QMetaType>
 #include <QString>
 #include <QVector3D>
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace drape::widget {
@@ -38,6 +43,11 @@ struct DrapeMeshData {
     double sampleRadius = 0;   ///< [m]
     double discRadius = 0;     ///< [m]
     QString description;       ///< fabric name and grid, for the status line
+    Drape::ClothShape shape = Drape::Disc;
+    std::shared_ptr<const importers::Mannequin> body; ///< drawn and collided with (null = none)
+    std::vector<int> pinnedAtStart; ///< vertices the shape pins (a waistband), increasing
+    Eigen::Vector3d boundsMin = Eigen::Vector3d::Zero(); ///< cloth start and body [m], for the camera
+    Eigen::Vector3d boundsMax = Eigen::Vector3d::Zero();
 };
 
 /// One state of the cloth.
@@ -51,12 +61,27 @@ struct DrapeFrame {
     double maxSpeed = 0;       ///< [m/s] over free vertices
     cloth::Polygon2 outline;   ///< simulated shadow outline [m] (empty unless requested)
     std::shared_ptr<const Eigen::VectorXd> mass; ///< [kg] per vertex (shared until a mass changes)
+    double fraction = -1;      ///< a drape to rest: progress in [0, 1], negative = not resting / unknown
+    QString status;            ///< a drape to rest: "Newton iteration 12, residual 3e-4"
+};
+
+/// The rest state's results, computed on the worker when the cloth came to rest.
+struct DrapeResults {
+    int generation = 0;
+    cloth::SolverStatus status;       ///< the static solve's (dynamic: outcome Converged, steps, time)
+    cloth::Positions x;               ///< rest positions [m], n x 3
+    /// Drapemeter shapes: the engine's drape metrics (measure_drape: D, nodes, radii, hem, slices).
+    std::optional<cloth::DrapeResult> drape;
+    /// With a body: the cloth's closest approach to the body surface (negative = inside).
+    std::optional<importers::Penetration> penetration;
 };
 
 using DrapeMeshPtr = std::shared_ptr<const DrapeMeshData>;
 using DrapeFramePtr = std::shared_ptr<const DrapeFrame>;
+using DrapeResultsPtr = std::shared_ptr<const DrapeResults>;
 
 } // namespace drape::widget
 
 Q_DECLARE_METATYPE(drape::widget::DrapeMeshPtr)
 Q_DECLARE_METATYPE(drape::widget::DrapeFramePtr)
+Q_DECLARE_METATYPE(drape::widget::DrapeResultsPtr)

@@ -9,26 +9,41 @@
 //
 // X(Type, ArgType, name, setter, default). Units: sampleDiameter and
 // discDiameter [mm], timeStep [s] (0 = automatic), restSpeed [m/s],
-// restResidual relative to the cloth's weight [-]. docs/widget.md has the table.
+// restResidual relative to the cloth's weight [-]. The choices are enums
+// (drape_enums.hpp), so Designer offers drop-downs. docs/widget.md has the table.
+#include "widget/drape_enums.hpp"
+
 #include <QColor>
 #include <QString>
 
 #define DRAPE_VIEW_PROPERTIES(X)                                                                      \
-    /* preset JSON file, a built-in name ("seed-table1"), or empty for the table's defaults */        \
+    /* the fabric: a preset JSON file, a built-in ("seed-table1"), a fabric of the library, a starter */ \
+    /* (silk, cotton, wool, denim), or empty for the parameter table's defaults */                      \
     X(QString, const QString&, fabricPreset, setFabricPreset, QString())                               \
+    /* the fabric library a name is looked up in; empty = the user's default library */                 \
+    X(QString, const QString&, libraryPath, setLibraryPath, QString())                                 \
     X(double, double, sampleDiameter, setSampleDiameter, 300.0)                                        \
     X(double, double, discDiameter, setDiscDiameter, 150.0)                                            \
     X(int, int, gridSize, setGridSize, 40) /* nodes across the specimen */                             \
-    X(QString, const QString&, clothShape, setClothShape, QStringLiteral("disc")) /* disc | square */  \
-    /* semi-implicit Euler: cheap steps, so a small cloth drapes live; implicit and static for */     \
+    /* what drapes: Disc, Square (drapemeter), Skirt (on the body), Tablecloth, GarmentMesh */          \
+    X(drape::widget::Drape::ClothShape, drape::widget::Drape::ClothShape, clothShape, setClothShape,    \
+      drape::widget::Drape::Disc)                                                                      \
+    /* a body mesh file (assimp: OBJ, Collada, glTF, FBX, PLY, STL), drawn and collided with; empty = */ \
+    /* none (a Skirt then uses the default mannequin) */                                               \
+    X(QString, const QString&, bodyFile, setBodyFile, QString())                                       \
+    /* a garment mesh file for clothShape = GarmentMesh (its top boundary is pinned) */                \
+    X(QString, const QString&, garmentFile, setGarmentFile, QString())                                 \
+    /* semi-implicit Euler: cheap steps, so a small cloth drapes live; Implicit and Static for */      \
     /* large or stiff cloths */                                                                        \
-    X(QString, const QString&, integrator, setIntegrator, QStringLiteral("symplectic"))                \
+    X(drape::widget::Drape::Integrator, drape::widget::Drape::Integrator, integrator, setIntegrator,    \
+      drape::widget::Drape::Symplectic)                                                                \
     X(QString, const QString&, texture, setTexture, QString()) /* BMP/PNG/JPEG, empty = plain */       \
     X(bool, bool, running, setRunning, false)                                                          \
     X(double, double, timeStep, setTimeStep, 0.0)                                                      \
     X(double, double, restSpeed, setRestSpeed, 1e-3)                                                   \
     X(double, double, restResidual, setRestResidual, 1e-3)                                             \
-    X(QString, const QString&, viewPreset, setViewPreset, QStringLiteral("iso")) /* top side iso close free */ \
+    X(drape::widget::Drape::ViewPreset, drape::widget::Drape::ViewPreset, viewPreset, setViewPreset,    \
+      drape::widget::Drape::Iso)                                                                       \
     X(QColor, const QColor&, clothColor, setClothColor, (QColor(0xb0, 0x3a, 0x48)))                   \
     X(QColor, const QColor&, backgroundColor, setBackgroundColor, (QColor(0x2b, 0x2f, 0x36)))         \
     X(bool, bool, showColliders, setShowColliders, true)                                               \
@@ -48,7 +63,12 @@
     X(errorOccurred, (const QString& message))                                                         \
     X(resultsSaved, (const QString& jsonPath, const QString& objPath))                                 \
     X(jobProgress, (double fraction, const QString& message))                                          \
-    X(jobFinished, (bool ok, const QString& message))
+    X(jobFinished, (bool ok, const QString& message))                                                  \
+    /* a drape to rest (drapeToRest, or the Static integrator): fraction in [0, 1] (the residual's */ \
+    /* way down to restResidual on a log scale; negative = unknown) and a status line */              \
+    X(drapeProgress, (double fraction, const QString& status))                                         \
+    /* results of the rest state are ready (positions(), drapeCoefficient, results()) */               \
+    X(resultsReady, ())
 
 // ---- expansions used by DrapeController and DrapeView --------------------------
 

@@ -25,7 +25,7 @@ QString saveDrapeResults(const QString& jsonPath, const cloth::ClothSystem& sys,
     j["fabric_preset"] = spec.presetName.toStdString();
     j["fabric"] = fabric::fabric_to_json(spec.preset);
     const cloth::DrapeSetup& su = spec.setup;
-    j["setup"] = {{"shape", spec.shape.toStdString()},
+    j["setup"] = {{"shape", toString(spec.shape).toStdString()},
                   {"sample_diameter_m", su.sample_diameter},
                   {"disc_diameter_m", su.disc_diameter},
                   {"pedestal_height_m", su.pedestal_height},
@@ -49,6 +49,10 @@ QString saveDrapeResults(const QString& jsonPath, const cloth::ClothSystem& sys,
     j["state"]["pinned"] = pinned;
     j["state"]["total_mass_kg"] = sys.model().total_mass();
 
+    if (!isDrapemeter(spec.shape)) {
+        // A garment: its extent; the drapemeter's metrics do not apply.
+        j["results"] = {{"min_z_m", sys.x.col(2).minCoeff()}, {"max_z_m", sys.x.col(2).maxCoeff()}};
+    } else {
     const cloth::DrapeResult r = cloth::measure_drape(sys, su);
     nlohmann::json outline = nlohmann::json::array();
     for (const auto& p : r.outline) outline.push_back({p.x(), p.y()});
@@ -62,6 +66,7 @@ QString saveDrapeResults(const QString& jsonPath, const cloth::ClothSystem& sys,
                     {"hem_min_z_m", r.hem.min_z},
                     {"hem_max_z_m", r.hem.max_z},
                     {"outline_m", outline}};
+    }
 
     // The OBJ's texture coordinates are the ones the view maps the texture with.
     Eigen::MatrixX2d vt(sys.vertex_count(), 2);

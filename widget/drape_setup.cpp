@@ -3,8 +3,12 @@
 #include "engine/cloth/colliders.hpp"
 #include "engine/cloth/model.hpp"
 #include "engine/core/error.hpp"
+#include "importers/garment_scene.hpp"
+#include "importers/mesh_import.hpp"
 
 #include <algorithm>
+#include <map>
+#include <set>
 
 namespace drape::widget {
 
@@ -32,17 +36,79 @@ std::unique_ptr<cloth::ClothSystem> makeSquareSystem(const fabric::FabricPreset&
     return sys;
 }
 
+/// A host's garment mesh as cloth with its pins, on the body (if any) and the floor.
+std::unique_ptr<cloth::ClothSystem> makeGarmentSystem(const fabric::FabricPreset& preset, const GarmentMesh& g,
+                                                      const std::shared_ptr<const importers::Mannequin>& body)
+{
+    // A seed preset's continuum equivalent drapes any mesh (as in importers::make_skirt_scene).
+    cloth::ClothMesh mesh = cloth::make_triangle_mesh(g.X, g.F, g.warp);
+    cloth::ClothModel model = cloth::make_model(mesh, preset.params, preset.model);
+    auto sys = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
+    for (int v : g.pinned) {
+        if (v < 0 || v >= sys->vertex_count())
+            throw ParameterError("garment: pinned vertex " + std::to_string(v) + " is not in [0, " +
+                                 std::to_string(sys->vertex_count()) + ")");
+        sys->set_pinned(v, true);
+    }
+    double floor = 0;
+    if (body) {
+        sys->add_collider(body->contact);
+        floor = body->bounds.min.z();
+    } else {
+        floor = std::min(0.0, g.X.col(2).minCoeff() - 0.5); // somewhere below a garment hanging free
+    }
+    sys->add_collider(std::make_shared<cloth::PlaneCollider>(Eigen::Vector3d(0, 0, floor), Eigen::Vector3d::UnitZ()));
+    return sys;
+}
+
 } // namespace
 
-std::unique_ptr<cloth::ClothSystem> makeDrapeSystem(const DrapeSpec& spec)
+GarmentMesh loadGarmentMesh(const std::string& path)
+{
+    const importers::ImportedMesh m = importers::import_scene(path).merged();
+    GarmentMesh g;
+    g.X = m.X;
+    g.F = m.F;
+    importers::weld_vertices(g.X, g.F);
+    // The top boundary: boundary vertices (on an edge of one triangle) within 1 cm of the highest one.
+    std::map<std::pair<int, int>, int> edges;
+    for (int t = 0; t < g.F.rows(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            int a = g.F(t, k), b = g.F(t, (k + 1) % 3);
+            if (a > b) std::swap(a, b);
+            ++edges[{a, b}];
+        }
+    std::set<int> boundary;
+    for (const auto& [e, n] : edges)
+        if (n == 1) {
+            boundary.insert(e.first);
+            boundary.insert(e.second);
+        }
+    if (boundary.empty()) throw ParameterError(path + ": the garment mesh is closed; pin its vertices with setGarmentMesh");
+    double top = -1e300;
+    for (int v : boundary) top = std::max(top, g.X(v, 2));
+    for (int v : boundary)
+        if (g.X(v, 2) > top - 0.01) g.pinned.push_back(v);
+    return g;
+}
+
+std::unique_ptr<cloth::ClothSystem> makeDrapeSystem(const DrapeSpec& spec,
+                                                    const std::shared_ptr<const importers::Mannequin>& body)
 {
     std::unique_ptr<cloth::ClothSystem> sys;
-    if (spec.shape == QLatin1String("square"))
-        sys = makeSquareSystem(spec.preset, spec.setup);
-    else if (spec.shape == QLatin1String("disc"))
-        sys = cloth::make_drape_system(spec.preset.material(), spec.setup, spec.preset.model);
-    else
-        throw ParameterError("shape: unknown cloth shape '" + spec.shape.toStdString() + "' (use disc or square)");
+    switch (spec.shape) {
+    case Drape::Square: sys = makeSquareSystem(spec.preset, spec.setup); break;
+    case Drape::Disc: sys = cloth::make_drape_system(spec.preset.material(), spec.setup, spec.preset.model); break;
+    case Drape::Skirt:
+        if (!body) throw ParameterError("skirt: no body to put it on");
+        sys = importers::make_skirt_scene(body, spec.preset).system;
+        break;
+    case Drape::Tablecloth: sys = importers::make_tablecloth_scene(spec.preset).system; break;
+    case Drape::GarmentMesh:
+        if (!spec.garment) throw ParameterError("garment: no garment mesh (setGarmentMesh or garmentFile)");
+        sys = makeGarmentSystem(spec.preset, *spec.garment, body);
+        break;
+    }
     if (!sys || sys->vertex_count() == 0) throw ParameterError("cloth: the mesh has no vertices");
     if (sys->v.rows() != sys->vertex_count()) sys->v.setZero(sys->vertex_count(), 3);
     return sys;

@@ -1,5 +1,6 @@
 #pragma once
-// DrapeView: the embeddable drape widget. A QWidget showing its controller's
+// DrapeView: the embeddable drape widget (the drapemeter, a garment on a body,
+// a tablecloth; fabrics by name from the library). A QWidget showing its controller's
 // Scene (a SceneWidget: qml/SceneView.qml in a QQuickWidget); the engine runs on
 // a worker thread (see DrapeController), so the host's UI never waits for the
 // simulation. Its designable properties and signals are the controller's,
@@ -10,6 +11,7 @@
 //
 // Units: sampleDiameter and discDiameter in millimetres; timeStep [s];
 // restSpeed [m/s]; restResidual is relative to the cloth's weight.
+#include "widget/drape_widget_export.hpp"
 #include "widget/drape_controller.hpp"
 #include "widget/drape_properties.hpp"
 #include "widget/scene_widget.hpp"
@@ -21,7 +23,7 @@ class QQuickWidget;
 
 namespace drape::widget {
 
-class DrapeView : public QWidget {
+class DRAPE_WIDGET_EXPORT DrapeView : public QWidget {
     Q_OBJECT
     DRAPE_VIEW_PROPERTIES(DRAPE_DECLARE_Q_PROPERTY)
 
@@ -44,7 +46,17 @@ public:
     DRAPE_VIEW_PROPERTIES(DRAPE_VIEW_FORWARD)
 #undef DRAPE_VIEW_FORWARD
 
+    // ---- the embedding API (the controller's; see DrapeController) ----------------
+    void setFabric(const fabric::FabricPreset& preset, const QString& label = {}) { m_controller->setFabric(preset, label); }
+    void setBody(std::shared_ptr<const importers::Mannequin> body) { m_controller->setBody(std::move(body)); }
+    void setGarmentMesh(const GarmentMesh& garment) { m_controller->setGarmentMesh(garment); }
+    cloth::Positions positions() const { return m_controller->positions(); }
+    DrapeResultsPtr lastResults() const { return m_controller->lastResults(); }
+    double drapeCoefficient() const { return m_controller->drapeCoefficient(); } ///< [%], NaN before a drapemeter rest
+
 public slots:
+    void drapeToRest() { m_controller->drapeToRest(); }
+    void cancel() { m_controller->cancel(); }
     void play() { m_controller->play(); }
     void pause() { m_controller->pause(); }
     void step() { m_controller->step(); }

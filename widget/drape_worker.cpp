@@ -1,12 +1,14 @@
 #include "widget/drape_worker.hpp"
 
 #include "widget/drape_results.hpp"
+#include "widget/rest_job.hpp"
 
 #include "engine/cloth/colliders.hpp"
 #include "engine/core/error.hpp"
 
 #include <QTimer>
 
+#include <algorithm>
 #include <cmath>
 
 namespace drape::widget {
@@ -41,20 +43,48 @@ void DrapeWorker::fail(const QString& what, const std::exception& e)
     emit errorOccurred(what + QStringLiteral(": ") + QString::fromUtf8(e.what()));
 }
 
+std::shared_ptr<const importers::Mannequin> DrapeWorker::bodyFor(const DrapeSpec& spec)
+{
+    if (isDrapemeter(spec.shape) || spec.shape == Drape::Tablecloth) return nullptr;
+    if (spec.body) return spec.body;
+    QString path = spec.bodyFile;
+    if (path.isEmpty() && spec.shape == Drape::Skirt) path = QString::fromStdString(importers::default_mannequin_path());
+    if (path.isEmpty()) return nullptr;
+    if (path != m_bodyPath || !m_bodyLoaded) {
+        // Imported here, on the worker: a body of tens of thousands of triangles
+        // takes a second to read and index, which the GUI never waits for.
+        m_bodyLoaded = std::make_shared<const importers::Mannequin>(importers::load_mannequin(path.toStdString()));
+        m_bodyPath = path;
+    }
+    return m_bodyLoaded;
+}
+
 void DrapeWorker::rebuild(std::shared_ptr<const DrapeSpec> spec)
 {
     if (!spec) return;
     // The controller plays again after a rebuild when it is meant to be running.
     setRunning(false);
     try {
-        std::unique_ptr<cloth::ClothSystem> sys = makeDrapeSystem(*spec);
+        std::shared_ptr<const importers::Mannequin> body = bodyFor(*spec);
+        if (spec->shape == Drape::GarmentMesh && !spec->garment && !spec->garmentFile.isEmpty()) {
+            if (spec->garmentFile != m_garmentPath || !m_garmentLoaded) {
+                m_garmentLoaded = std::make_shared<const GarmentMesh>(loadGarmentMesh(spec->garmentFile.toStdString()));
+                m_garmentPath = spec->garmentFile;
+            }
+            auto withGarment = std::make_shared<DrapeSpec>(*spec);
+            withGarment->garment = m_garmentLoaded;
+            spec = std::move(withGarment);
+        }
+        std::unique_ptr<cloth::ClothSystem> sys = makeDrapeSystem(*spec, body);
         // Swap only after everything built: a failed rebuild keeps the old cloth.
         m_stepper.reset();
         m_sys = std::move(sys);
         m_spec = std::move(spec);
+        m_body = std::move(body);
         m_x0 = m_sys->x;
         m_baseColliders = m_sys->colliders();
         m_steps = 0;
+        m_touched = false;
         makeStepper();
         emitMesh();
         publish(true);
@@ -80,6 +110,16 @@ void DrapeWorker::emitMesh()
                             .arg(fabricName(m_spec->preset))
                             .arg(mesh->vertexCount)
                             .arg(cm.F.rows());
+    mesh->shape = m_spec->shape;
+    for (int i = 0; i < m_sys->vertex_count(); ++i)
+        if (m_sys->pinned(i)) mesh->pinnedAtStart.push_back(i);
+    mesh->body = m_body;
+    mesh->boundsMin = m_sys->x.colwise().minCoeff().transpose();
+    mesh->boundsMax = m_sys->x.colwise().maxCoeff().transpose();
+    if (m_body) {
+        mesh->boundsMin = mesh->boundsMin.cwiseMin(m_body->bounds.min);
+        mesh->boundsMax = mesh->boundsMax.cwiseMax(m_body->bounds.max);
+    }
     m_texcoord = mesh->texcoord;
     m_mesh = mesh;
     emit meshReady(mesh);
@@ -165,6 +205,7 @@ void DrapeWorker::advance()
     if (!m_running || !m_sys || !m_stepper) return;
     QElapsedTimer budget;
     budget.start();
+    m_touched = true;
     const double dt = effectiveTimeStep();
     try {
         // Step for about one display frame, then let queued commands (pin, pause) in.
@@ -189,6 +230,13 @@ void DrapeWorker::advance()
             if (res < m_restResidual) {
                 setRunning(false);
                 publish(true);
+                cloth::SolverStatus st;
+                st.outcome = cloth::SolverStatus::Outcome::Converged;
+                st.steps = m_steps;
+                st.residual = res;
+                st.sim_time = m_sys->time;
+                st.max_speed = speed;
+                computeResults(st);
                 emit restReached(m_sys->time, res);
                 return;
             }
@@ -202,27 +250,68 @@ void DrapeWorker::advance()
     m_timer->start();
 }
 
+void DrapeWorker::drapeToRest()
+{
+    if (!m_sys) return;
+    m_cancel = false;
+    runStatic(-1);
+}
+
 void DrapeWorker::runStatic(long maxNewton)
 {
     setRunning(true);
+    // The command line's options (drape simulate --integrator static), with the
+    // view's rest criteria: the same input gives the same rest state.
     cloth::RestOptions opt;
     opt.integrator = cloth::Integrator::Static;
     opt.residual = m_restResidual;
     opt.max_speed = m_restSpeed;
     if (maxNewton > 0) opt.max_newton = maxNewton;
     opt.cancel = &m_cancel;
-    opt.progress = [this](const cloth::SolverStatus&) {
-        if (m_uiReady && m_sincePublish.elapsed() > 30) publish(false);
+    double r0 = -1, fraction = 0;
+    QString status;
+    opt.progress = [&](const cloth::SolverStatus& st) {
+        // Progress: the residual's way down to the target on a log scale. A
+        // continuation solve starts again on each grid: the fraction never goes back.
+        if (r0 < 0 && st.residual > 0) r0 = st.residual;
+        if (r0 > opt.residual && st.residual > 0)
+            fraction = std::max(fraction, std::clamp(std::log(r0 / st.residual) / std::log(r0 / opt.residual), 0.0, 0.99));
+        status = QStringLiteral("Newton iteration %1, residual %2").arg(st.newton_iterations).arg(st.residual, 0, 'g', 3);
+        if (m_uiReady && m_sincePublish.elapsed() > kFrameIntervalMs) publish(false, fraction, status);
         return !m_cancel.load();
     };
+    publish(true, 0.0, QStringLiteral("draping to rest"));
     try {
-        const cloth::SolverStatus st = cloth::run_to_rest(*m_sys, opt);
+        cloth::SolverStatus st;
+        const bool fresh = pristine() && maxNewton < 0;
+        if (fresh && m_spec->shape == Drape::Disc && m_spec->setup.grid > 40 && !m_spec->preset.is_seed()) {
+            // The drapemeter from its start, on a fine grid: the engine's own
+            // drape (a coarse grid first, then this one), exactly what
+            // `drape simulate` runs. Shown when it is done.
+            const cloth::DrapeResult r = cloth::simulate_drape(m_spec->preset.material(), m_spec->setup, opt, m_spec->preset.model);
+            st = r.status;
+            if (st.outcome != cloth::SolverStatus::Outcome::Cancelled) m_sys->x = r.x;
+        } else {
+            st = cloth::run_to_rest(*m_sys, opt);
+        }
+        m_touched = true;
         m_steps += st.steps;
         m_sys->v.setZero();
         setRunning(false);
-        publish(true);
+        publish(true, st.converged() ? 1.0 : fraction, describeSolve(st));
         if (st.converged()) {
-            if (maxNewton < 0) emit restReached(m_sys->time, st.residual);
+            if (maxNewton < 0) {
+                computeResults(st);
+                emit restReached(m_sys->time, st.residual);
+            }
+        } else if (st.outcome == cloth::SolverStatus::Outcome::NotConverged && maxNewton < 0) {
+            // Stopped at the iteration budget: the shape is still worth reading back
+            // (its status says so), and the error below says why it is not at rest.
+            computeResults(st);
+            emit errorOccurred(QStringLiteral("static solver: %1 after %2 iterations (residual %3)")
+                                   .arg(QString::fromStdString(cloth::to_string(st.outcome)))
+                                   .arg(st.newton_iterations)
+                                   .arg(st.residual, 0, 'g', 3));
         } else if (st.outcome != cloth::SolverStatus::Outcome::Cancelled && maxNewton < 0) {
             emit errorOccurred(QStringLiteral("static solver: %1 after %2 iterations (residual %3)%4")
                                    .arg(QString::fromStdString(cloth::to_string(st.outcome)))
@@ -237,9 +326,26 @@ void DrapeWorker::runStatic(long maxNewton)
     m_cancel = false;
 }
 
+void DrapeWorker::computeResults(const cloth::SolverStatus& status)
+{
+    if (!m_sys || !m_mesh || !m_spec) return;
+    try {
+        auto r = std::make_shared<DrapeResults>();
+        r->generation = m_mesh->generation;
+        r->status = status;
+        r->x = m_sys->x;
+        if (isDrapemeter(m_spec->shape)) r->drape = cloth::measure_drape(*m_sys, m_spec->setup);
+        if (m_body) r->penetration = importers::body_penetration(*m_body, m_sys->x);
+        emit resultsReady(r);
+    } catch (const std::exception& e) {
+        fail(QStringLiteral("measure the rest state"), e);
+    }
+}
+
 void DrapeWorker::stepOnce()
 {
     if (!m_sys) return;
+    m_touched = true;
     setRunning(false);
     if (m_integ == cloth::Integrator::Static) {
         runStatic(1); // one Newton iteration
@@ -266,6 +372,7 @@ void DrapeWorker::reset()
     m_sys->v.setZero(m_sys->vertex_count(), 3);
     m_sys->time = 0;
     m_steps = 0;
+    m_touched = false;
     remakeStepper(); // integrators may keep history (e.g. factorisations)
     publish(true);
     if (wasRunning) play();
@@ -279,6 +386,7 @@ void DrapeWorker::setPinned(int vertex, bool pinned)
             throw ParameterError("pin: vertex " + std::to_string(vertex) + " is not in [0, " +
                                  std::to_string(m_sys->vertex_count()) + ")");
         m_sys->set_pinned(vertex, pinned);
+        m_touched = true;
         if (pinned) m_sys->v.row(vertex).setZero();
     } catch (const std::exception& e) {
         fail(QStringLiteral("pin"), e);
@@ -305,6 +413,7 @@ void DrapeWorker::setMass(int vertex, double kg)
             throw ParameterError("mass: vertex " + std::to_string(vertex) + " mass " + std::to_string(kg) +
                                  " kg must be a positive number");
         m_sys->set_mass(vertex, kg);
+        m_touched = true;
     } catch (const std::exception& e) {
         fail(QStringLiteral("vertex mass"), e);
     }
@@ -318,6 +427,7 @@ void DrapeWorker::addSphere(SphereSpec s)
         if (!s.centre.allFinite() || !(s.radius > 0) || !std::isfinite(s.radius))
             throw ParameterError("sphere collider: radius " + std::to_string(s.radius) + " m must be positive and the centre finite");
         m_sys->add_collider(std::make_shared<cloth::SphereCollider>(s.centre, s.radius));
+        m_touched = true;
         makeStepper(); // contact blocks may be part of the implicit solver's pattern
         emitMesh();
         publish(true);
@@ -343,7 +453,7 @@ void DrapeWorker::setOutlineWanted(bool on)
     publish(true);
 }
 
-void DrapeWorker::publish(bool force)
+void DrapeWorker::publish(bool force, double fraction, const QString& status)
 {
     if (!m_sys || !m_mesh) return;
     if (!force && !m_uiReady) return; // the GUI still has the previous frame: skip, never queue up
@@ -361,6 +471,8 @@ void DrapeWorker::publish(bool force)
     for (int i = 0; i < n; ++i)
         if (m_sys->pinned(i)) f->pinned.push_back(i);
     f->mass = std::make_shared<const Eigen::VectorXd>(m_sys->model().mass);
+    f->fraction = fraction;
+    f->status = status;
     if (m_outline) {
         // The shadow outline costs a pass over all triangles: refresh it a few times a second.
         if (force || m_lastOutline.empty() || m_sinceOutline.elapsed() > 200) {

@@ -29,6 +29,9 @@ public:
 
     // ---- commands: call on the worker thread (queued) ----------------------
     void rebuild(std::shared_ptr<const DrapeSpec> spec);
+    /// Brings the cloth to rest with the static solver (whatever the integrator),
+    /// reporting a progress fraction; results follow (resultsReady).
+    void drapeToRest();
     void setIntegrator(cloth::Integrator integ);
     void setTimeStep(double dt);                   ///< [s], 0 = automatic
     void setRestCriteria(double speed, double residual); ///< [m/s], relative residual [-]
@@ -55,13 +58,18 @@ signals:
     void frameReady(drape::widget::DrapeFramePtr frame);
     void runningChanged(bool running);
     void restReached(double simTime, double residual);
+    void resultsReady(drape::widget::DrapeResultsPtr results);
     void errorOccurred(const QString& message);
     void resultsSaved(const QString& jsonPath, const QString& objPath);
 
 private:
     void advance();
     void runStatic(long maxNewton);
-    void publish(bool force);
+    /// Positions still as built (no step, pin, mass or collider change since)?
+    bool pristine() const { return !m_touched; }
+    void publish(bool force, double fraction = -1, const QString& status = {});
+    void computeResults(const cloth::SolverStatus& status);
+    std::shared_ptr<const importers::Mannequin> bodyFor(const DrapeSpec& spec);
     void setRunning(bool on);
     double effectiveTimeStep();
     void makeStepper();
@@ -72,6 +80,12 @@ private:
     std::unique_ptr<cloth::ClothSystem> m_sys;
     std::unique_ptr<cloth::Stepper> m_stepper;
     std::shared_ptr<const DrapeSpec> m_spec;
+    std::shared_ptr<const importers::Mannequin> m_body; ///< in use
+    /// Imported files kept while their path is asked for (a rebuild with a new fabric keeps the body).
+    QString m_bodyPath, m_garmentPath;
+    std::shared_ptr<const importers::Mannequin> m_bodyLoaded;
+    std::shared_ptr<const GarmentMesh> m_garmentLoaded;
+    bool m_touched = false;
     std::vector<std::shared_ptr<const cloth::Collider>> m_baseColliders;
     DrapeMeshPtr m_mesh;
     cloth::Positions m_x0;

@@ -3,6 +3,7 @@
 // MeshGeometry uploads (scene positions, smooth normals, texture coordinates,
 // interleaved; uint32 triangle indices). Pure functions with no Qt Quick object,
 // so a worker thread packs while the GUI thread draws the previous frame.
+#include "widget/drape_widget_export.hpp"
 #include "engine/cloth/mesh.hpp"
 
 #include <QByteArray>
@@ -30,15 +31,15 @@ struct PackedVertices {
     int vertexCount = 0;
 };
 
-PackedTopology packTopology(const cloth::Triangles& F, int vertexCount);
+DRAPE_WIDGET_EXPORT PackedTopology packTopology(const cloth::Triangles& F, int vertexCount);
 
 /// Material coordinates [m] (n x 2) -> texture coordinates in [0, 1], the same
 /// scale on both axes, so an image (e.g. a record's top photo cropped to the
 /// specimen) covers the sheet once. Zeros when `uv` does not have n rows.
-std::vector<float> texcoordsFromMaterial(const Eigen::MatrixX2d& uv, int n);
+DRAPE_WIDGET_EXPORT std::vector<float> texcoordsFromMaterial(const Eigen::MatrixX2d& uv, int n);
 
 /// Positions [m] (world, z up) -> scene positions, area-weighted smooth normals
 /// and the texture coordinates (2 per vertex, or empty for zeros).
-PackedVertices packVertices(const cloth::Positions& X, const cloth::Triangles& F, const std::vector<float>& texcoord);
+DRAPE_WIDGET_EXPORT PackedVertices packVertices(const cloth::Positions& X, const cloth::Triangles& F, const std::vector<float>& texcoord);
 
 } // namespace drape::widget

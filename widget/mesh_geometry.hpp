@@ -1,14 +1,18 @@
 #pragma once
 // A triangle mesh as Qt Quick 3D geometry: smooth per-vertex normals and texture
 // coordinates, uploaded from the frame packer's buffers on the GUI thread.
+#include "widget/drape_widget_export.hpp"
+#include <QtQml/qqmlregistration.h>
 #include "widget/frame_packer.hpp"
 
 #include <QQuick3DGeometry>
 
 namespace drape::widget {
 
-class MeshGeometry : public QQuick3DGeometry {
+class DRAPE_WIDGET_EXPORT MeshGeometry : public QQuick3DGeometry {
     Q_OBJECT
+    QML_ELEMENT
+    QML_UNCREATABLE("use Scene.items")
     Q_PROPERTY(int vertexCount READ vertexCount NOTIFY meshChanged)
     Q_PROPERTY(int triangleCount READ triangleCount NOTIFY meshChanged)
 public:

@@ -4,6 +4,7 @@
 // messages); a few times a second the current positions are packed on the
 // job's thread and handed to a SceneMesh, so the view shows the drape forming.
 // The fitting demo drapes its garments with it.
+#include "widget/drape_widget_export.hpp"
 #include "widget/long_job.hpp"
 
 #include "engine/cloth/solver.hpp"
@@ -15,7 +16,7 @@ namespace drape::widget {
 
 class SceneMesh;
 
-class RestJob : public QObject {
+class DRAPE_WIDGET_EXPORT RestJob : public QObject {
     Q_OBJECT
 public:
     explicit RestJob(QObject* parent = nullptr);
@@ -47,6 +48,6 @@ private:
 };
 
 /// "converged after 145 Newton iterations, residual 2e-05, 62.0 s".
-QString describeSolve(const cloth::SolverStatus& status);
+DRAPE_WIDGET_EXPORT QString describeSolve(const cloth::SolverStatus& status);
 
 } // namespace drape::widget

@@ -9,6 +9,8 @@
 // another. Positions are in Drapekit's world frame (z up, metres); the items'
 // transforms are in the scene frame (y up, see world_frame.hpp). GUI thread only;
 // pack frames on a worker with packVertices and hand them to SceneMesh::setVertices.
+#include "widget/drape_widget_export.hpp"
+#include <QtQml/qqmlregistration.h>
 #include "widget/orbit_camera.hpp"
 #include "widget/scene_item.hpp"
 
@@ -26,7 +28,7 @@ namespace drape::widget {
 
 /// The scene's items as a list model (one role, "sceneItem"): the view adds and
 /// removes the delegates of the items that come and go and keeps the others.
-class SceneItemList : public QAbstractListModel {
+class DRAPE_WIDGET_EXPORT SceneItemList : public QAbstractListModel {
     Q_OBJECT
 public:
     using QAbstractListModel::QAbstractListModel;
@@ -44,8 +46,10 @@ private:
     std::vector<SceneItem*> m_items;
 };
 
-class Scene : public QObject {
+class DRAPE_WIDGET_EXPORT Scene : public QObject {
     Q_OBJECT
+    QML_ELEMENT
+    QML_UNCREATABLE("a host fills a Scene from C++")
     Q_PROPERTY(QAbstractListModel* items READ items CONSTANT)
     Q_PROPERTY(QVariantList markers READ markers NOTIFY markersChanged) ///< scene positions
     Q_PROPERTY(QVector3D markerScale READ markerScale NOTIFY markersChanged)

@@ -5,6 +5,8 @@
 // rotation in scene coordinates), with one PrincipledMaterial. A SceneMesh is an
 // item whose triangle mesh the host gives in world coordinates (z up, metres)
 // and whose positions it updates: a body, a table top, a cloth.
+#include "widget/drape_widget_export.hpp"
+#include <QtQml/qqmlregistration.h>
 #include "widget/frame_packer.hpp"
 #include "widget/mesh_geometry.hpp"
 
@@ -21,8 +23,10 @@
 
 namespace drape::widget {
 
-class SceneItem : public QObject {
+class DRAPE_WIDGET_EXPORT SceneItem : public QObject {
     Q_OBJECT
+    QML_ELEMENT
+    QML_UNCREATABLE("use Scene.items")
     Q_PROPERTY(QString name READ name CONSTANT)
     Q_PROPERTY(QQuick3DGeometry* geometry READ geometry CONSTANT)
     Q_PROPERTY(QString source READ source CONSTANT)
@@ -93,8 +97,9 @@ private:
 /// makes its own (qml/SceneView.qml: Texture { textureData: SceneTexture { item: ... } }),
 /// so the data lives exactly as long as the Texture using it: Qt 6.4's Texture
 /// leaves a connection behind on texture data that outlives it.
-class SceneTextureData : public QQuick3DTextureData {
+class DRAPE_WIDGET_EXPORT SceneTextureData : public QQuick3DTextureData {
     Q_OBJECT
+    QML_NAMED_ELEMENT(SceneTexture)
     Q_PROPERTY(drape::widget::SceneItem* item READ item WRITE setItem NOTIFY itemChanged)
 public:
     explicit SceneTextureData(QQuick3DObject* parent = nullptr);
@@ -111,8 +116,9 @@ private:
     QMetaObject::Connection m_connection;
 };
 
-class SceneMesh : public SceneItem {
+class DRAPE_WIDGET_EXPORT SceneMesh : public SceneItem {
     Q_OBJECT
+    QML_ANONYMOUS
 public:
     explicit SceneMesh(const QString& name, QObject* parent = nullptr);
 

@@ -2,6 +2,7 @@
 // SceneWidget: a QWidget showing a Scene through qml/SceneView.qml in a
 // QQuickWidget. DrapeView embeds one for its controller's scene; the fitting
 // demo shows its bodies and garments in others.
+#include "widget/drape_widget_export.hpp"
 #include <QImage>
 #include <QWidget>
 
@@ -11,7 +12,7 @@ namespace drape::widget {
 
 class Scene;
 
-class SceneWidget : public QWidget {
+class DRAPE_WIDGET_EXPORT SceneWidget : public QWidget {
     Q_OBJECT
 public:
     /// Shows `scene`, or a scene of its own when null.

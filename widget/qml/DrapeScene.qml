@@ -1,7 +1,7 @@
 // The drapemeter scene for Qt Quick hosts: the one scene view (SceneView.qml)
 // showing a DrapeController's scene - the same view DrapeView shows.
 import QtQuick
-import Drapekit 1.0
+import Drapekit
 
 SceneView {
     id: root

@@ -4,7 +4,7 @@
 // from Drapekit's z-up world).
 import QtQuick
 import QtQuick3D
-import Drapekit 1.0
+import Drapekit
 
 Item {
     id: root

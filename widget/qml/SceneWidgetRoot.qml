@@ -1,5 +1,5 @@
 // Root of SceneWidget's QQuickWidget: the view bound to the widget's scene.
-import Drapekit 1.0
+import Drapekit
 
 SceneView {
     scene: sceneWidgetScene

@@ -44,11 +44,18 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "error: %s\n", qPrintable(m));
     });
     view.setGridSize(cl.value("grid").toInt());
-    view.setIntegrator(cl.value("integrator"));
+    const auto integ = drape::widget::parseIntegrator(cl.value("integrator"));
+    const auto viewPreset = drape::widget::parseViewPreset(cl.value("view"));
+    const auto shape = drape::widget::parseClothShape(cl.value("shape"));
+    if (!integ || !viewPreset || !shape) {
+        std::fprintf(stderr, "error: unknown --integrator, --view or --shape\n");
+        return 2;
+    }
+    view.setIntegrator(*integ);
     view.setFabricPreset(cl.value("preset"));
     view.setTexture(cl.value("texture"));
-    view.setViewPreset(cl.value("view"));
-    view.setClothShape(cl.value("shape"));
+    view.setViewPreset(*viewPreset);
+    view.setClothShape(*shape);
     view.show();
     bool rest = false;
     QObject::connect(&view, &DrapeView::restReached, [&] { rest = true; });

@@ -81,9 +81,11 @@ struct ModelOptions {
     /// drape comes out too stiff on coarse grids: silk D 29.9 % at grid 41 and
     /// 24.4 % at grid 61). The load grows as 1 / L^2, so refining the mesh takes
     /// the limit away where the mesh resolves the folds itself. No parameter:
-    /// it follows from the bending rigidity. Off: the seed's linear springs.
+    /// it follows from the bending rigidity. None: the seed's linear springs, the
+    /// default until the fits have been checked with it (docs/model-discrepancy.md);
+    /// the starter fabrics and garments use Euler.
     enum class Buckling { None, Euler };
-    Buckling buckling = Buckling::Euler;
+    Buckling buckling = Buckling::None;
 };
 
 /// A horizontal tether of a material point to a place: energy 1/2 k |P (x - target)|^2

@@ -118,8 +118,8 @@ capture::MeasureOptions options(const cli::Args& a)
     if (!persp.count(opt.perspective))
         throw cli::UsageError("--perspective must be auto, none, disc-plane, hem or calibration, got '" + opt.perspective + "'");
     opt.segmentation = a.get_or("--segmentation", "auto");
-    if (opt.segmentation != "auto" && opt.segmentation != "photo")
-        throw cli::UsageError("--segmentation must be auto or photo, got '" + opt.segmentation + "'");
+    if (opt.segmentation != "auto" && opt.segmentation != "photo" && opt.segmentation != "lab")
+        throw cli::UsageError("--segmentation must be auto, photo or lab, got '" + opt.segmentation + "'");
     opt.overrides.threshold = a.get_or("--threshold", "");
     if (auto mk = a.get("--mask")) {
         opt.overrides.mask = cv::imread(*mk, cv::IMREAD_GRAYSCALE);
@@ -366,7 +366,7 @@ int run_measure(const std::vector<std::string>& argv)
 DRAPE_COMMAND({"measure", "measure a drape-test record, a single top photo, or a folder of photos",
                "usage: drape measure RECORD_DIR [--json] [--overlay out.png] [--texture F.bmp] [--mesh F.obj]\n"
                "                    [--rays N] [--no-calibrate] [--node-prominence F] [--perspective P]\n"
-               "                    [--threshold T] [--mask M.png] [--segmentation auto|photo]\n"
+               "                    [--threshold T] [--mask M.png] [--segmentation auto|photo|lab]\n"
                "       drape measure --top PHOTO --disc 180mm --specimen 300mm|300x400mm [--scale S] [photo flags] [...]\n"
                "       drape measure --batch FOLDER --table OUT.csv|OUT.json [--overlays DIR] (--meta TEMPLATE.json | photo flags)\n"
                "  RECORD_DIR       folder with meta.json and its photos (a lab record with cameras and contours, or a\n"
@@ -385,7 +385,8 @@ DRAPE_COMMAND({"measure", "measure a drape-test record, a single top photo, or a
                "                   calibration (hem on a calibrated record). Every model is reported beside it.\n"
                "  --threshold T    manual segmentation: L<NN, L>NN, a>NN, b<NN ... (CIE L*a*b*)\n"
                "  --mask FILE      a mask the size of the photo: white = cloth, black = not, grey = decide\n"
-               "  --segmentation photo  the single-photo segmenter (GrabCut) on a lab record too\n"
+               "  --segmentation S auto (default), photo (the single-photo GrabCut segmenter, also on a lab record),\n"
+               "                   lab (the lab classifier: disc colour against a floor ring, by chroma or darkness)\n"
                "photo flags (--top, --batch):\n"
                "  --disc D         support disc diameter (mm, cm, m)\n"
                "  --specimen S     specimen: a diameter (300mm) or width x length (300x400mm)\n"

@@ -54,7 +54,9 @@ struct MeasureOptions {
     /// "disc-plane", "hem", "calibration" (hem on a calibrated camera).
     std::string perspective = "auto";
     /// "auto" (the lab classifier for calibrated records, the photo segmenter
-    /// for single photos), "photo" (the photo segmenter for any record).
+    /// for single photos), "photo" (the photo segmenter for any record), "lab"
+    /// (the lab classifier for any record: fabric colour on the disc against
+    /// a floor ring beyond the specimen, by chroma or darkness).
     std::string segmentation = "auto";
     /// Manual overrides (threshold, user mask); they select the photo segmenter.
     SegmentOverrides overrides;

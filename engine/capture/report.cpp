@@ -54,11 +54,17 @@ nlohmann::ordered_json to_json(const Measurement& m)
         top["specimen_angle_deg"] = t.specimen_angle * 180.0 / M_PI;
         top["height_error_m"] = t.height_error_m;
         top["drape_coefficient_edge_error_percent"] = t.dc_edge_term;
-        top["segmentation"] = {{"method", t.segmentation_method},
-                               {"by", t.model.chromatic ? "chroma" : "darkness"},
-                               {"contrast_lab", t.model.contrast},
-                               {"fabric_lab", {t.model.fabric_lab[0], t.model.fabric_lab[1], t.model.fabric_lab[2]}},
-                               {"floor_lab", {t.model.floor_lab[0], t.model.floor_lab[1], t.model.floor_lab[2]}}};
+        if (t.photo_segmentation)
+            top["segmentation"] = {{"method", t.segmentation_method},
+                                   {"contrast_lab", t.model.contrast},
+                                   {"lightness_weight", t.lightness_weight},
+                                   {"upper_disc", t.clamp_disc}};
+        else
+            top["segmentation"] = {{"method", t.segmentation_method},
+                                   {"by", t.model.chromatic ? "chroma" : "darkness"},
+                                   {"contrast_lab", t.model.contrast},
+                                   {"fabric_lab", {t.model.fabric_lab[0], t.model.fabric_lab[1], t.model.fabric_lab[2]}},
+                                   {"floor_lab", {t.model.floor_lab[0], t.model.floor_lab[1], t.model.floor_lab[2]}}};
         json mags = json::array();
         for (int k = 1; k <= std::min(12, t.metrics.fourier.harmonics()); ++k) mags.push_back(t.metrics.fourier.magnitude(k));
         top["outline_fourier_a0_m"] = t.metrics.fourier.a0;

@@ -208,6 +208,9 @@ cv::Mat refine_edge(const cv::Mat& lab, const cv::Mat& region, double wL)
 {
     cv::Mat M;
     region.convertTo(M, CV_32F, 1.0 / 255);
+    // Cores 2 px inside and outside the boundary, means over 13 x 13 px, a
+    // band of 3 px either side. (Tried 3/5/8 px cores, 17 and 21 px windows:
+    // within 0.4 points of each other on the synthetic scenes.)
     const auto k5 = cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5});
     const auto k7 = cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7});
     cv::Mat fcore, bcore, inv = 255 - region;

@@ -371,7 +371,8 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
             ov.mask_name = rec.top_photo->mask;
         }
     }
-    const bool photo_seg = single || opt.segmentation == "photo" || !ov.threshold.empty() || !ov.mask.empty();
+    const bool photo_seg = (single && opt.segmentation != "lab") || opt.segmentation == "photo" || !ov.threshold.empty() ||
+                           !ov.mask.empty();
     const bool round = rec.specimen.shape == record::Specimen::Shape::Round;
     const bool angle_known = round || !rec.specimen.angle_from_photo;
     double angle = rec.specimen.angle;
@@ -383,6 +384,9 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
         gate = seg.gate;
         tv.region = seg.region;
         tv.segmentation_method = seg.method;
+        tv.photo_segmentation = true;
+        tv.lightness_weight = seg.lightness_weight;
+        tv.clamp_disc = seg.clamp_disc;
         tv.model.contrast = seg.contrast;
         tv.model.chromatic = seg.lightness_weight < 1;
         for (const auto& w : seg.warnings) tv.warnings.push_back("top view: " + w);

@@ -46,6 +46,9 @@ struct TopView {
     PerspectiveValue uncorrected, disc_plane, hem; ///< every model, always reported
     double specimen_angle = 0;          ///< orientation of a non-round specimen used [rad]
     std::string segmentation_method;
+    bool photo_segmentation = false;    ///< the single-photo segmenter (else the lab classifier in `model`)
+    double lightness_weight = 1;        ///< photo segmenter: weight of L* against a*, b*
+    bool clamp_disc = false;            ///< photo segmenter: the disc top is not cloth-coloured
     cv::Mat region;                     ///< counted pixels (CV_8U, 255), for the overlay
     std::vector<Eigen::Vector2d> limit_px;    ///< the search limit in the image
     std::vector<Eigen::Vector2d> at_limit_px; ///< rays whose edge was found at the search limit

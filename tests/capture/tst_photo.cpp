@@ -385,6 +385,17 @@ private slots:
             cv::imwrite((fs::path(dir) / ("preview-" + c.name + ".png")).string(), preview);
             std::ofstream f(fs::path(dir) / (c.name + ".flags"));
             for (const auto& x : c.flags) f << x << "\n";
+            // The overlay as docs/capture.md shows it (480 px wide).
+            std::vector<std::string> args{"measure", "--top", (fs::path(dir) / (c.name + ".jpg")).string(), "--overlay",
+                                          (fs::path(dir) / (c.name + "-overlay-full.png")).string()};
+            args.insert(args.end(), c.flags.begin(), c.flags.end());
+            const Run r = run_drape(args);
+            cv::Mat ov = cv::imread((fs::path(dir) / (c.name + "-overlay-full.png")).string());
+            if (!ov.empty()) {
+                cv::resize(ov, ov, {}, 480.0 / ov.cols, 480.0 / ov.cols, cv::INTER_AREA);
+                cv::imwrite((fs::path(dir) / ("photo-" + c.name + ".png")).string(), ov, {cv::IMWRITE_PNG_COMPRESSION, 9});
+            }
+            qInfo("%s: exit %d", c.name.c_str(), r.code);
             qInfo("%s: true D %.2f %%, disc-plane %.2f %%", c.name.c_str(), synth_photo::true_dc(c.scene),
                   synth_photo::plane_dc(c.scene, 0.0));
         }

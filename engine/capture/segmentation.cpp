@@ -496,8 +496,9 @@ PhotoSegmentation segment_photo(const cv::Mat& bgr, const cv::Mat& lab, const re
     cv::Mat bgd, fgd;
     // GrabCut's own k-means draws from OpenCV's global generator: seeded, so
     // that a photo gives the same answer every time.
-    const char* seed_env = std::getenv("DRAPE_GRABCUT_SEED");
-    cv::setRNGSeed(seed_env ? std::atoi(seed_env) : 12345);
+    // (Seeds 1, 2, 3 and this one agree within 0.3 points on every scene of
+    // tst_photo but the print with a background-coloured element: 47.6..49.0.)
+    cv::setRNGSeed(12345);
     cv::grabCut(gimg, mask, cv::Rect(), bgd, fgd, 5, cv::GC_INIT_WITH_MASK);
     cv::Mat bin = (mask == cv::GC_FGD) | (mask == cv::GC_PR_FGD);
     cv::morphologyEx(bin, bin, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));

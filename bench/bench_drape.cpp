@@ -1,12 +1,16 @@
 // bench_drape: time to rest of the seed's RK4 against the static solver (cold
-// and warm after a 10 % parameter change), on the seed's 30 x 30 set-up and a
-// 100 x 100 grid disc, at the same tolerance (relative force residual).
-// Each case runs in its own child process so its peak memory is its own.
+// and warm after a 10 % parameter change), on the seed's 30 x 30 set-up, a
+// 100 x 100 grid disc and the cotton starter preset on a 100 x 100 grid (issue
+// 13), at the same tolerance (relative force residual). Each case runs in its
+// own child process so its peak memory is its own. The load average is printed
+// beside every row (the machine is shared).
 //
-//   build/bin/bench_drape [--quick] [--rk4-wall-limit S] [--tolerance R]
+//   build/bin/bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]
 #include "engine/cloth/drape.hpp"
 #include "engine/fabric/seed_format.hpp"
+#include "engine/library/starter.hpp"
 
+#include <cstdlib>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -87,8 +91,10 @@ Row to_row(const DrapeResult& d, long vertices)
 
 void print(const std::string& name, const Row& r)
 {
-    std::printf("| %-34s | %7ld | %9.2f | %9ld | %9ld | %8.1e | %5.1f | %2d | %8.1f | %-13s |\n", name.c_str(), r.vertices, r.wall, r.iters,
-                r.fevals, r.residual, r.dc, r.nodes, r.peak_kb / 1024.0, r.status);
+    double load[1] = {0};
+    if (getloadavg(load, 1) < 1) load[0] = -1;
+    std::printf("| %-34s | %7ld | %9.2f | %9ld | %9ld | %8.1e | %5.1f | %2d | %8.1f | %-13s | %.2f |\n", name.c_str(), r.vertices, r.wall, r.iters,
+                r.fevals, r.residual, r.dc, r.nodes, r.peak_kb / 1024.0, r.status, load[0]);
     std::fflush(stdout);
 }
 
@@ -97,19 +103,20 @@ void print(const std::string& name, const Row& r)
 int main(int argc, char** argv)
 {
     double rk4_limit = 900, tol = 1e-6;
-    bool quick = false;
+    bool quick = false, static_only = false;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
+        else if (!std::strcmp(argv[i], "--static-only")) static_only = true;
         else if (!std::strcmp(argv[i], "--rk4-wall-limit") && i + 1 < argc) rk4_limit = std::atof(argv[++i]);
         else if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc) tol = std::atof(argv[++i]);
         else {
-            std::fprintf(stderr, "usage: bench_drape [--quick] [--rk4-wall-limit S] [--tolerance R]\n");
+            std::fprintf(stderr, "usage: bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]\n");
             return 2;
         }
     }
     std::printf("tolerance: relative force residual %.0e; RK4 stops at %.0f s wall if not at rest\n\n", tol, rk4_limit);
-    std::printf("| case                               | vertices | wall [s] | iters/steps | force evals | residual | D [%%] | nodes | peak [MB] | status |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf("| case                               | vertices | wall [s] | iters/steps | force evals | residual | D [%%] | nodes | peak [MB] | status | load avg |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
 
     // Dampers do not change a rest state; the seed's dashpots (7 N*s/m on a 0.02 g
     // particle) would force RK4 to 3e-7 s steps, so RK4 runs the same springs with
@@ -164,12 +171,30 @@ int main(int argc, char** argv)
         static_cases(material(SeedParams::table1()), material(changed), setup, cold, warm);
         print("seed 30x30, static, cold", cold);
         print("seed 30x30, static, warm (+10 % flexion)", warm);
-        const Row rk = rk4_case(material(light), setup);
-        print("seed 30x30, RK4 (seed's integrator)", rk);
-        std::printf("|  ratio RK4 / static: cold %.1fx, warm %.1fx (wall time) |\n\n", rk.wall / cold.wall, rk.wall / warm.wall);
+        if (!static_only) {
+            const Row rk = rk4_case(material(light), setup);
+            print("seed 30x30, RK4 (seed's integrator)", rk);
+            std::printf("|  ratio RK4 / static: cold %.1fx, warm %.1fx (wall time) |\n", rk.wall / cold.wall, rk.wall / warm.wall);
+        }
+        std::printf("\n");
     }
     if (quick) return 0;
-    // 2. A 100 x 100 grid disc (about 7,700 particles) of a mid-weight fabric.
+    // 2. Issue 13's case: the cotton starter preset (data/library/cotton-plain-weave.json)
+    // on a 300 mm specimen over a 150 mm disc, grid 100.
+    {
+        DrapeSetup setup;
+        setup.grid = 100;
+        const FabricParams p = drape::library::find_starter("cotton")->params;
+        FabricParams q = p;
+        q[Param::BendWarp] *= 1.1;
+        q[Param::BendWeft] *= 1.1;
+        Row cold, warm;
+        static_cases(p, q, setup, cold, warm);
+        print("cotton 100x100, static, cold", cold);
+        print("cotton 100x100, static, warm (+10 % bending)", warm);
+        std::printf("\n");
+    }
+    // 3. A 100 x 100 grid disc (about 7,700 particles) of a mid-weight fabric.
     {
         DrapeSetup setup;
         setup.grid = 100;
@@ -183,6 +208,7 @@ int main(int argc, char** argv)
         static_cases(p, q, setup, cold, warm);
         print("100x100 disc, static, cold", cold);
         print("100x100 disc, static, warm (+10 % bending)", warm);
+        if (static_only) return 0;
         const Row rk = rk4_case(p, setup);
         print("100x100 disc, RK4", rk);
         std::printf("|  ratio RK4 / static: cold %.1fx, warm %.1fx (wall time%s) |\n", rk.wall / cold.wall, rk.wall / warm.wall,

@@ -159,3 +159,114 @@ double Args::get_length(const std::string& flag, double fallback) const
 }
 
 } // namespace drape::cli
+
+// ---- progress on stderr (progress.hpp) ------------------------------------------
+
+#include "cli/progress.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+
+namespace drape::cli {
+
+namespace {
+/// Plain lines (not a terminal): at most one every this many seconds.
+constexpr double kPlainInterval = 5.0;
+/// A terminal line is redrawn at most this often.
+constexpr double kTerminalInterval = 0.1;
+} // namespace
+
+std::string format_duration(double s)
+{
+    char buf[48];
+    if (!(s >= 0) || s > 1e7) return "?";
+    if (s < 60) std::snprintf(buf, sizeof buf, "%.0f s", s);
+    else if (s < 3600) std::snprintf(buf, sizeof buf, "%d min %02d s", int(s) / 60, int(s) % 60);
+    else std::snprintf(buf, sizeof buf, "%d h %02d min", int(s) / 3600, (int(s) % 3600) / 60);
+    return buf;
+}
+
+Progress::Progress(std::string label, bool quiet)
+    : m_label(std::move(label)), m_quiet(quiet), m_tty(::isatty(STDERR_FILENO) == 1),
+      m_start(std::chrono::steady_clock::now()), m_last(m_start - std::chrono::hours(1))
+{
+}
+
+Progress::~Progress()
+{
+    if (m_open) std::fputc('\n', stderr);
+}
+
+std::string Progress::line(double fraction, const std::string& detail) const
+{
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
+    std::string s = "  " + m_label;
+    if (fraction >= 0) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, " %3.0f %%", 100 * fraction);
+        s += buf;
+        // The time left once there is something to extrapolate from.
+        if (fraction >= 0.02 && fraction < 1) s += ", about " + format_duration(elapsed * (1 - fraction) / fraction) + " left";
+    }
+    s += " (" + format_duration(elapsed) + ")";
+    if (!detail.empty()) s += "  " + detail;
+    return s;
+}
+
+void Progress::update(double fraction, const std::string& detail)
+{
+    if (m_quiet) return;
+    if (fraction >= 0) m_fraction = fraction;
+    const auto now = std::chrono::steady_clock::now();
+    const double since = std::chrono::duration<double>(now - m_last).count();
+    if (since < (m_tty ? kTerminalInterval : kPlainInterval)) return;
+    m_last = now;
+    const std::string s = line(m_fraction, detail);
+    if (m_tty) {
+        std::fprintf(stderr, "\r%-100s", s.c_str());
+        m_open = true;
+    } else {
+        std::fprintf(stderr, "%s\n", s.c_str());
+    }
+    std::fflush(stderr);
+}
+
+void Progress::finish(const std::string& detail, bool complete)
+{
+    if (m_quiet) return;
+    const std::string s = line(complete ? 1.0 : m_fraction, detail.empty() ? "done" : detail);
+    if (m_tty) std::fprintf(stderr, "\r%-100s\n", s.c_str());
+    else std::fprintf(stderr, "%s\n", s.c_str());
+    m_open = false;
+    std::fflush(stderr);
+}
+
+std::function<bool(const cloth::SolverStatus&)> Progress::solver_callback(const cloth::RestOptions& ro)
+{
+    struct State {
+        double r0 = -1, fraction = 0;
+    };
+    auto st = std::make_shared<State>();
+    const bool statics = ro.integrator == cloth::Integrator::Static;
+    const double target = ro.residual, max_time = ro.max_sim_time;
+    return [this, st, statics, target, max_time](const cloth::SolverStatus& s) {
+        double f = -1;
+        if (statics) {
+            if (st->r0 < 0 && s.residual > 0) st->r0 = s.residual;
+            // A continuation solve starts again on each grid: the fraction never goes back.
+            if (st->r0 > target && s.residual > 0)
+                st->fraction = std::max(st->fraction, std::clamp(std::log(st->r0 / s.residual) / std::log(st->r0 / target), 0.0, 0.99));
+            f = st->fraction;
+        } else if (max_time > 0) {
+            f = std::clamp(s.sim_time / max_time, 0.0, 0.99); // an upper bound: rest usually comes sooner
+        }
+        char buf[128];
+        if (statics) std::snprintf(buf, sizeof buf, "iteration %ld, residual %.2e", s.newton_iterations, s.residual);
+        else std::snprintf(buf, sizeof buf, "%ld steps, t = %.3f s, residual %.2e", s.steps, s.sim_time, s.residual);
+        update(f, buf);
+        return true;
+    };
+}
+
+} // namespace drape::cli

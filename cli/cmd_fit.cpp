@@ -1,5 +1,6 @@
 // drape fit: fit a fabric preset to drape-test records.
 #include "cli/command.hpp"
+#include "cli/progress.hpp"
 
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
@@ -147,22 +148,20 @@ int run(const std::vector<std::string>& argv)
         if (fitted_terms(m, fo.channels) == 0)
             throw ParameterError(m.id + ": no measured value in the fitted channels (" + join(fo.channels) +
                                  "): nothing to fit it to (add the record's photos or contours, or fit other --channels)");
+    Progress progress("fit", quiet);
     if (!quiet)
-        fo.progress = [](const estimate::FitProgress& p) {
-            const int width = 30;
-            const int filled = p.planned > 0 ? std::min(width, width * p.evaluation / p.planned) : 0;
-            std::string bar(static_cast<std::size_t>(filled), '#');
-            bar.resize(width, '.');
-            std::fprintf(stderr, "\r  [%s] %-11s eval %3d/%-3d  best chi2 %10.1f  %4ld sims  %6.1f s ", bar.c_str(), p.stage.c_str(),
-                         p.evaluation, p.planned, p.best_chi2, p.simulations, p.elapsed_s);
-            std::fflush(stderr);
+        fo.progress = [&progress](const estimate::FitProgress& p) {
+            char detail[160];
+            std::snprintf(detail, sizeof detail, "%-11s evaluation %d of at most %d, best chi2 %.1f, %ld simulations",
+                          p.stage.c_str(), p.evaluation, p.planned, p.best_chi2, p.simulations);
+            progress.update(p.planned > 0 ? std::min(1.0, double(p.evaluation) / p.planned) : -1.0, detail);
         };
     g_cancel = false;
     fo.cancel = &g_cancel;
     auto old = std::signal(SIGINT, on_sigint);
     estimate::FitResult r = estimate::fit_fabric(recs, fo);
     std::signal(SIGINT, old);
-    if (!quiet) std::fprintf(stderr, "\n");
+    progress.finish(r.cancelled ? "cancelled" : "done", !r.cancelled);
     // A result that cannot be right is not written as if it were fitted.
     if (r.evaluations == 0 || r.records.empty()) {
         if (r.cancelled) {

@@ -8,8 +8,10 @@
 #include "engine/core/io.hpp"
 #include "engine/core/units.hpp"
 #include "engine/fabric/preset.hpp"
+#include "engine/library/blender.hpp"
 #include "engine/library/fabric_library.hpp"
 #include "engine/library/resolve.hpp"
+#include "engine/library/u3m.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -235,12 +237,31 @@ int run_library(const std::vector<std::string>& argv)
         } else {
             if (a.positionals().size() != 1) throw cli::UsageError("library export needs NAME or --all");
             const std::string f = a.get_or("--format", "drapekit");
-            PresetFormat pf;
-            if (f == "drapekit" || f == "drapekit-fabric") pf = PresetFormat::Drapekit;
-            else if (f == "seed19" || f == "seed-19") pf = PresetFormat::Seed19;
-            else throw cli::UsageError("--format: '" + f + "' must be drapekit or seed19");
-            doc = lib.export_preset(a.positionals().front(), pf);
-            what = "'" + a.positionals().front() + "'";
+            const std::string name = a.positionals().front();
+            what = "'" + name + "'";
+            if (f == "u3m") {
+                const FabricRecord r = lib.get(name);
+                doc = preset_to_u3m(r.preset, {r.created, r.modified});
+            } else if (f == "blender") {
+                // A Python script, not JSON.
+                const std::string script = preset_to_blender_script(lib.get(name).preset);
+                const auto out = a.get("--out");
+                if (out && *out != "-") {
+                    drape::write_file_atomic(*out, script);
+                    if (a.has("--json")) std::cout << cli::dump_json(json{{"exported", what}, {"out", *out}, {"format", "blender"}}) << "\n";
+                    else std::printf("exported %s to %s (Blender cloth settings: run it in Blender with the garment selected)\n",
+                                     what.c_str(), out->c_str());
+                } else {
+                    std::cout << script;
+                }
+                return 0;
+            } else {
+                PresetFormat pf;
+                if (f == "drapekit" || f == "drapekit-fabric") pf = PresetFormat::Drapekit;
+                else if (f == "seed19" || f == "seed-19") pf = PresetFormat::Seed19;
+                else throw cli::UsageError("--format: '" + f + "' must be drapekit, seed19, u3m or blender");
+                doc = lib.export_preset(name, pf);
+            }
         }
         const auto out = a.get("--out");
         write_output(doc, out);
@@ -273,6 +294,8 @@ int run_library(const std::vector<std::string>& argv)
         } else {
             j = drape::read_json_file(file);
         }
+        std::string u3m_note;
+        if (is_u3m(j)) j = fabric::fabric_to_json(preset_from_u3m(j, file, &u3m_note)); // a U3M material: its preset
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
         ImportReport rep;
         if (const auto n = a.get("--name")) check_name_flag(*n);
@@ -292,10 +315,12 @@ int run_library(const std::vector<std::string>& argv)
             }
         }
         if (a.has("--json")) {
-            std::cout << cli::dump_json(json{{"added", rep.added}, {"replaced", rep.replaced}, {"skipped", rep.skipped},
-                                             {"renamed", rep.renamed}, {"names", rep.names}, {"count", lib.count()}})
-                      << "\n";
+            json out = {{"added", rep.added}, {"replaced", rep.replaced}, {"skipped", rep.skipped},
+                        {"renamed", rep.renamed}, {"names", rep.names}, {"count", lib.count()}};
+            if (!u3m_note.empty()) out["u3m"] = u3m_note;
+            std::cout << cli::dump_json(out) << "\n";
         } else {
+            if (!u3m_note.empty()) std::printf("U3M: %s\n", u3m_note.c_str());
             std::printf("imported from %s: %d added, %d replaced, %d skipped, %d renamed; %d fabric(s) in %s\n", file.c_str(),
                         rep.added, rep.replaced, rep.skipped, rep.renamed, lib.count(), lib.path().c_str());
         }
@@ -319,10 +344,13 @@ DRAPE_COMMAND({"library", "manage the fabric library (SQLite): list, show, add, 
                "  update NAME FILE                  replace the stored preset, keep the name\n"
                "  rename OLD NEW\n"
                "  remove NAME [NAME ...]\n"
-               "  export NAME [--format drapekit|seed19] [--out FILE]   one preset (stdout without --out)\n"
+               "  export NAME [--format drapekit|seed19|u3m|blender] [--out FILE]   one preset (stdout without --out):\n"
+               "                                    u3m = U3M 1.1 material (weight, thickness; our parameters in\n"
+               "                                    custom.drapekit); blender = a Python script setting Blender's cloth\n"
                "  export --all [--out FILE]         the whole library as one JSON document\n"
                "  import FILE|FOLDER [--name NAME] [--on-conflict fail|skip|replace|rename]\n"
-               "                                    a preset, a whole-library export or a folder of presets\n"
+               "                                    a preset, a U3M material (.u3m JSON), a whole-library export or a\n"
+               "                                    folder of presets\n"
                "                                    (e.g. data/library, the starter library); all or nothing",
                run_library});
 

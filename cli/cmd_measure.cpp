@@ -1,67 +1,172 @@
-// `drape measure RECORD_DIR`: a drape-lab record -> calibrated measurements.
+// `drape measure`: a drape-test record, a single top photo, or a folder of
+// photos -> calibrated measurements.
 #include "cli/command.hpp"
+#include "cli/progress.hpp"
 
 #ifdef HAVE_DRAPE_CAPTURE
 #include "engine/capture/export.hpp"
 #include "engine/capture/measure.hpp"
 #include "engine/capture/report.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
+#include "engine/core/units.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 namespace {
 
-int run_measure(const std::vector<std::string>& argv)
+using namespace drape;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+double length_mm(const cli::Args& a, const std::string& flag)
 {
-    using namespace drape;
-    cli::Args a(argv, {"--overlay", "--rays", "--node-prominence", "--texture", "--mesh"}, {"--json", "--no-calibrate"});
-    if (a.positionals().size() != 1) throw cli::UsageError("expected exactly one RECORD_DIR");
-    const record::Record rec = record::read_record(a.positionals()[0]);
+    return 1e3 * a.get_length(flag, std::nan(""));
+}
+
+/// "300mm" -> round; "300x400mm" or "30x40cm" -> rectangle.
+json specimen_json(const std::string& text, const cli::Args& a)
+{
+    const auto x = text.find('x');
+    json sp;
+    if (x == std::string::npos) {
+        sp = {{"shape", "round"}, {"diameter_mm", 1e3 * parse_length(text, "--specimen")}};
+    } else {
+        std::string w = text.substr(0, x), l = text.substr(x + 1);
+        // A unit on the second number only applies to both ("300x400mm").
+        std::size_t u = l.find_first_not_of("0123456789.eE+-");
+        const std::string unit = u == std::string::npos ? "" : l.substr(u);
+        if (w.find_first_not_of("0123456789.eE+-") == std::string::npos) w += unit;
+        sp = {{"shape", "rectangle"}, {"width_mm", 1e3 * parse_length(w, "--specimen")}, {"length_mm", 1e3 * parse_length(l, "--specimen")}};
+    }
+    if (auto ang = a.get("--specimen-angle")) {
+        if (*ang == "auto") sp["angle_deg"] = "auto";
+        else sp["angle_deg"] = a.get_double("--specimen-angle", 0);
+    }
+    return sp;
+}
+
+/// The meta.json the single-photo flags describe (documented in docs/capture.md).
+json meta_from_flags(const cli::Args& a, const std::string& image, const std::string& id)
+{
+    json conf;
+    const auto disc = a.get("--disc");
+    const auto spec = a.get("--specimen");
+    if (!disc || !spec) throw cli::UsageError("a photo needs --disc DIAMETER and --specimen DIAMETER|WxL");
+    conf["support_disc_diameter_D2_mm"] = length_mm(a, "--disc");
+    conf["specimen"] = specimen_json(*spec, a);
+    if (a.has("--pedestal-height")) conf["pedestal_height_mm"] = length_mm(a, "--pedestal-height");
+    json scale;
+    const std::string s = a.get_or("--scale", "disc");
+    if (s == "disc") {
+        scale["source"] = "disc";
+    } else if (s == "markers") {
+        scale["source"] = "markers";
+        if (!a.has("--marker-size")) throw cli::UsageError("--scale markers needs --marker-size (the black square's edge, e.g. 50mm)");
+        scale["size_mm"] = length_mm(a, "--marker-size");
+        scale["dictionary"] = a.get_or("--marker-dict", "DICT_4X4_50");
+    } else if (s == "chessboard") {
+        scale["source"] = "chessboard";
+        const std::string b = a.get_or("--board", "");
+        int c = 0, r = 0;
+        if (std::sscanf(b.c_str(), "%dx%d", &c, &r) != 2)
+            throw cli::UsageError("--scale chessboard needs --board COLSxROWS (inner corners, e.g. 9x6) and --square 25mm");
+        scale["inner_corners"] = {c, r};
+        scale["square_mm"] = a.has("--square") ? length_mm(a, "--square") : 25.0;
+    } else if (s.rfind("px-per-mm=", 0) == 0) {
+        double v = 0;
+        if (!parse_number(s.substr(10), v) || !(v > 0)) throw cli::UsageError("--scale px-per-mm=N: N must be a positive number");
+        scale["source"] = "px-per-mm";
+        scale["px_per_mm"] = v;
+    } else {
+        throw cli::UsageError("--scale must be disc, markers, chessboard or px-per-mm=N, got '" + s + "'");
+    }
+    if (a.has("--reference-height")) scale["height_mm"] = length_mm(a, "--reference-height");
+    json tp = {{"image", image}, {"scale", scale}};
+    if (auto d = a.get("--disc-px")) {
+        double x = 0, y = 0, r = 0;
+        const int n = std::sscanf(d->c_str(), "%lf,%lf,%lf", &x, &y, &r);
+        if (n < 2) throw cli::UsageError("--disc-px X,Y[,R]: the disc centre (and radius) in pixels");
+        tp["disc_px"] = {{"centre", {x, y}}};
+        if (n == 3) tp["disc_px"]["radius"] = r;
+    }
+    if (a.has("--camera-height")) tp["camera_height_mm"] = length_mm(a, "--camera-height");
+    if (a.has("--focal-px")) tp["focal_px"] = a.get_double("--focal-px", 0);
+    if (auto p = a.get("--perspective"); p && *p != "calibration") tp["perspective"] = *p;
+    return {{"specimen_id", id}, {"configuration", conf}, {"top_photo", tp}};
+}
+
+capture::MeasureOptions options(const cli::Args& a)
+{
     capture::MeasureOptions opt;
     opt.rays = a.get_int("--rays", 720, 90, 7200);
     opt.calibrate = !a.has("--no-calibrate");
     opt.metrics.relative_prominence = a.get_double("--node-prominence", opt.metrics.relative_prominence);
     if (!(opt.metrics.relative_prominence >= 0 && opt.metrics.relative_prominence < 1))
         throw cli::UsageError("--node-prominence must be in [0, 1)");
-    const capture::Measurement m = capture::measure_record(rec, opt);
-    if (auto path = a.get("--overlay")) {
-        if (m.top_image.empty()) throw FileError(*path + ": no overlay: the record has no readable top photo");
-        if (!cv::imwrite(*path, capture::draw_top_overlay(rec, m))) throw FileError(*path + ": cannot write the overlay");
+    opt.perspective = a.get_or("--perspective", "auto");
+    static const std::set<std::string> persp = {"auto", "none", "disc-plane", "hem", "calibration"};
+    if (!persp.count(opt.perspective))
+        throw cli::UsageError("--perspective must be auto, none, disc-plane, hem or calibration, got '" + opt.perspective + "'");
+    opt.segmentation = a.get_or("--segmentation", "auto");
+    if (opt.segmentation != "auto" && opt.segmentation != "photo" && opt.segmentation != "lab")
+        throw cli::UsageError("--segmentation must be auto, photo or lab, got '" + opt.segmentation + "'");
+    opt.overrides.threshold = a.get_or("--threshold", "");
+    if (auto mk = a.get("--mask")) {
+        opt.overrides.mask = cv::imread(*mk, cv::IMREAD_GRAYSCALE);
+        if (opt.overrides.mask.empty()) throw FileError(*mk + ": --mask is not a readable image");
+        opt.overrides.mask_name = *mk;
     }
-    if (auto path = a.get("--texture")) {
-        const cv::Mat tex = capture::rectified_texture(rec, m);
-        if (!cv::imwrite(*path, tex)) throw FileError(*path + ": cannot write the texture");
-        std::filesystem::path p(*path);
-        if (p.extension() == ".bmp") cv::imwrite(p.replace_extension(".png").string(), tex);
-    }
-    if (auto path = a.get("--mesh")) capture::write_obj(capture::contour_surface(rec, m), *path);
-    if (a.has("--json")) {
-        std::cout << cli::dump_json(capture::to_json(m), 1) << "\n";
-        return 0;
-    }
+    return opt;
+}
+
+void print_text(const capture::Measurement& m)
+{
     std::printf("record %s\n", m.specimen_id.c_str());
     if (m.top.measured) {
-        const auto& t = m.top.metrics;
-        std::printf("  drape coefficient  %.1f %% (+- %.1f, height model: %s)", t.drape_coefficient_percent,
-                    m.top.dc_uncertainty_percent, capture::to_string(m.top.height_model));
+        const auto& tv = m.top;
+        const auto& t = tv.metrics;
+        std::printf("  drape coefficient  %.1f %% (+- %.1f, perspective: %s)", t.drape_coefficient_percent, tv.dc_uncertainty_percent,
+                    tv.perspective.c_str());
         if (m.lab_dc_percent) std::printf("   lab %.1f %%", *m.lab_dc_percent);
-        std::printf("\n  uncorrected (z=0)  %.1f %%   chord model %.1f %%\n", m.top.dc_plane_percent, m.top.dc_chord_percent);
+        std::printf("\n");
+        for (const capture::PerspectiveValue* v : {&tv.uncorrected, &tv.disc_plane, &tv.hem}) {
+            if (v->model == "disc-plane" && !(m.view && m.view->single_camera && m.view->reference_height != 0.0)) continue;
+            if (!v->available) continue;
+            std::printf("    %-11s %5.1f %% +- %.1f  (", v->model == "none" ? "uncorrected" : v->model.c_str(), v->dc_percent,
+                        v->uncertainty_percent);
+            for (std::size_t i = 0; i < v->terms.size(); ++i)
+                std::printf("%s%s %.1f", i ? ", " : "", v->terms[i].name.c_str(), v->terms[i].points);
+            std::printf(")\n");
+        }
+        std::printf("  perspective        %s: %s\n", tv.perspective.c_str(), tv.perspective_reason.c_str());
         std::printf("  nodes              %d at", t.node_count);
         for (double th : t.node_angles_rad) std::printf(" %.0f", th * 180 / M_PI);
         std::printf(" deg\n  radius mean/min/max %.1f / %.1f / %.1f mm\n", t.mean_radius_m * 1e3, t.min_radius_m * 1e3,
                     t.max_radius_m * 1e3);
+        std::printf("  segmentation       %s\n", tv.segmentation_method.c_str());
+    }
+    if (m.view && m.view->single_camera) {
+        const auto& g = *m.view;
+        std::printf("  scale              %s\n", g.source_text.c_str());
+        std::printf("  camera height      %.0f +- %.0f mm (%s)\n", g.camera_height * 1e3, g.camera_height_sigma * 1e3,
+                    g.camera_height_source.c_str());
+        std::printf("  disc centre        %.1f, %.1f px (%s)\n", g.centre_px.x(), g.centre_px.y(), g.centre_source.c_str());
     }
     if (m.hem_min_height)
         std::printf("  lowest hem         z = %.1f mm (%s)\n", *m.hem_min_height * 1e3, m.hem_min_source.c_str());
     if (m.top_calibration && m.top_calibration->ok)
         std::printf("  top camera         %zu boards, reprojection %.2f px, declared pose off by %.2f px\n",
-                    m.top_calibration->boards_found.size(), m.top_calibration->rms_px_measured,
-                    m.top_calibration->max_shift_px);
+                    m.top_calibration->boards_found.size(), m.top_calibration->rms_px_measured, m.top_calibration->max_shift_px);
     for (const auto& c : m.contours) {
         std::printf("  contour %4.0f mm    mean r %.1f mm, %d harmonics, fit RMS %.2f mm (noise %.2f mm), |c1..c4| =",
                     c.depth * 1e3, c.mean_radius * 1e3, c.harmonics, c.residual_rms * 1e3, c.noise_sigma * 1e3);
@@ -70,21 +175,234 @@ int run_measure(const std::vector<std::string>& argv)
     }
     for (const auto& s : m.not_measured) std::printf("  not measured: %s\n", s.c_str());
     for (const auto& s : m.warnings) std::printf("  warning: %s\n", s.c_str());
+}
+
+/// Exit code of one measurement: 1 when refused, or when a photo gave no D.
+int verdict(const capture::Measurement& m, bool photo, const std::string& what)
+{
+    if (m.refused) {
+        std::cerr << "drape measure: " << what << ": refused (" << m.refused->check << "): " << m.refused->message
+                  << "\n  what to try: " << m.refused->remedy << "\n";
+        return 1;
+    }
+    if (photo && !m.top.measured) {
+        std::string why;
+        for (const auto& s : m.not_measured)
+            if (s.rfind("top view", 0) == 0) why = s;
+        std::cerr << "drape measure: " << what << ": no drape coefficient: " << (why.empty() ? "top view not measured" : why) << "\n";
+        return 1;
+    }
     return 0;
 }
 
-DRAPE_COMMAND({"measure", "measure a drape-lab record (photos, laser contours)",
-               "usage: drape measure RECORD_DIR [--json] [--overlay out.png] [--texture F.bmp] [--mesh F.obj]\n                    [--rays N] [--no-calibrate] [--node-prominence F]\n"
-               "  RECORD_DIR       folder with meta.json and any of top.jpg, side.jpg, iso.jpg, contours.csv\n"
+void write_outputs(const cli::Args& a, const record::Record& rec, const capture::Measurement& m)
+{
+    if (auto path = a.get("--overlay")) {
+        if (m.top_image.empty()) throw FileError(*path + ": no overlay: the record has no readable top photo");
+        if (!cv::imwrite(*path, capture::draw_top_overlay(rec, m))) throw FileError(*path + ": cannot write the overlay");
+    }
+    if (auto path = a.get("--texture")) {
+        if (!m.top.measured) throw FileError(*path + ": no texture: the top view was not measured");
+        const cv::Mat tex = capture::rectified_texture(rec, m);
+        if (!cv::imwrite(*path, tex)) throw FileError(*path + ": cannot write the texture");
+        fs::path p(*path);
+        if (p.extension() == ".bmp") cv::imwrite(p.replace_extension(".png").string(), tex);
+    }
+    if (auto path = a.get("--mesh")) capture::write_obj(capture::contour_surface(rec, m), *path);
+}
+
+// ---- batch ---------------------------------------------------------------------
+
+std::string csv_cell(const std::string& s)
+{
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string o = "\"";
+    for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return o + "\"";
+}
+
+std::string num_cell(double v, int prec = 2)
+{
+    if (!std::isfinite(v)) return "";
+    char b[64];
+    std::snprintf(b, sizeof b, "%.*f", prec, v);
+    return b;
+}
+
+int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
+{
+    const fs::path folder = *a.get("--batch");
+    std::error_code ec;
+    if (!fs::is_directory(folder, ec)) throw FileError(folder.string() + ": --batch needs a folder of photos");
+    std::vector<fs::path> photos;
+    for (const auto& e : fs::directory_iterator(folder, ec)) {
+        std::string ext = e.path().extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        if (e.is_regular_file() && (ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".tif" || ext == ".tiff" || ext == ".bmp"))
+            photos.push_back(e.path());
+    }
+    std::sort(photos.begin(), photos.end());
+    if (photos.empty()) throw FileError(folder.string() + ": no photos (.jpg, .jpeg, .png, .tif, .bmp) in the folder");
+    const auto table = a.get("--table");
+    if (!table) throw cli::UsageError("--batch needs --table OUT.csv or OUT.json");
+    const bool as_json = fs::path(*table).extension() == ".json";
+    cli::prepare_output_file(*table, "--table");
+    std::optional<fs::path> overlays;
+    if (auto d = a.get("--overlays")) {
+        cli::prepare_output_dir(*d, "--overlays");
+        overlays = *d;
+    }
+    // One calibration for every photo: a meta.json template (--meta), or the flags.
+    json templ;
+    if (auto mt = a.get("--meta")) templ = parse_json(read_file(*mt, std::size_t(4) << 20), *mt);
+    json rows = json::array();
+    std::ostringstream csv;
+    csv << "photo,status,check,drape_coefficient_percent,uncertainty_percent,perspective,uncorrected_percent,disc_plane_percent,"
+           "hem_percent,hem_uncertainty_percent,nodes,scale,px_per_mm,camera_height_mm,camera_height_known,message\n";
+    int failed = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < photos.size(); ++i) {
+        const fs::path& p = photos[i];
+        const std::string name = p.filename().string();
+        json row = {{"photo", name}};
+        std::string status = "measured", check, message;
+        capture::Measurement m;
+        try {
+            json meta = templ.is_null() ? meta_from_flags(a, name, p.stem().string()) : templ;
+            if (!templ.is_null()) {
+                meta["top_photo"]["image"] = name;
+                meta["specimen_id"] = p.stem().string();
+            }
+            const record::Record rec = record::parse_meta_json(meta, folder, a.get_or("--meta", "the command line") + " for " + name);
+            m = capture::measure_record(rec, opt);
+            if (overlays && !m.top_image.empty())
+                cv::imwrite((*overlays / (p.stem().string() + "-overlay.png")).string(), capture::draw_top_overlay(rec, m));
+            if (m.refused) {
+                status = "refused";
+                check = m.refused->check;
+                message = m.refused->message + " -- try: " + m.refused->remedy;
+            } else if (!m.top.measured) {
+                status = "not measured";
+                for (const auto& s : m.not_measured) message += (message.empty() ? "" : "; ") + s;
+            }
+        } catch (const Error& e) {
+            status = "error";
+            message = e.what();
+        }
+        if (status != "measured") ++failed;
+        const auto& tv = m.top;
+        const bool ok = status == "measured";
+        const double D = ok ? tv.metrics.drape_coefficient_percent : std::nan("");
+        row["status"] = status;
+        row["check"] = check;
+        row["message"] = message;
+        if (ok) {
+            row["measurement"] = capture::to_json(m);
+        }
+        rows.push_back(row);
+        csv << csv_cell(name) << "," << status << "," << check << "," << num_cell(D) << ","
+            << num_cell(ok ? tv.dc_uncertainty_percent : std::nan("")) << "," << (ok ? tv.perspective : "") << ","
+            << num_cell(ok ? tv.uncorrected.dc_percent : std::nan("")) << "," << num_cell(ok ? tv.disc_plane.dc_percent : std::nan("")) << ","
+            << num_cell(ok ? tv.hem.dc_percent : std::nan("")) << "," << num_cell(ok ? tv.hem.uncertainty_percent : std::nan("")) << ","
+            << (ok ? std::to_string(tv.metrics.node_count) : "") << "," << (m.view ? record::to_string(m.view->source) : "") << ","
+            << num_cell(m.view ? m.view->scale_px_per_m * 1e-3 : std::nan(""), 4) << ","
+            << num_cell(m.view ? m.view->camera_height * 1e3 : std::nan(""), 0) << ","
+            << (m.view ? (m.view->camera_height_known ? "yes" : "no") : "") << "," << csv_cell(message) << "\n";
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::fprintf(stderr, "[%zu/%zu] %-28s %s", i + 1, photos.size(), name.c_str(), status.c_str());
+        if (ok) std::fprintf(stderr, "  D = %.1f %% +- %.1f (%s)", D, tv.dc_uncertainty_percent, tv.perspective.c_str());
+        else if (!check.empty()) std::fprintf(stderr, " (%s)", check.c_str());
+        std::fprintf(stderr, "   %.0f s, about %.0f s left\n", elapsed, elapsed / static_cast<double>(i + 1) * static_cast<double>(photos.size() - i - 1));
+    }
+    write_file_atomic(*table, as_json ? cli::dump_json(json({{"folder", folder.string()}, {"photos", rows}}), 1) + "\n" : csv.str());
+    std::fprintf(stderr, "%zu photos: %zu measured, %d refused or failed; table in %s\n", photos.size(),
+                 photos.size() - static_cast<std::size_t>(failed), failed, table->c_str());
+    return failed ? 1 : 0;
+}
+
+int run_measure(const std::vector<std::string>& argv)
+{
+    cli::Args a(argv,
+                {"--overlay", "--rays", "--node-prominence", "--texture", "--mesh", "--top", "--disc", "--specimen",
+                 "--specimen-angle", "--scale", "--marker-size", "--marker-dict", "--board", "--square", "--reference-height",
+                 "--disc-px", "--camera-height", "--focal-px", "--perspective", "--threshold", "--mask", "--segmentation",
+                 "--write-meta", "--batch", "--table", "--overlays", "--meta", "--pedestal-height"},
+                {"--json", "--no-calibrate"});
+    const capture::MeasureOptions opt = options(a);
+    if (a.has("--batch")) {
+        if (!a.positionals().empty() || a.has("--top")) throw cli::UsageError("--batch takes no RECORD_DIR or --top");
+        return run_batch(a, opt);
+    }
+    record::Record rec;
+    bool photo = false;
+    std::string what;
+    if (auto top = a.get("--top")) {
+        if (!a.positionals().empty()) throw cli::UsageError("give either RECORD_DIR or --top PHOTO, not both");
+        const fs::path p = fs::absolute(*top);
+        std::error_code ec;
+        if (!fs::is_regular_file(p, ec)) throw FileError(*top + ": no such photo");
+        const json meta = meta_from_flags(a, p.filename().string(), p.stem().string());
+        if (auto out = a.get("--write-meta")) write_file_atomic(*out, cli::dump_json(meta, 1) + "\n");
+        rec = record::parse_meta_json(meta, p.parent_path(), "the command line (as meta.json)");
+        photo = true;
+        what = *top;
+    } else {
+        if (a.positionals().size() != 1) throw cli::UsageError("expected exactly one RECORD_DIR, or --top PHOTO, or --batch FOLDER");
+        rec = record::read_record(a.positionals()[0]);
+        photo = rec.single_camera();
+        what = a.positionals()[0];
+    }
+    // One measurement is one step (a second or two): a line when it starts and one when it is done.
+    cli::Progress progress("measure " + rec.specimen_id, a.has("--json"));
+    progress.update(-1, photo ? "scale, segmentation, outline" : "photos, calibration, contours");
+    const capture::Measurement m = capture::measure_record(rec, opt);
+    progress.finish();
+    write_outputs(a, rec, m);
+    if (a.has("--json")) std::cout << cli::dump_json(capture::to_json(m), 1) << "\n";
+    else print_text(m);
+    return verdict(m, photo, what);
+}
+
+DRAPE_COMMAND({"measure", "measure a drape-test record, a single top photo, or a folder of photos",
+               "usage: drape measure RECORD_DIR [--json] [--overlay out.png] [--texture F.bmp] [--mesh F.obj]\n"
+               "                    [--rays N] [--no-calibrate] [--node-prominence F] [--perspective P]\n"
+               "                    [--threshold T] [--mask M.png] [--segmentation auto|photo|lab]\n"
+               "       drape measure --top PHOTO --disc 180mm --specimen 300mm|300x400mm [--scale S] [photo flags] [...]\n"
+               "       drape measure --batch FOLDER --table OUT.csv|OUT.json [--overlays DIR] (--meta TEMPLATE.json | photo flags)\n"
+               "  RECORD_DIR       folder with meta.json and its photos (a lab record with cameras and contours, or a\n"
+               "                   single-camera record with \"top_photo\": docs/capture.md)\n"
                "  --json           print the measurements as JSON (SI units, unit in each key)\n"
-               "  --overlay FILE   write the top photo with the traced outline, nodes and pedestal circle\n"
-               "  --texture FILE   write the top view rectified to the pedestal-top plane, 0.25 mm/px\n"
-               "                   (FILE.bmp also writes FILE.png)\n"
+               "  --overlay FILE   write the top photo with what was counted (tinted), the traced outline, nodes,\n"
+               "                   disc circle, search limit, scale reference; a refused photo shows why\n"
+               "  --texture FILE   write the top view rectified to the pedestal-top plane, 0.25 mm/px (FILE.bmp also\n"
+               "                   writes FILE.png)\n"
                "  --mesh FILE.obj  write the surface through the contour levels' Fourier series [m]\n"
                "  --rays N         rays traced around the axis (default 720)\n"
                "  --no-calibrate   use the declared top pose instead of solvePnP on the floor chessboards\n"
                "  --node-prominence F  a fold crest must rise F x (max r - min r) above its troughs (default 0.10)\n"
-               "Files that are missing or unreadable are listed under not_measured; a bad meta.json is an error.",
+               "  --perspective P  the model D is reported with: auto (hem when the camera height is known, else\n"
+               "                   disc-plane), none (outline in the scale reference's plane), disc-plane, hem,\n"
+               "                   calibration (hem on a calibrated record). Every model is reported beside it.\n"
+               "  --threshold T    manual segmentation: L<NN, L>NN, a>NN, b<NN ... (CIE L*a*b*)\n"
+               "  --mask FILE      a mask the size of the photo: white = cloth, black = not, grey = decide\n"
+               "  --segmentation S auto (default), photo (the single-photo GrabCut segmenter, also on a lab record),\n"
+               "                   lab (the lab classifier: disc colour against a floor ring, by chroma or darkness)\n"
+               "photo flags (--top, --batch):\n"
+               "  --disc D         support disc diameter (mm, cm, m)\n"
+               "  --specimen S     specimen: a diameter (300mm) or width x length (300x400mm)\n"
+               "  --specimen-angle DEG|auto  rotation of a rectangle (0: width along the photo's x axis; auto: from the outline)\n"
+               "  --scale S        disc (default: the disc rim found in the photo), markers (ArUco), chessboard,\n"
+               "                   px-per-mm=N (a ruler)\n"
+               "  --marker-size L  the markers' black square edge; --marker-dict NAME (default DICT_4X4_50)\n"
+               "  --board CxR      chessboard inner corners; --square L (default 25mm)\n"
+               "  --reference-height Z  height of the markers / ruler / board above the disc top (negative: below;\n"
+               "                   on the floor of a 120 mm stand: -120mm). Default 0.\n"
+               "  --disc-px X,Y[,R]  the disc's centre (and radius) in the photo [px], when it cannot be found\n"
+               "  --camera-height H  optical centre above the disc top; or --focal-px F (the lens in pixels)\n"
+               "  --pedestal-height H  the stand's height (default 120mm)\n"
+               "  --write-meta FILE  write the meta.json these flags describe (keep it beside the photo)\n"
+               "Exit codes: 0 measured; 1 refused (the check and what to try are printed) or bad input; 2 bad command\n"
+               "line. Files that are missing or unreadable in a lab record are listed under not_measured.",
                run_measure});
 
 } // namespace

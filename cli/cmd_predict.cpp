@@ -1,6 +1,7 @@
 // drape predict: simulate a fitted preset on another drape set-up.
 #include "cli/command.hpp"
 #include "cli/checks.hpp"
+#include "cli/progress.hpp"
 #include "cli/setup.hpp"
 
 #include "engine/cloth/drape_io.hpp"
@@ -69,13 +70,10 @@ int run(const std::vector<std::string>& argv)
     cloth::single_threaded_blas();
     cloth::RestOptions ro;
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
-    if (!quiet)
-        ro.progress = [](const cloth::SolverStatus& st) {
-            std::fprintf(stderr, "\r  %-8ld iterations  residual %.2e  wall %.1fs   ", st.steps, st.residual, st.wall_seconds);
-            return true;
-        };
+    Progress progress("predict", quiet);
+    if (!quiet) ro.progress = progress.solver_callback(ro);
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
-    if (!quiet) std::fprintf(stderr, "\n");
+    progress.finish(to_string(r.status.outcome), r.status.converged());
     if (!check_drape_result(r, setup)) return 4;
     if (json) {
         std::cout << dump_json(cloth::drape_summary_json(r, setup, ro.integrator)) << "\n";

@@ -1,12 +1,17 @@
 // drape simulate: drape a fabric preset over the drapemeter and measure it.
 #include "cli/command.hpp"
 #include "cli/checks.hpp"
+#include "cli/progress.hpp"
 #include "cli/setup.hpp"
 
 #include "engine/cloth/drape_io.hpp"
 #include "engine/core/error.hpp"
 #include "engine/fabric/preset.hpp"
+#ifdef HAVE_DRAPE_CAPTURE
+#include "engine/capture/mesh_picture.hpp"
+#endif
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -36,9 +41,11 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --folds N             start on an N-fold branch (an N-fold lift of 5 mm, N in 2..16; default: the
                         seeded mix of modes 2..16, 1 mm)
   --perturbation L      largest lift of the flat start's perturbation (at most 50mm)
-  --out DIR             write summary.json, rest.obj, slices.csv, outline.csv
+  --out DIR             write summary.json, rest.obj, slices.csv, outline.csv and rest.png (the rest
+                        state seen from the front and from above)
   --json                print the summary as JSON on stdout
-  --quiet               no progress on stderr
+  --quiet               no progress on stderr (a terminal gets one line with percent and time left,
+                        a log or pipe plain lines)
   --disc-grip           the specimen cannot slide on the disc top (large static friction)
   --vertex-contact-only contact at mesh vertices only (the seed's): coarse elements cut the pedestal rim
   --trace               print every static-solver iteration on stderr)";
@@ -70,19 +77,42 @@ int run(const std::vector<std::string>& argv)
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     ro.trace = a.has("--trace");
     preset.model.edge_contact = !a.has("--vertex-contact-only");
-    if (!quiet)
-        ro.progress = [](const cloth::SolverStatus& st) {
-            std::fprintf(stderr, "\r  %-8ld steps  residual %.2e  t=%.3fs  wall %.1fs   ", st.steps, st.residual, st.sim_time,
-                         st.wall_seconds);
-            return true;
-        };
+    Progress progress("simulate", quiet);
+    if (!quiet) ro.progress = progress.solver_callback(ro);
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
-    if (!quiet) std::fprintf(stderr, "\n");
+    progress.finish(to_string(r.status.outcome), r.status.converged());
     if (!check_drape_result(r, setup)) return 4;
     const auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
     if (const auto out = a.get("--out")) {
         auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // for the mesh topology
         cloth::write_drape_outputs(*out, r, setup, ro.integrator, sys->mesh());
+#ifdef HAVE_DRAPE_CAPTURE
+        // A picture of the rest state for a person: the cloth and the pedestal.
+        // The pedestal: a cylinder (top cap and side) 1 mm below the cloth it carries.
+        const int seg = 64;
+        const double rad = 0.5 * setup.disc_diameter, top = -1e-3, bottom = -setup.pedestal_height;
+        cloth::Positions ped(2 * seg + 1, 3);
+        cloth::Triangles pf(3 * seg, 3);
+        for (int k = 0; k < seg; ++k) {
+            const double t = 2 * M_PI * k / seg;
+            ped.row(k) << rad * std::cos(t), rad * std::sin(t), top;
+            ped.row(seg + k) << rad * std::cos(t), rad * std::sin(t), bottom;
+        }
+        ped.row(2 * seg) << 0, 0, top;
+        for (int k = 0; k < seg; ++k) {
+            const int k1 = (k + 1) % seg;
+            pf.row(3 * k) << 2 * seg, k, k1;
+            pf.row(3 * k + 1) << k, seg + k, seg + k1;
+            pf.row(3 * k + 2) << k, seg + k1, k1;
+        }
+        char title[160];
+        std::snprintf(title, sizeof title, "%s  D = %.1f %%, %d nodes (%.0f/%.0f mm, grid %d)", preset.name.c_str(),
+                      r.metrics.drape_coefficient_percent, r.metrics.node_count, setup.sample_diameter * 1e3,
+                      setup.disc_diameter * 1e3, setup.grid);
+        capture::write_mesh_picture(*out + "/rest.png",
+                                    {{&r.x, &sys->mesh().F, cv::Scalar(72, 58, 176)}, {&ped, &pf, cv::Scalar(150, 150, 150)}},
+                                    title);
+#endif
     }
     if (json) {
         std::cout << dump_json(summary) << "\n";

@@ -63,9 +63,10 @@ cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
 
 std::set<std::string> fabric_flags() { return {"--fabric", "--set"}; }
 
-fabric::FabricPreset load_fabric_flags(const Args& a)
+fabric::FabricPreset load_fabric_flags(const Args& a, const std::string& fallback)
 {
-    const auto arg = a.get("--fabric");
+    auto arg = a.get("--fabric");
+    if (!arg && !fallback.empty()) arg = fallback;
     if (!arg) throw UsageError("--fabric is required");
 #ifdef HAVE_DRAPE_LIBRARY
     fabric::FabricPreset preset = library::resolve_fabric(*arg);

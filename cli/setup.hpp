@@ -43,7 +43,8 @@ cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup defaults);
 /// (library::resolve_fabric), with parameters overridden from the parameter table (KEY a
 /// table key, VALUE a number in the key's unit; e.g. --set bend_warp_Nm=2e-6).
 /// An override turns a seed-19 preset into its continuum equivalent.
-fabric::FabricPreset load_fabric_flags(const Args& a);
+/// `fallback` (when not empty) is the fabric when --fabric is not given.
+fabric::FabricPreset load_fabric_flags(const Args& a, const std::string& fallback = {});
 /// The value flags load_fabric_flags reads: --fabric and --set.
 std::set<std::string> fabric_flags();
 

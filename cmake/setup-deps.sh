@@ -5,7 +5,7 @@ set -euo pipefail
 PKGS=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas0-pthread
-  libopencv-dev
+  libopencv-dev libopencv-contrib-dev
   libnlopt-cxx-dev
   libassimp-dev assimp-testmodels
   libsqlite3-dev nlohmann-json3-dev

@@ -19,7 +19,8 @@ int main(int argc, char** argv)
     cli.addHelpOption();
     cli.addVersionOption();
     const QCommandLineOption script({"s", "script"}, "Run a scripted fitting and exit: fitting (skirt on the mannequin) or tablecloth.", "name");
-    const QCommandLineOption garment("garment", "Garment: skirt | tablecloth (overrides the script's).", "name");
+    const QCommandLineOption garment("garment", "Garment: skirt | tablecloth | garment (overrides the script's).", "name");
+    const QCommandLineOption garmentFile("garment-file", "Garment mesh to drape (OBJ, Collada, glTF, ...; its top boundary is pinned): implies --garment garment.", "file");
     const QCommandLineOption fabric("fabric", "Fabric name (or part of it) from the library / starter presets.", "name");
     const QCommandLineOption fabric2("compare", "Second fabric, draped side by side.", "name");
     const QCommandLineOption shot("screenshot", "Write a PNG of the view(s) after the drape (script mode).", "file");
@@ -30,7 +31,7 @@ int main(int argc, char** argv)
     const QCommandLineOption library("library", "Fabric library (SQLite); default $DRAPE_LIBRARY or ~/.local/share/drapekit/library.sqlite.", "file");
     const QCommandLineOption size("size", "Window size WxH (e.g. 1100x760).", "size");
     const QCommandLineOption list("list-fabrics", "Print the fabrics the demo offers and exit.");
-    cli.addOptions({script, garment, fabric, fabric2, shot, json, mannequin, unit, up, library, size, list});
+    cli.addOptions({script, garment, garmentFile, fabric, fabric2, shot, json, mannequin, unit, up, library, size, list});
     cli.process(app);
 
     drape::demo::DemoOptions o;
@@ -48,6 +49,10 @@ int main(int argc, char** argv)
             std::fprintf(stderr, "drape-demo: unknown script \"%s\" (expected fitting or tablecloth)\n", qPrintable(name));
             return 2;
         }
+    }
+    if (cli.isSet(garmentFile)) {
+        s.garment = "garment";
+        s.garmentFile = cli.value(garmentFile);
     }
     if (cli.isSet(garment)) s.garment = cli.value(garment);
     s.fabric = cli.value(fabric);
@@ -69,7 +74,7 @@ int main(int argc, char** argv)
         w.resize(wh[0].toInt(), wh[1].toInt());
     }
     w.show();
-    if (!cli.isSet(script) && !cli.isSet(garment)) return app.exec();
+    if (!cli.isSet(script) && !cli.isSet(garment) && !cli.isSet(garmentFile)) return app.exec();
 
     int code = 0;
     QObject::connect(&w, &drape::demo::MainWindow::scriptFinished, &app, [&code](int c) {

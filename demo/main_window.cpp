@@ -25,9 +25,12 @@
 #include <QSplitter>
 #include <QStatusBar>
 #include <QTimer>
+#include <QHeaderView>
 #include <QToolButton>
+#include <QTreeWidget>
 #include <QVBoxLayout>
 
+#include <cmath>
 #include <filesystem>
 
 #ifndef DRAPE_SOURCE_DIR
@@ -88,7 +91,38 @@ void MainWindow::buildUi()
     m_garment->setObjectName(QStringLiteral("garment"));
     m_garment->addItem(tr("Circular skirt on the mannequin"), QStringLiteral("skirt"));
     m_garment->addItem(tr("Round tablecloth on a round table"), QStringLiteral("tablecloth"));
+    m_garment->addItem(tr("Imported garment mesh…"), QStringLiteral("garment"));
     form->addRow(tr("Garment"), m_garment);
+    connect(m_garment, &QComboBox::activated, this, [this](int i) {
+        if (m_garment->itemData(i).toString() == QLatin1String("garment") && m_garmentFile.isEmpty()) chooseGarmentFile();
+    });
+
+    // The library browser: search, weight, drape coefficient; a click picks the fabric.
+    m_search = new QLineEdit(panel);
+    m_search->setObjectName(QStringLiteral("fabricSearch"));
+    m_search->setPlaceholderText(tr("Search the fabric library…"));
+    m_search->setClearButtonEnabled(true);
+    form->addRow(m_search);
+    m_browser = new QTreeWidget(panel);
+    m_browser->setObjectName(QStringLiteral("fabricBrowser"));
+    m_browser->setColumnCount(4);
+    m_browser->setHeaderLabels({tr("Fabric"), tr("g/m²"), tr("D %"), tr("from")});
+    m_browser->setRootIsDecorated(false);
+    m_browser->setSortingEnabled(true);
+    m_browser->setMinimumHeight(150);
+    m_browser->header()->setSectionResizeMode(0, QHeaderView::Stretch);
+    m_browser->setToolTip(tr("Click: the fabric to drape. Ctrl+click: the second fabric (compare)."));
+    form->addRow(m_browser);
+    connect(m_search, &QLineEdit::textChanged, this, &MainWindow::filterBrowser);
+    connect(m_browser, &QTreeWidget::itemClicked, this, [this](QTreeWidgetItem* item) {
+        const int i = item->data(0, Qt::UserRole).toInt();
+        if (QApplication::keyboardModifiers() & Qt::ControlModifier) {
+            m_compare->setChecked(true);
+            m_fabricB->setCurrentIndex(i);
+        } else {
+            m_fabricA->setCurrentIndex(i);
+        }
+    });
 
     m_fabricA = new QComboBox(panel);
     m_fabricA->setObjectName(QStringLiteral("fabricA"));
@@ -164,7 +198,7 @@ void MainWindow::buildUi()
         if (!path.isEmpty() && !saveScreenshot(path, &err)) showMessage(err);
     });
     for (FittingView* v : {m_viewA, m_viewB}) {
-        connect(v, &FittingView::progress, this, [this, v](double f, const QString& msg) {
+        connect(v, &FittingView::drapeProgress, this, [this, v](double f, const QString& msg) {
             if (v == m_viewA || !m_viewA->busy()) {
                 if (f < 0) m_progress->setRange(0, 0);
                 else {
@@ -220,10 +254,56 @@ void MainWindow::chooseMannequin()
     if (!loadMannequin(path, &err)) QMessageBox::warning(this, tr("Mannequin"), err);
 }
 
+bool MainWindow::setGarmentFile(const QString& path, QString* error)
+{
+    if (!QFileInfo::exists(path)) {
+        if (error) *error = tr("no such garment mesh: %1").arg(path);
+        return false;
+    }
+    m_garmentFile = path;
+    m_viewA->setGarmentMeshFile(path);
+    m_viewB->setGarmentMeshFile(path);
+    m_garment->setItemText(m_garment->findData(QStringLiteral("garment")), tr("Imported: %1").arg(QFileInfo(path).fileName()));
+    return true;
+}
+
+void MainWindow::chooseGarmentFile()
+{
+    const QString path = QFileDialog::getOpenFileName(this, tr("Garment mesh"), QString(),
+                                                      tr("Meshes (*.obj *.dae *.zae *.gltf *.glb *.fbx *.ply *.stl);;All files (*)"));
+    QString err;
+    if (!path.isEmpty() && !setGarmentFile(path, &err)) QMessageBox::warning(this, tr("Garment"), err);
+}
+
+void MainWindow::filterBrowser(const QString& text)
+{
+    for (int i = 0; i < m_browser->topLevelItemCount(); ++i) {
+        QTreeWidgetItem* item = m_browser->topLevelItem(i);
+        const std::size_t k = std::size_t(item->data(0, Qt::UserRole).toInt());
+        const auto& f = m_fabrics[k];
+        const QString hay = QString::fromStdString(f.name + " " + f.preset.composition + " " + f.preset.source + " " + f.origin);
+        item->setHidden(!text.isEmpty() && !hay.contains(text, Qt::CaseInsensitive));
+    }
+}
+
 void MainWindow::reloadFabrics(const QString& select)
 {
     std::vector<std::string> warnings;
     m_fabrics = library::available_fabrics(m_options.library.toStdString(), m_options.starterDir.toStdString(), &warnings);
+    m_browser->setSortingEnabled(false);
+    m_browser->clear();
+    for (std::size_t i = 0; i < m_fabrics.size(); ++i) {
+        const auto& f = m_fabrics[i];
+        auto* item = new QTreeWidgetItem(m_browser);
+        item->setText(0, QString::fromStdString(f.name));
+        item->setData(0, Qt::UserRole, int(i));
+        item->setToolTip(0, QString::fromStdString(f.preset.composition));
+        item->setData(1, Qt::DisplayRole, std::round(f.preset.params[cloth::Param::AreaDensity] * 1e4) / 10);
+        if (f.preset.drape) item->setData(2, Qt::DisplayRole, std::round(f.preset.drape->percent * 10) / 10);
+        item->setText(3, QString::fromStdString(f.origin));
+    }
+    m_browser->setSortingEnabled(true);
+    filterBrowser(m_search->text());
     for (QComboBox* box : {m_fabricA, m_fabricB}) {
         const QString keep = select.isEmpty() ? box->currentText() : select;
         box->clear();
@@ -262,11 +342,10 @@ bool MainWindow::startDrape(QString* error)
         if (error) *error = tr("no fabric chosen");
         return false;
     }
-    const importers::Garment g = importers::parse_garment(m_garment->currentData().toString().toStdString());
-    if (g == importers::Garment::Skirt && !m_mannequin) {
-        if (error) *error = tr("no mannequin loaded");
-        return false;
-    }
+    const QString gname = m_garment->currentData().toString();
+    const GarmentChoice g = gname == QLatin1String("tablecloth") ? GarmentChoice::Tablecloth
+                            : gname == QLatin1String("garment")  ? GarmentChoice::Imported
+                                                                 : GarmentChoice::Skirt;
     m_allOk = true;
     m_pending = 0;
     if (!m_viewA->drape(g, m_fabrics[std::size_t(a)], error)) return false;
@@ -290,8 +369,8 @@ void MainWindow::onViewFinished()
 {
     setBusy(false);
     QString text = m_lastMessage;
-    if (auto* s = m_viewA->scene(); s && s->mannequin && m_allOk) {
-        const importers::Penetration p = importers::body_penetration(*s->mannequin, m_viewA->lastPositions());
+    if (m_viewA->garment() != GarmentChoice::Tablecloth && m_viewA->mannequin() && m_allOk) {
+        const importers::Penetration p = importers::body_penetration(*m_viewA->mannequin(), m_viewA->lastPositions());
         text += tr("; closest cloth vertex %1 mm from the body").arg(p.min_distance * 1000, 0, 'f', 1);
     }
     m_status->setText(text);
@@ -306,6 +385,7 @@ void MainWindow::setBusy(bool busy)
     m_cancel->setEnabled(busy);
     m_fit->setEnabled(!busy);
     m_garment->setEnabled(!busy);
+    m_browser->setEnabled(!busy);
 }
 
 void MainWindow::showMessage(const QString& text)
@@ -406,26 +486,29 @@ QByteArray MainWindow::summaryJson() const
     QJsonObject root;
     QJsonArray views;
     for (FittingView* v : {m_viewA, m_viewB}) {
-        const importers::Scene* s = v->scene();
-        if (!s || (v == m_viewB && !m_compare->isChecked())) continue;
+        const widget::DrapeMeshPtr mesh = v->controller()->currentMesh();
+        if (!mesh || !v->lastResults() || (v == m_viewB && !m_compare->isChecked())) continue;
         QJsonObject o;
-        const cloth::SolverStatus& st = v->lastStatus();
-        o["garment"] = QString::fromStdString(to_string(s->garment));
+        const cloth::SolverStatus st = v->lastStatus();
+        o["garment"] = toString(v->garment());
         o["fabric"] = v->fabricName();
-        o["vertices"] = s->system->vertex_count();
-        o["triangles"] = int(s->system->mesh().F.rows());
+        o["vertices"] = mesh->vertexCount;
+        o["triangles"] = int(mesh->F.rows());
         o["outcome"] = QString::fromStdString(cloth::to_string(st.outcome));
         o["newton_iterations"] = double(st.newton_iterations);
         o["residual"] = st.residual;
         o["wall_seconds"] = st.wall_seconds;
         const cloth::Positions x = v->lastPositions();
-        if (s->mannequin && x.rows() > 0) {
-            const importers::Penetration p = importers::body_penetration(*s->mannequin, x);
+        if (mesh->body && x.rows() > 0) {
+            const importers::Penetration p = importers::body_penetration(*mesh->body, x);
             o["min_body_distance_m"] = p.min_distance;
             o["vertices_inside_body"] = p.inside;
-            o["waist_z_m"] = s->waist.z;
-            o["waist_radius_m"] = s->waist.max_radius;
-            const auto& b = s->mannequin->bounds;
+            if (v->garment() == GarmentChoice::Skirt) {
+                const importers::Girth waist = importers::find_waist(*mesh->body);
+                o["waist_z_m"] = waist.z;
+                o["waist_radius_m"] = waist.max_radius;
+            }
+            const auto& b = mesh->body->bounds;
             o["mannequin_bounding_box_m"] = QJsonObject{
                 {"min", QJsonArray{b.min.x(), b.min.y(), b.min.z()}},
                 {"max", QJsonArray{b.max.x(), b.max.y(), b.max.z()}}};
@@ -447,8 +530,12 @@ void MainWindow::runScript(const ScriptOptions& s)
         QTimer::singleShot(0, this, [this] { emit scriptFinished(1); });
     };
     const int gi = m_garment->findData(s.garment);
-    if (gi < 0) return fail(tr("unknown garment \"%1\" (expected skirt or tablecloth)").arg(s.garment));
+    if (gi < 0) return fail(tr("unknown garment \"%1\" (expected skirt, tablecloth or garment)").arg(s.garment));
     m_garment->setCurrentIndex(gi);
+    if (!s.garmentFile.isEmpty()) {
+        QString err;
+        if (!setGarmentFile(s.garmentFile, &err)) return fail(err);
+    }
     if (!s.fabric.isEmpty()) {
         const int i = findFabric(s.fabric);
         if (i < 0) return fail(tr("no fabric matches \"%1\"").arg(s.fabric));

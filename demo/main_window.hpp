@@ -1,7 +1,9 @@
 #pragma once
-// The demo app for fittings: choose a mannequin, a garment and a fabric (from
-// the library, the starter presets, or fitted now from a drape-test record),
-// drape it, orbit, compare two fabrics side by side, save a screenshot.
+// The demo app for fittings: choose a mannequin, a garment (the circle skirt,
+// the tablecloth, or an imported garment mesh) and a fabric (from the library
+// browser - search, weight, drape coefficient - or fitted now from a drape-test
+// record into the library), drape it, orbit, compare two fabrics side by side,
+// save a screenshot. Each view is the widget library's DrapeView.
 // A scripted mode runs one fitting without a user (for Xvfb, tests and docs).
 #include "demo/fitting_view.hpp"
 
@@ -20,6 +22,7 @@ class QLineEdit;
 class QProgressBar;
 class QPushButton;
 class QSplitter;
+class QTreeWidget;
 
 namespace drape::demo {
 
@@ -33,7 +36,8 @@ struct DemoOptions {
 
 /// What a scripted run does.
 struct ScriptOptions {
-    QString garment = "skirt"; ///< skirt | tablecloth
+    QString garment = "skirt"; ///< skirt | tablecloth | garment (with garmentFile)
+    QString garmentFile;       ///< an imported garment mesh (its top boundary is pinned)
     QString fabric;            ///< fabric name (substring match), empty = the first one
     QString fabric2;           ///< second fabric: compare side by side
     QString screenshot;        ///< PNG path
@@ -65,6 +69,11 @@ public:
     FittingView* viewA() const { return m_viewA; }
     FittingView* viewB() const { return m_viewB; }
     QComboBox* garmentBox() const { return m_garment; }
+    /// The library browser: every fabric with its weight and drape coefficient, filtered by the search text.
+    QTreeWidget* fabricBrowser() const { return m_browser; }
+    QLineEdit* fabricSearch() const { return m_search; }
+    /// Imports a garment mesh for the "Imported garment" choice; false (and a message) when it cannot.
+    bool setGarmentFile(const QString& path, QString* error = nullptr);
     QComboBox* fabricBoxA() const { return m_fabricA; }
     QComboBox* fabricBoxB() const { return m_fabricB; }
     QCheckBox* compareBox() const { return m_compare; }
@@ -80,6 +89,8 @@ signals:
 private:
     void buildUi();
     void reloadFabrics(const QString& select = {});
+    void filterBrowser(const QString& text);
+    void chooseGarmentFile();
     void onViewFinished();
     void fitFromRecord();
     void chooseMannequin();
@@ -94,6 +105,9 @@ private:
     QSplitter* m_split = nullptr;
     QLineEdit* m_mannequinPath = nullptr;
     QComboBox* m_garment = nullptr;
+    QLineEdit* m_search = nullptr;
+    QTreeWidget* m_browser = nullptr;
+    QString m_garmentFile;
     QComboBox* m_fabricA = nullptr;
     QComboBox* m_fabricB = nullptr;
     QCheckBox* m_compare = nullptr;

@@ -20,7 +20,7 @@ QString DrapeViewPlugin::group() const
 
 QString DrapeViewPlugin::toolTip() const
 {
-    return QStringLiteral("Live cloth drape simulation (Qt Quick 3D)");
+    return QStringLiteral("Cloth drape simulation (Qt Quick 3D): the drapemeter, garments on bodies, library fabrics");
 }
 
 QString DrapeViewPlugin::whatsThis() const
@@ -91,8 +91,8 @@ QString DrapeViewPlugin::domXml() const
   <property name="sampleDiameter"><double>300.0</double></property>
   <property name="discDiameter"><double>150.0</double></property>
   <property name="gridSize"><number>30</number></property>
-  <property name="integrator"><string>symplectic</string></property>
-  <property name="viewPreset"><string>close</string></property>
+  <property name="integrator"><enum>drape::widget::Drape::Symplectic</enum></property>
+  <property name="viewPreset"><enum>drape::widget::Drape::Close</enum></property>
   <property name="running"><bool>true</bool></property>
  </widget>
  <customwidgets>

@@ -7,9 +7,12 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <numbers>
 #include <cstdio>
+#include <chrono>
+#include <cstdlib>
 #include <random>
 
 namespace drape::importers {
@@ -85,14 +88,93 @@ Panel make_annulus(const Eigen::Vector2d& centre, double z, double inner_radius,
 
 Garment parse_garment(const std::string& name)
 {
-    if (name == "skirt") return Garment::Skirt;
+    if (name == "skirt" || name == "circle-skirt") return Garment::Skirt;
     if (name == "tablecloth") return Garment::Tablecloth;
-    throw ParameterError("garment: unknown \"" + name + "\" (expected skirt or tablecloth)");
+    throw ParameterError("garment: unknown \"" + name + "\" (expected circle-skirt or tablecloth)");
 }
 
 std::string to_string(Garment g)
 {
-    return g == Garment::Skirt ? "skirt" : "tablecloth";
+    switch (g) {
+    case Garment::Skirt: return "skirt";
+    case Garment::Tablecloth: return "tablecloth";
+    case Garment::Mesh: return "mesh";
+    }
+    return "skirt";
+}
+
+namespace {
+bool is_pin_name(std::string n)
+{
+    std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return n.rfind("pin", 0) == 0 || n.rfind("waist", 0) == 0;
+}
+} // namespace
+
+Scene make_garment_scene(std::shared_ptr<const Mannequin> m, const std::string& path, const fabric::FabricPreset& fabric,
+                         const ImportOptions& opt)
+{
+    if (!m) throw ParameterError("garment: no mannequin");
+    const ImportedScene scene = import_scene(path, opt);
+    ImportedMesh all = scene.merged();
+    weld_vertices(all.X, all.F);
+    std::vector<Eigen::Vector3d> pin_points;
+    std::string names;
+    for (const auto& mesh : scene.meshes) {
+        names += (names.empty() ? "" : ", ") + mesh.name;
+        if (is_pin_name(mesh.name))
+            for (Eigen::Index i = 0; i < mesh.X.rows(); ++i) pin_points.emplace_back(mesh.X.row(i).transpose());
+    }
+    if (pin_points.empty())
+        throw FileError(path + ": no mesh, object or group named 'pin...' or 'waist...' (found: " + names +
+                        "); declare the vertices that hold the garment, e.g. `g waist` before the waistband's faces in OBJ");
+    Scene s;
+    s.garment = Garment::Mesh;
+    s.mannequin = m;
+    s.waist = find_waist(*m);
+    s.fabric_name = fabric.name;
+    s.garment_name = path;
+    cloth::ClothMesh mesh = cloth::make_triangle_mesh(all.X, all.F, Eigen::Vector3d::UnitX());
+    cloth::ClothModel model = cloth::make_model(mesh, fabric.params, fabric.model);
+    s.system = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
+    int pinned = 0;
+    for (int i = 0; i < s.system->vertex_count(); ++i) {
+        const Eigen::Vector3d x = s.system->x.row(i).transpose();
+        for (const auto& p : pin_points)
+            if ((p - x).squaredNorm() == 0.0) {
+                s.system->set_pinned(i, true);
+                ++pinned;
+                break;
+            }
+    }
+    if (pinned == s.system->vertex_count())
+        throw FileError(path + ": every vertex is in a 'pin'/'waist' group: nothing is left to drape");
+    s.system->add_collider(m->contact);
+    s.system->add_collider(std::make_shared<cloth::PlaneCollider>(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()));
+    return s;
+}
+
+std::shared_ptr<const MeshCollider> lower_body_collider(const Mannequin& m, double z_top, const Eigen::Vector2d& axis)
+{
+    // The hips: the largest closed torso section between the waist and the crotch.
+    double keep = 0;
+    for (double f = 0.40; f <= 0.62; f += 0.02) {
+        const Girth g = measure_girth(m, m.bounds.min.z() + f * m.height(), 90);
+        if (g.rays_hit == g.rays) keep = std::max(keep, g.max_radius);
+    }
+    keep += 0.05;
+    std::vector<int> tris;
+    for (Eigen::Index t = 0; t < m.mesh.F.rows(); ++t) {
+        bool inside = true;
+        for (int k = 0; k < 3 && inside; ++k) {
+            const Eigen::Vector3d x = m.mesh.X.row(m.mesh.F(t, k)).transpose();
+            inside = x.z() <= z_top && std::hypot(x.x() - axis.x(), x.y() - axis.y()) <= keep;
+        }
+        if (inside) tris.push_back(static_cast<int>(t));
+    }
+    cloth::Triangles F(static_cast<Eigen::Index>(tris.size()), 3);
+    for (std::size_t i = 0; i < tris.size(); ++i) F.row(static_cast<Eigen::Index>(i)) = m.mesh.F.row(tris[i]);
+    return std::make_shared<MeshCollider>(m.mesh.X, F, Mannequin::kContactPadding);
 }
 
 cloth::Positions hang_skirt(const Mannequin& m, const Panel& p, const Eigen::Vector2d& centre, double z_band,
@@ -170,12 +252,13 @@ Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const fabric::FabricP
     Panel p = make_annulus(s.waist.centre, zband, r_in, r_out, opt.segments, rings);
     const cloth::FabricParams& fp = fabric.params; // a seed preset's continuum equivalent drapes any mesh
     s.fabric_name = fabric.name;
+    s.garment_name = "circle skirt";
     cloth::ClothMesh mesh = cloth::make_triangle_mesh(p.X, p.F, Eigen::Vector3d::UnitX());
     cloth::ClothModel model = cloth::make_model(mesh, fp, fabric.model);
     s.system = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
     for (int v : p.waistband) s.system->set_pinned(v, true);
-    s.system->x = hang_skirt(*m, p, s.waist.centre, zband, r_in, opt);
-    s.system->add_collider(m->contact);
+    if (opt.start == SkirtOptions::Start::Gathered) s.system->x = hang_skirt(*m, p, s.waist.centre, zband, r_in, opt);
+    s.system->add_collider(opt.start == SkirtOptions::Start::Flat ? lower_body_collider(*m, zband + 0.05, s.waist.centre) : m->contact);
     s.system->add_collider(std::make_shared<cloth::PlaneCollider>(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()));
     return s;
 }
@@ -191,6 +274,7 @@ Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& tab
     s.table = table;
     const cloth::FabricParams& fp = fabric.params; // a seed preset's continuum equivalent drapes any mesh
     s.fabric_name = fabric.name;
+    s.garment_name = "tablecloth";
     cloth::ClothMesh mesh = cloth::make_disc(table.cloth_diameter, grid, 0.0);
     cloth::ClothModel model = cloth::make_model(mesh, fp, fabric.model);
     s.system = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
@@ -218,6 +302,38 @@ Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& tab
                                                                      table.height, 2e-3));
     s.system->add_collider(std::make_shared<cloth::PlaneCollider>(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()));
     return s;
+}
+
+cloth::SolverStatus drape_to_rest(Scene& scene, const cloth::RestOptions& opt)
+{
+    cloth::ClothSystem& s = *scene.system;
+    if (scene.garment != Garment::Skirt || std::getenv("DRAPE_NO_DROP")) return cloth::run_to_rest(s, opt);
+    // The drop: implicit Euler from the flat pattern, as the skirt would fall in
+    // a fitting room; the folds are the fabric's.
+    const auto t0 = std::chrono::steady_clock::now();
+    cloth::Stepper stepper(s, cloth::Integrator::ImplicitEuler);
+    stepper.set_implicit_iterations(3);
+    const double dt = std::getenv("DRAPE_DROP_DT") ? std::atof(std::getenv("DRAPE_DROP_DT")) : 1.0 / 60.0;
+    const double T = std::getenv("DRAPE_DROP_T") ? std::atof(std::getenv("DRAPE_DROP_T")) : 1.5;
+    if (const char* a = std::getenv("DRAPE_DROP_AIR")) s.model().air_damping = std::atof(a);
+    cloth::SolverStatus drop;
+    s.v.setZero();
+    while (s.time < T) {
+        if (!stepper.step(dt)) break;
+        ++drop.steps;
+        if (opt.cancel && opt.cancel->load()) break;
+        if (opt.progress) {
+            drop.newton_iterations = stepper.linear_solves();
+            drop.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            drop.sim_time = s.time;
+            if (!opt.progress(drop)) break;
+        }
+    }
+    cloth::SolverStatus st = cloth::run_to_rest(s, opt);
+    st.newton_iterations += stepper.linear_solves();
+    st.steps += drop.steps;
+    st.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - st.wall_seconds;
+    return st;
 }
 
 cloth::RestOptions garment_rest_options()

@@ -44,9 +44,16 @@ struct SkirtOptions;
 cloth::Positions hang_skirt(const Mannequin& m, const Panel& p, const Eigen::Vector2d& centre, double z_band,
                             double r_in, const SkirtOptions& opt);
 
+/// The part of the body a skirt touches: the triangles below `z_top` [m] and
+/// within the hips' reach of the vertical axis through `axis` (the hips' widest
+/// section + 5 cm), padded like Mannequin::contact. Arms and hands held away
+/// from the body (an A-pose) are left out: a skirt dropped from the waist falls
+/// where they are, as in a fitting room with the arms raised.
+std::shared_ptr<const MeshCollider> lower_body_collider(const Mannequin& m, double z_top, const Eigen::Vector2d& axis);
+
 /// Garment choice.
-enum class Garment { Skirt, Tablecloth };
-Garment parse_garment(const std::string& name); ///< "skirt" | "tablecloth"; ParameterError otherwise
+enum class Garment { Skirt, Tablecloth, Mesh };
+Garment parse_garment(const std::string& name); ///< "skirt" (or "circle-skirt") | "tablecloth"; ParameterError otherwise
 std::string to_string(Garment g);
 
 /// A round table standing on the floor.
@@ -58,6 +65,10 @@ struct Table {
 
 /// Sizes of the generated skirt, relative to the measured waist.
 struct SkirtOptions {
+    /// Flat: the pattern as cut, a flat annulus at the waistband, dropped (the
+    /// fabric makes its own folds). Gathered: hung on a near-vertical cone
+    /// gathered into eight folds (the start decides the folds; for comparison).
+    enum class Start { Flat, Gathered } start = Start::Flat;
     double length = 0.50;       ///< [m] from waistband to hem, flat
     double ease = 0.012;        ///< [m] waistband radius beyond the waist's farthest point
     double lift = 0.02;         ///< [m] waistband above the waist
@@ -71,8 +82,9 @@ struct Scene {
     std::unique_ptr<cloth::ClothSystem> system;
     std::shared_ptr<const Mannequin> mannequin; ///< skirt only
     Table table;                                ///< tablecloth only
-    Girth waist;                                ///< skirt only
+    Girth waist;                                ///< skirt and garment meshes: the body's waist (its centre is the axis)
     std::string fabric_name;
+    std::string garment_name;                   ///< "circle skirt", "tablecloth" or the garment file
 };
 
 /// Skirt on the mannequin: annulus around the measured waist, waistband pinned,
@@ -80,11 +92,26 @@ struct Scene {
 /// preset is converted with fabric::continuum_from_seed.
 Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const fabric::FabricPreset& fabric,
                        const SkirtOptions& opt = {});
+/// A garment mesh from a file (OBJ or anything assimp reads), on the mannequin.
+/// The vertices that hold it are declared in the file: every vertex of a mesh,
+/// object or group whose name starts with "pin" or "waist" (case-insensitive;
+/// in OBJ: `g waist` before the waistband's faces) is pinned where it is. The
+/// rest drapes from the shape the file gives it. Colliders: the body and the
+/// floor. Throws FileError / ParameterError naming the file when it has no such
+/// group, or nothing else to drape.
+Scene make_garment_scene(std::shared_ptr<const Mannequin> m, const std::string& path, const fabric::FabricPreset& fabric,
+                         const ImportOptions& opt = {});
+
 /// Round tablecloth centred on a round table: colliders = table top (a
 /// PedestalCollider: top radius, height) + floor; a small symmetry-breaking
 /// lift as in the drapemeter so folds can form.
 Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& table = {}, int grid = 45,
                             std::uint64_t seed = 1);
+
+/// Brings a garment scene to rest by the path a fitting room would see (see
+/// garment_scene.cpp) and returns the solver status. Never throws on numerical
+/// trouble; cancellation and progress through `opt`.
+cloth::SolverStatus drape_to_rest(Scene& scene, const cloth::RestOptions& opt);
 
 /// Rest options of a garment drape: the static solver (each Newton iteration one
 /// sparse Cholesky) with a residual the eye cannot tell from exact rest.

@@ -1,22 +1,18 @@
+// DrapeController: the worker thread, the scene it fills and the commands.
+// The designable properties' setters and the fabric preset are in
+// drape_controller_settings.cpp.
 #include "widget/drape_controller.hpp"
 
-#include "widget/cloth_geometry.hpp"
 #include "widget/drape_worker.hpp"
-#include "widget/line_geometry.hpp"
+#include "widget/picking.hpp"
 
-#include "engine/core/error.hpp"
 #include "engine/cloth/params.hpp"
-#include "engine/fabric/seed_format.hpp"
 
-#include <Eigen/Geometry>
-
-#include <QImageReader>
-#include <QQuick3DTextureData>
 #include <QTimer>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
-#include <variant>
 
 namespace drape::widget {
 
@@ -28,18 +24,36 @@ DrapeController::DrapeController(QObject* parent) : QObject(parent)
 {
     qRegisterMetaType<DrapeMeshPtr>();
     qRegisterMetaType<DrapeFramePtr>();
+    qRegisterMetaType<DrapeResultsPtr>();
 
-    m_cloth = new ClothGeometry();
-    m_cloth->QObject::setParent(this);
-    m_simOutline = new LineGeometry();
-    m_simOutline->QObject::setParent(this);
-    m_measOutline = new LineGeometry();
-    m_measOutline->QObject::setParent(this);
-    m_textureData = new QQuick3DTextureData();
-    m_textureData->QObject::setParent(this);
+    m_scene = new Scene(this);
+    m_scene->setBackgroundColor(m_settings.backgroundColor);
+    m_scene->camera().setPreset(OrbitCamera::Preset::Iso);
+    connect(m_scene, &Scene::cameraChanged, this, &DrapeController::cameraChanged);
+    connect(m_scene, &Scene::cameraMoved, this, [this] {
+        if (m_settings.viewPreset == Drape::Free) return;
+        m_settings.viewPreset = Drape::Free;
+        emit viewPresetChanged(m_settings.viewPreset);
+    });
+    connect(m_scene, &Scene::clicked, this, [this](double x, double y, double w, double h) {
+        if (m_settings.pickEnabled) togglePinAt(x, y, w, h);
+    });
+
+    m_cloth = m_scene->addMesh(QStringLiteral("cloth"));
+    m_cloth->setColor(m_settings.clothColor);
     m_floorBoards = new FloorBoardsGeometry();
-    m_floorBoards->QObject::setParent(this);
-    m_camera.setPreset(OrbitCamera::Preset::Iso);
+    SceneItem* boards = m_scene->addGeometry(QStringLiteral("floorBoards"), m_floorBoards);
+    boards->setColor(QColor(0x1e, 0x1e, 0x1e));
+    boards->setMaterial(true, false, 0.95, 0.05);
+    m_simOutline = new LineGeometry();
+    m_measOutline = new LineGeometry();
+    for (auto [name, geometry, color] : {std::tuple{"simulatedOutline", m_simOutline, QColor(0xff, 0x8c, 0x00)},
+                                         std::tuple{"measuredOutline", m_measOutline, QColor(0x20, 0xa0, 0xff)}}) {
+        SceneItem* line = m_scene->addGeometry(QString::fromLatin1(name), geometry);
+        line->setColor(color);
+        line->setMaterial(false, true, 0.9, 0.1);
+    }
+    updateVisibility();
 
     m_worker = new DrapeWorker();
     m_worker->moveToThread(&m_thread);
@@ -50,10 +64,11 @@ DrapeController::DrapeController(QObject* parent) : QObject(parent)
     connect(m_worker, &DrapeWorker::restReached, this, [this](double, double) { emit restReached(); });
     connect(m_worker, &DrapeWorker::errorOccurred, this, &DrapeController::fail);
     connect(m_worker, &DrapeWorker::resultsSaved, this, &DrapeController::resultsSaved);
+    connect(m_worker, &DrapeWorker::resultsReady, this, &DrapeController::onResults);
     m_thread.setObjectName(QStringLiteral("drape-sim"));
     m_thread.start();
-    toWorker([w = m_worker, integ = cloth::parse_integrator(m_integrator.toStdString())] { w->setIntegrator(integ); });
-    toWorker([w = m_worker, s = m_restSpeed, r = m_restResidual] { w->setRestCriteria(s, r); });
+    toWorker([w = m_worker, integ = toEngine(m_settings.integrator)] { w->setIntegrator(integ); });
+    toWorker([w = m_worker, s = m_settings.restSpeed, r = m_settings.restResidual] { w->setRestCriteria(s, r); });
 
     connect(&m_job, &LongJob::started, this, [this](const QString& n) {
         emit jobStarted(n);
@@ -76,270 +91,14 @@ DrapeController::~DrapeController()
     m_thread.wait();
 }
 
-template <class F>
-void DrapeController::toWorker(F&& f)
+QObject* DrapeController::workerObject() const
 {
-    QMetaObject::invokeMethod(m_worker, std::forward<F>(f), Qt::QueuedConnection);
+    return m_worker;
 }
 
 void DrapeController::fail(const QString& message)
 {
     emit errorOccurred(message);
-}
-
-// ---- properties ------------------------------------------------------------
-
-void DrapeController::setFabricPreset(const QString& preset)
-{
-    if (preset == m_fabricPreset) return;
-    applyFabricPreset(preset);
-}
-
-bool DrapeController::applyFabricPreset(const QString& preset)
-{
-    fabric::FabricPreset p;
-    try {
-        // Presets are small JSON files: reading them here lets the property
-        // reject a bad file at once (the previous fabric stays in use).
-        if (!preset.isEmpty()) p = fabric::load_fabric(preset.toStdString());
-    } catch (const std::exception& e) {
-        fail(QStringLiteral("fabric preset '%1': %2").arg(preset, QString::fromUtf8(e.what())));
-        return false;
-    }
-    m_preset = std::move(p);
-    const bool changed = preset != m_fabricPreset;
-    m_fabricPreset = preset;
-    if (changed) emit fabricPresetChanged(m_fabricPreset);
-    emit fabricParametersChanged();
-    scheduleRebuild();
-    return true;
-}
-
-void DrapeController::setSampleDiameter(double mm)
-{
-    if (mm == m_sampleDiameterMm) return;
-    if (!(mm > 0) || !std::isfinite(mm)) {
-        fail(QStringLiteral("sampleDiameter: %1 mm is not a positive length").arg(mm));
-        return;
-    }
-    m_sampleDiameterMm = mm;
-    emit sampleDiameterChanged(mm);
-    scheduleRebuild();
-}
-
-void DrapeController::setDiscDiameter(double mm)
-{
-    if (mm == m_discDiameterMm) return;
-    if (!(mm > 0) || !std::isfinite(mm)) {
-        fail(QStringLiteral("discDiameter: %1 mm is not a positive length").arg(mm));
-        return;
-    }
-    m_discDiameterMm = mm;
-    emit discDiameterChanged(mm);
-    scheduleRebuild();
-}
-
-void DrapeController::setGridSize(int n)
-{
-    if (n == m_gridSize) return;
-    if (n < 5 || n > 1000) {
-        fail(QStringLiteral("gridSize: %1 nodes across is outside [5, 1000]").arg(n));
-        return;
-    }
-    m_gridSize = n;
-    emit gridSizeChanged(n);
-    scheduleRebuild();
-}
-
-void DrapeController::setClothShape(const QString& shape)
-{
-    if (shape == m_shape) return;
-    if (shape != QLatin1String("disc") && shape != QLatin1String("square")) {
-        fail(QStringLiteral("clothShape: '%1' is not a shape (use disc or square)").arg(shape));
-        return;
-    }
-    m_shape = shape;
-    emit clothShapeChanged(shape);
-    scheduleRebuild();
-}
-
-void DrapeController::setIntegrator(const QString& name)
-{
-    if (name == m_integrator) return;
-    cloth::Integrator integ;
-    try {
-        integ = cloth::parse_integrator(name.toStdString());
-    } catch (const std::exception& e) {
-        fail(QStringLiteral("integrator '%1': %2").arg(name, QString::fromUtf8(e.what())));
-        return;
-    }
-    m_integrator = name;
-    emit integratorChanged(name);
-    toWorker([w = m_worker, integ] { w->setIntegrator(integ); });
-}
-
-void DrapeController::setTexture(const QString& path)
-{
-    if (path == m_texture) return;
-    if (!path.isEmpty()) {
-        QImageReader reader(path);
-        reader.setAutoTransform(true);
-        const QImage img = reader.read();
-        if (img.isNull()) {
-            fail(QStringLiteral("texture '%1': %2").arg(path, reader.errorString()));
-            return; // keep the previous texture and property value
-        }
-        uploadTexture(img);
-        m_hasTexture = true;
-    } else {
-        m_hasTexture = false;
-    }
-    m_texture = path;
-    emit textureChanged(m_texture);
-}
-
-bool DrapeController::setTextureImage(const QImage& image)
-{
-    if (image.isNull()) {
-        fail(QStringLiteral("texture: the image is empty"));
-        return false;
-    }
-    uploadTexture(image);
-    m_hasTexture = true;
-    m_texture.clear(); // an in-memory image has no path
-    emit textureChanged(m_texture);
-    return true;
-}
-
-void DrapeController::uploadTexture(const QImage& image)
-{
-    // Texture coordinate v grows along the weft (+y, image up in the top view),
-    // while image rows run downwards: mirror so the image is upright seen from above.
-    const QImage rgba = image.convertToFormat(QImage::Format_RGBA8888).mirrored(false, true);
-    m_textureData->setSize(rgba.size());
-    m_textureData->setFormat(QQuick3DTextureData::RGBA8);
-    m_textureData->setHasTransparency(false);
-    m_textureData->setTextureData(QByteArray(reinterpret_cast<const char*>(rgba.constBits()), rgba.sizeInBytes()));
-}
-
-void DrapeController::setRunning(bool on)
-{
-    if (on == m_running) return;
-    m_running = on;
-    emit runningChanged(on);
-    if (on) {
-        if (!m_rebuildPending) toWorker([w = m_worker] { w->play(); }); // else rebuildNow() plays
-    } else {
-        m_worker->requestCancel(); // a static solve stops at its next check
-        toWorker([w = m_worker] { w->pause(); });
-    }
-}
-
-void DrapeController::onWorkerRunning(bool on)
-{
-    if (on == m_running) return;
-    m_running = on;
-    emit runningChanged(on);
-}
-
-void DrapeController::setTimeStep(double dt)
-{
-    if (dt == m_timeStep) return;
-    if (!(dt >= 0) || !std::isfinite(dt) || dt > 1.0) {
-        fail(QStringLiteral("timeStep: %1 s is outside [0, 1] (0 = automatic)").arg(dt));
-        return;
-    }
-    m_timeStep = dt;
-    emit timeStepChanged(dt);
-    toWorker([w = m_worker, dt] { w->setTimeStep(dt); });
-}
-
-void DrapeController::setRestSpeed(double v)
-{
-    if (v == m_restSpeed) return;
-    if (!(v > 0) || !std::isfinite(v)) {
-        fail(QStringLiteral("restSpeed: %1 m/s must be positive").arg(v));
-        return;
-    }
-    m_restSpeed = v;
-    emit restSpeedChanged(v);
-    toWorker([w = m_worker, s = m_restSpeed, r = m_restResidual] { w->setRestCriteria(s, r); });
-}
-
-void DrapeController::setRestResidual(double r)
-{
-    if (r == m_restResidual) return;
-    if (!(r > 0) || !std::isfinite(r)) {
-        fail(QStringLiteral("restResidual: %1 must be positive").arg(r));
-        return;
-    }
-    m_restResidual = r;
-    emit restResidualChanged(r);
-    toWorker([w = m_worker, s = m_restSpeed, rr = m_restResidual] { w->setRestCriteria(s, rr); });
-}
-
-void DrapeController::setViewPreset(const QString& name)
-{
-    if (name == m_viewPreset) return;
-    if (name == QLatin1String("top"))
-        m_camera.setPreset(OrbitCamera::Preset::Top);
-    else if (name == QLatin1String("side"))
-        m_camera.setPreset(OrbitCamera::Preset::Side);
-    else if (name == QLatin1String("iso"))
-        m_camera.setPreset(OrbitCamera::Preset::Iso);
-    else if (name == QLatin1String("close"))
-        m_camera.setPreset(OrbitCamera::Preset::Close);
-    else if (name != QLatin1String("free")) {
-        fail(QStringLiteral("viewPreset: '%1' is not a view (use top, side, iso, close or free)").arg(name));
-        return;
-    }
-    m_viewPreset = name;
-    emit viewPresetChanged(name);
-    emit cameraChanged();
-}
-
-void DrapeController::setClothColor(const QColor& c)
-{
-    if (c == m_clothColor) return;
-    m_clothColor = c;
-    emit clothColorChanged(c);
-}
-
-void DrapeController::setBackgroundColor(const QColor& c)
-{
-    if (c == m_backgroundColor) return;
-    m_backgroundColor = c;
-    emit backgroundColorChanged(c);
-}
-
-void DrapeController::setShowColliders(bool on)
-{
-    if (on == m_showColliders) return;
-    m_showColliders = on;
-    emit showCollidersChanged(on);
-}
-
-void DrapeController::setShowOutlines(bool on)
-{
-    if (on == m_showOutlines) return;
-    m_showOutlines = on;
-    emit showOutlinesChanged(on);
-    toWorker([w = m_worker, on] { w->setOutlineWanted(on); });
-    if (!on) m_simOutline->clearPolygon();
-}
-
-void DrapeController::setLabFloor(bool on)
-{
-    if (on == m_labFloor) return;
-    m_labFloor = on;
-    emit labFloorChanged(on);
-}
-
-void DrapeController::setPickEnabled(bool on)
-{
-    if (on == m_pickEnabled) return;
-    m_pickEnabled = on;
-    emit pickEnabledChanged(on);
 }
 
 int DrapeController::vertexCount() const
@@ -355,6 +114,7 @@ double DrapeController::simulatedTime() const
 QString DrapeController::statusText() const
 {
     if (!m_mesh || !m_frame) return QStringLiteral("no cloth");
+    if (!m_frame->status.isEmpty()) return QStringLiteral("%1 | %2").arg(m_mesh->description, m_frame->status);
     return QStringLiteral("%1 | t = %2 s, %3 steps, max speed %4 m/s%5")
         .arg(m_mesh->description)
         .arg(m_frame->simTime, 0, 'f', 3)
@@ -385,58 +145,80 @@ void DrapeController::rebuildNow()
     m_rebuildPending = false;
     auto spec = std::make_shared<DrapeSpec>();
     spec->preset = m_preset;
-    spec->presetName = m_fabricPreset;
-    spec->shape = m_shape;
-    spec->setup.sample_diameter = m_sampleDiameterMm * 1e-3;
-    spec->setup.disc_diameter = m_discDiameterMm * 1e-3;
-    spec->setup.grid = m_gridSize;
+    spec->presetName = m_settings.fabricPreset;
+    spec->shape = m_settings.clothShape;
+    spec->body = m_body;
+    spec->bodyFile = m_settings.bodyFile;
+    spec->garment = m_garment;
+    spec->garmentFile = m_settings.garmentFile;
+    spec->setup.sample_diameter = m_settings.sampleDiameter * 1e-3;
+    spec->setup.disc_diameter = m_settings.discDiameter * 1e-3;
+    spec->setup.grid = m_settings.gridSize;
     m_worker->requestCancel(); // a running static solve gives way to the rebuild
     toWorker([w = m_worker, spec = std::shared_ptr<const DrapeSpec>(spec)] { w->rebuild(spec); });
-    if (m_running) toWorker([w = m_worker] { w->play(); });
+    if (m_settings.running) toWorker([w = m_worker] { w->play(); });
 }
 
 void DrapeController::onMesh(const DrapeMeshPtr& mesh)
 {
     m_mesh = mesh;
     m_frame.reset();
-    m_cloth->setMesh(mesh);
-    m_pinned.clear(); // a new system starts without pins
-    m_colliderShapes = mesh->colliders;
-    rebuildColliderList();
+    m_cloth->setTopology(mesh->F, mesh->vertexCount, mesh->texcoord); // drawn again with the next frame
+    m_pinned.clear(); // a new system starts with the pins it was built with (garments)
+    for (int i : mesh->pinnedAtStart) m_pinned.insert(i);
+    m_results.reset();
+    showBody(mesh->body);
+    showColliders(mesh->colliders);
+    applyViewPreset();
     emit meshChanged();
     updatePinnedPositions();
 }
 
-void DrapeController::rebuildColliderList()
+void DrapeController::showColliders(const std::vector<ColliderShape>& shapes)
 {
+    for (const QString& name : std::as_const(m_colliderItems)) m_scene->removeItem(name);
+    m_colliderItems.clear();
     QVariantList list;
     bool hasFloor = false;
-    for (const ColliderShape& c : m_colliderShapes) {
-        QVariantMap m;
+    for (const ColliderShape& c : shapes) {
         const bool plane = c.kind == QLatin1String("plane");
         // Only a horizontal floor gets the lab's boards.
-        const bool boards = plane && c.normal.y() > 0.99f;
-        if (boards) {
+        if (plane && c.normal.y() > 0.99f) {
             m_floorBoards->setFloorHeight(double(c.position.y()));
             hasFloor = true;
         }
-        m[QStringLiteral("kind")] = c.kind;
-        m[QStringLiteral("source")] = c.source;
-        m[QStringLiteral("position")] = c.position;
-        m[QStringLiteral("scale")] = c.scale;
-        m[QStringLiteral("rotation")] = plane ? QQuaternion::rotationTo(QVector3D(0, 0, 1), c.normal) : QQuaternion();
+        const QQuaternion rotation = plane ? QQuaternion::rotationTo(QVector3D(0, 0, 1), c.normal) : QQuaternion();
         // The lab's stand: white floor sheet, neutral grey pedestal.
-        m[QStringLiteral("color")] = plane ? QColor(0xe6, 0xe6, 0xe2)
-                                     : c.kind == QLatin1String("pedestal") ? QColor(0x80, 0x80, 0x80)
-                                                                           : QColor(0x6a, 0x8c, 0xb0);
-        list.push_back(m);
+        const QColor color = plane ? QColor(0xe6, 0xe6, 0xe2)
+                             : c.kind == QLatin1String("pedestal") ? QColor(0x80, 0x80, 0x80)
+                                                                   : QColor(0x6a, 0x8c, 0xb0);
+        const QString name = QStringLiteral("collider-%1-%2").arg(c.kind).arg(m_colliderItems.size());
+        SceneItem* item = m_scene->addShape(name, c.source, c.position, c.scale, rotation);
+        item->setColor(color);
+        item->setMaterial(true, true, 0.95, 0.05);
+        m_colliderItems << name;
+        list.push_back(QVariantMap{{QStringLiteral("kind"), c.kind},
+                                   {QStringLiteral("source"), c.source},
+                                   {QStringLiteral("position"), c.position},
+                                   {QStringLiteral("scale"), c.scale},
+                                   {QStringLiteral("rotation"), rotation},
+                                   {QStringLiteral("color"), color}});
     }
     m_colliders = list;
-    if (hasFloor != m_hasFloor) {
-        m_hasFloor = hasFloor;
-        emit labFloorChanged(m_labFloor);
-    }
+    m_hasFloor = hasFloor;
+    updateVisibility();
     emit collidersChanged();
+}
+
+void DrapeController::updateVisibility()
+{
+    for (const QString& name : std::as_const(m_colliderItems))
+        if (SceneItem* item = m_scene->item(name)) item->setVisible(m_settings.showColliders);
+    const bool drapemeter = !m_mesh || isDrapemeter(m_mesh->shape);
+    m_scene->item(QStringLiteral("floorBoards"))->setVisible(m_settings.showColliders && m_settings.labFloor && m_hasFloor && drapemeter);
+    if (SceneItem* body = m_scene->item(QStringLiteral("body"))) body->setVisible(m_settings.showColliders);
+    m_scene->item(QStringLiteral("simulatedOutline"))->setVisible(m_settings.showOutlines);
+    m_scene->item(QStringLiteral("measuredOutline"))->setVisible(m_settings.showOutlines);
 }
 
 void DrapeController::onFrame(const DrapeFramePtr& frame)
@@ -446,26 +228,39 @@ void DrapeController::onFrame(const DrapeFramePtr& frame)
         return; // a frame of a cloth that has been replaced
     }
     m_frame = frame;
-    m_cloth->setFrame(frame);
-    if (m_showOutlines && !frame->outline.empty()) m_simOutline->setPolygon(frame->outline, kOutlineHeight);
-    updatePinnedPositions();
+    m_cloth->setVertices(frame->vertices);
+    m_progressFraction = frame->fraction;
+    if (m_settings.showOutlines && !frame->outline.empty()) m_simOutline->setPolygon(frame->outline, kOutlineHeight);
+    updatePinnedPositions(); // and the status line
     m_worker->frameConsumed();
     emit progress(frame->simTime, frame->maxSpeed);
+    if (frame->fraction >= 0 || !frame->status.isEmpty()) emit drapeProgress(frame->fraction, frame->status);
     emit frameApplied();
 }
 
 void DrapeController::updatePinnedPositions()
 {
     QVariantList list;
+    std::vector<Eigen::Vector3d> points;
     if (m_frame) {
-        QList<int> sorted(m_pinned.begin(), m_pinned.end());
-        std::sort(sorted.begin(), sorted.end());
-        for (int i : sorted)
-            if (i >= 0 && i < m_frame->x.rows()) list.push_back(toScene(m_frame->x(i, 0), m_frame->x(i, 1), m_frame->x(i, 2)));
+        for (int i : pinnedVertices())
+            if (i >= 0 && i < m_frame->x.rows()) {
+                points.emplace_back(m_frame->x.row(i).transpose());
+                list.push_back(toScene(m_frame->x(i, 0), m_frame->x(i, 1), m_frame->x(i, 2)));
+            }
     }
+    m_scene->setMarkers(points, 0.004, QColor(0xff, 0xd0, 0x00));
+    m_scene->setStatusText(statusText());
     if (list == m_pinnedPositions) return;
     m_pinnedPositions = list;
     emit pinnedChanged();
+}
+
+void DrapeController::onWorkerRunning(bool on)
+{
+    if (on == m_settings.running) return;
+    m_settings.running = on;
+    emit runningChanged(on);
 }
 
 // ---- commands ----------------------------------------------------------------
@@ -482,7 +277,7 @@ void DrapeController::pause()
 
 void DrapeController::step()
 {
-    if (m_running) setRunning(false);
+    if (m_settings.running) setRunning(false);
     toWorker([w = m_worker] { w->stepOnce(); });
 }
 
@@ -504,75 +299,10 @@ void DrapeController::clearExtraColliders()
     toWorker([w = m_worker] { w->clearExtraColliders(); });
 }
 
-void DrapeController::orbit(double dxPixels, double dyPixels)
-{
-    m_camera.orbit(-dxPixels * 0.01, dyPixels * 0.01); // [rad per pixel]
-    if (m_viewPreset != QLatin1String("free")) {
-        m_viewPreset = QStringLiteral("free");
-        emit viewPresetChanged(m_viewPreset);
-    }
-    emit cameraChanged();
-}
-
-void DrapeController::pan(double dxPixels, double dyPixels, double viewHeight)
-{
-    if (!(viewHeight > 0)) return;
-    m_camera.pan(dxPixels / viewHeight, dyPixels / viewHeight);
-    if (m_viewPreset != QLatin1String("free")) {
-        m_viewPreset = QStringLiteral("free");
-        emit viewPresetChanged(m_viewPreset);
-    }
-    emit cameraChanged();
-}
-
-void DrapeController::zoom(double wheelDelta)
-{
-    m_camera.zoom(std::pow(0.999, wheelDelta)); // one notch (120) = 11 % closer
-    emit cameraChanged();
-}
-
 int DrapeController::pickVertex(double x, double y, double w, double h) const
 {
-    if (!m_frame || !m_mesh || w <= 0 || h <= 0) return -1;
-    Eigen::Vector3d o, d;
-    m_camera.ray(x, y, w, h, o, d);
-    const cloth::Positions& X = m_frame->x;
-    const cloth::Triangles& F = m_mesh->F;
-    double best = std::numeric_limits<double>::infinity();
-    Eigen::Index bestT = -1;
-    // Moller-Trumbore against every triangle: a 10,000-vertex cloth takes well
-    // under a millisecond, and both faces count (the cloth is double-sided).
-    for (Eigen::Index t = 0; t < F.rows(); ++t) {
-        const Eigen::Vector3d a = X.row(F(t, 0)), b = X.row(F(t, 1)), c = X.row(F(t, 2));
-        const Eigen::Vector3d e1 = b - a, e2 = c - a, p = d.cross(e2);
-        const double det = e1.dot(p);
-        if (std::abs(det) < 1e-18) continue;
-        const double inv = 1.0 / det;
-        const Eigen::Vector3d s = o - a;
-        const double u = s.dot(p) * inv;
-        if (u < 0 || u > 1) continue;
-        const Eigen::Vector3d q = s.cross(e1);
-        const double v = d.dot(q) * inv;
-        if (v < 0 || u + v > 1) continue;
-        const double dist = e2.dot(q) * inv;
-        if (dist > 0 && dist < best) {
-            best = dist;
-            bestT = t;
-        }
-    }
-    if (bestT < 0) return -1;
-    const Eigen::Vector3d hit = o + best * d;
-    int vertex = -1;
-    double nearest = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < 3; ++k) {
-        const int i = F(bestT, k);
-        const double r = (X.row(i).transpose() - hit).squaredNorm();
-        if (r < nearest) {
-            nearest = r;
-            vertex = i;
-        }
-    }
-    return vertex;
+    if (!m_frame || !m_mesh) return -1;
+    return widget::pickVertex(m_scene->camera(), m_frame->x, m_mesh->F, x, y, w, h);
 }
 
 int DrapeController::togglePinAt(double x, double y, double w, double h)
@@ -634,10 +364,7 @@ double DrapeController::vertexMass(int vertex) const
 
 QPointF DrapeController::projectToView(const QVector3D& worldMetres, double w, double h) const
 {
-    double px = 0, py = 0;
-    if (!m_camera.project(Eigen::Vector3d(worldMetres.x(), worldMetres.y(), worldMetres.z()), w, h, px, py))
-        return {std::nan(""), std::nan("")};
-    return {px, py};
+    return m_scene->projectToView(Eigen::Vector3d(worldMetres.x(), worldMetres.y(), worldMetres.z()), w, h);
 }
 
 void DrapeController::addSphereCollider(const QVector3D& centreMetres, double radiusMetres)
@@ -652,68 +379,121 @@ void DrapeController::addSphereCollider(const QVector3D& centreMetres, double ra
 
 void DrapeController::saveResults(const QString& jsonPath)
 {
-    toWorker([w = m_worker, jsonPath, integ = m_integrator] { w->saveResults(jsonPath, integ); });
+    toWorker([w = m_worker, jsonPath, integ = toString(m_settings.integrator)] { w->saveResults(jsonPath, integ); });
 }
 
-bool DrapeController::saveFabricPreset(const QString& path)
+// ---- bodies, garments, rest, results ------------------------------------------------
+
+void DrapeController::showBody(const std::shared_ptr<const importers::Mannequin>& body)
 {
-    try {
-        if (path.isEmpty()) throw FileError("save fabric preset: empty file name");
-        fabric::save_fabric(m_preset, path.toStdString());
-    } catch (const std::exception& e) {
-        fail(QStringLiteral("save fabric preset '%1': %2").arg(path, QString::fromUtf8(e.what())));
-        return false;
+    if (body == m_drawnBody) return;
+    m_drawnBody = body;
+    if (!body) {
+        m_scene->removeItem(QStringLiteral("body"));
+        return;
     }
-    return true;
+    SceneItem* item = m_scene->addMesh(QStringLiteral("body"), body->mesh.X, body->mesh.F);
+    item->setColor(QColor(0xd9, 0xc7, 0xb8));
+    item->setMaterial(true, true, 0.8, 0.15);
+    item->setVisible(m_settings.showColliders);
 }
 
-QVariantList DrapeController::fabricParameters() const
+void DrapeController::applyViewPreset()
 {
-    QVariantList out;
-    // A seed preset shows its continuum equivalents, read-only (its grid constants are the physics).
-    const bool editable = !m_preset.is_seed();
-    const cloth::FabricParams& shown = m_preset.params;
-    for (const cloth::ParamSpec& s : cloth::param_table()) {
-        QVariantMap m;
-        m[QStringLiteral("key")] = QString::fromUtf8(s.key.data(), qsizetype(s.key.size()));
-        m[QStringLiteral("unit")] = QString::fromUtf8(s.unit.data(), qsizetype(s.unit.size()));
-        m[QStringLiteral("doc")] = QString::fromUtf8(s.doc.data(), qsizetype(s.doc.size()));
-        m[QStringLiteral("value")] = shown[s.id];
-        m[QStringLiteral("lower")] = s.lower;
-        m[QStringLiteral("upper")] = s.upper;
-        m[QStringLiteral("defaultValue")] = s.default_value;
-        m[QStringLiteral("logScale")] = s.log_scale;
-        m[QStringLiteral("editable")] = editable;
-        out.push_back(m);
+    OrbitCamera& cam = m_scene->camera();
+    switch (m_settings.viewPreset) {
+    case Drape::Top: cam.setPreset(OrbitCamera::Preset::Top); break;
+    case Drape::Side: cam.setPreset(OrbitCamera::Preset::Side); break;
+    case Drape::Iso: cam.setPreset(OrbitCamera::Preset::Iso); break;
+    case Drape::Close: cam.setPreset(OrbitCamera::Preset::Close); break;
+    case Drape::Free: return; // where the user left it
     }
+    if (m_mesh && !isDrapemeter(m_mesh->shape)) {
+        // The lab's stations look at the pedestal: a garment is framed from the
+        // same direction, at a distance that shows it and its body whole.
+        const Eigen::Vector3d lo = m_mesh->boundsMin, hi = m_mesh->boundsMax;
+        cam.target = 0.5 * (lo + hi);
+        const double radius = 0.5 * (hi - lo).norm();
+        cam.distance = std::clamp(1.1 * radius / std::sin(0.5 * cam.fovY), 0.05, 50.0);
+    }
+    m_scene->cameraUpdated();
+}
+
+void DrapeController::onResults(const DrapeResultsPtr& results)
+{
+    if (!results || !m_mesh || results->generation != m_mesh->generation) return;
+    m_results = results;
+    emit resultsReady();
+}
+
+void DrapeController::drapeToRest()
+{
+    if (m_rebuildPending) rebuildNow();
+    m_worker->requestCancel(); // a running static solve gives way
+    toWorker([w = m_worker] { w->pause(); });
+    toWorker([w = m_worker] { w->drapeToRest(); });
+}
+
+void DrapeController::cancel()
+{
+    setRunning(false);
+    m_worker->requestCancel();
+}
+
+double DrapeController::drapeCoefficient() const
+{
+    return m_results && m_results->drape ? m_results->drape->metrics.drape_coefficient_percent
+                                         : std::numeric_limits<double>::quiet_NaN();
+}
+
+int DrapeController::nodeCount() const
+{
+    return m_results && m_results->drape ? m_results->drape->metrics.node_count : -1;
+}
+
+cloth::Positions DrapeController::positions() const
+{
+    return m_frame ? m_frame->x : cloth::Positions();
+}
+
+QList<QVector3D> DrapeController::vertexPositions() const
+{
+    QList<QVector3D> out;
+    if (!m_frame) return out;
+    out.reserve(m_frame->x.rows());
+    for (Eigen::Index i = 0; i < m_frame->x.rows(); ++i)
+        out.push_back(QVector3D(float(m_frame->x(i, 0)), float(m_frame->x(i, 1)), float(m_frame->x(i, 2))));
     return out;
 }
 
-bool DrapeController::setFabricParameter(const QString& key, double value)
+QVariantMap DrapeController::results() const
 {
-    const QByteArray k = key.toUtf8();
-    const cloth::ParamSpec* s = cloth::find_param(std::string_view(k.constData(), std::size_t(k.size())));
-    if (!s) {
-        fail(QStringLiteral("fabric parameter '%1': no such parameter").arg(key));
-        return false;
+    QVariantMap m;
+    if (!m_results) return m;
+    const DrapeResults& r = *m_results;
+    m[QStringLiteral("vertices")] = int(r.x.rows());
+    m[QStringLiteral("outcome")] = QString::fromStdString(cloth::to_string(r.status.outcome));
+    m[QStringLiteral("newtonIterations")] = qlonglong(r.status.newton_iterations);
+    m[QStringLiteral("residual")] = r.status.residual;
+    m[QStringLiteral("wallSeconds")] = r.status.wall_seconds;
+    if (r.x.rows() > 0) {
+        m[QStringLiteral("minZM")] = r.x.col(2).minCoeff();
+        m[QStringLiteral("maxZM")] = r.x.col(2).maxCoeff();
     }
-    if (m_preset.is_seed()) {
-        fail(QStringLiteral("fabric parameter '%1': the preset holds the seed's grid constants; "
-                            "edit them in the preset file").arg(key));
-        return false;
+    if (r.drape) {
+        const cloth::DrapeMetrics& d = r.drape->metrics;
+        m[QStringLiteral("drapeCoefficientPercent")] = d.drape_coefficient_percent;
+        m[QStringLiteral("nodeCount")] = d.node_count;
+        m[QStringLiteral("shadowAreaM2")] = d.shadow_area_m2;
+        m[QStringLiteral("meanRadiusM")] = d.mean_radius_m;
+        m[QStringLiteral("hemMinZM")] = r.drape->hem.min_z;
+        m[QStringLiteral("hemMaxZM")] = r.drape->hem.max_z;
     }
-    cloth::FabricParams edited = m_preset.params;
-    edited[s->id] = value;
-    try {
-        edited.validate("fabric parameter");
-    } catch (const std::exception& e) {
-        fail(QString::fromUtf8(e.what()));
-        return false;
+    if (r.penetration) {
+        m[QStringLiteral("minBodyDistanceM")] = r.penetration->min_distance;
+        m[QStringLiteral("verticesInsideBody")] = r.penetration->inside;
     }
-    m_preset.set_params(edited);
-    emit fabricParametersChanged();
-    scheduleRebuild();
-    return true;
+    return m;
 }
 
 void DrapeController::showMeasuredOutline(const QPolygonF& outlineMetres)

@@ -1,73 +1,61 @@
 #pragma once
-// DrapeController: the state and commands of a drape view, shared by the
-// QWidget (DrapeView) and the QML scene (Drapekit.DrapeScene). It owns the
-// worker thread that runs the engine, the Qt Quick 3D geometry objects, the
-// orbit camera, the texture and the long-job runner.
+// DrapeController: the drape view's state and commands, shared by the QWidget
+// (DrapeView) and the QML scene (Drapekit.DrapeScene). It owns the worker
+// thread that runs the engine and the long-job runner, and it is a client of a
+// Scene: the cloth is a SceneMesh the worker's frames update, the body a
+// SceneMesh, the colliders primitives, the outlines and floor boards geometry
+// items, the pins markers.
+//
+// What drapes (clothShape): the drapemeter specimen (Disc) or a square sheet;
+// the built-in circle skirt on a body; a round tablecloth; or a host's garment
+// mesh with its pinned (waist) vertices on a body (bodyFile or setBody). The
+// fabric: a typed preset (setFabric) or a name (fabricPreset: a file, a
+// fabric-library name, a starter). Run with `running` (the chosen integrator)
+// or drapeToRest() (the static solver, with a progress fraction); cancel();
+// read back positions() and the metrics (drapeCoefficient, results()).
 //
 // Units: sampleDiameter and discDiameter are in millimetres (the lab's and a
 // CAD user's unit); everything else is SI (timeStep [s], restSpeed [m/s],
-// masses [kg], collider positions [m] in Drapekit's world frame: z up, origin
-// at the pedestal top centre).
-#include "widget/cloth_geometry.hpp"
+// masses [kg], positions [m] in Drapekit's world frame: z up, origin at the
+// pedestal top centre; bodies stand on the floor z = 0).
+#include "widget/drape_widget_export.hpp"
+#include <QtQml/qqmlregistration.h>
+#include "widget/drape_enums.hpp"
 #include "widget/drape_frame.hpp"
+#include "widget/drape_properties.hpp"
+#include "widget/drape_setup.hpp"
 #include "widget/floor_boards.hpp"
 #include "widget/line_geometry.hpp"
 #include "widget/long_job.hpp"
-#include "widget/orbit_camera.hpp"
+#include "widget/scene.hpp"
 
 #include "engine/fabric/preset.hpp"
 
-#include <QColor>
 #include <QImage>
 #include <QObject>
 #include <QPointF>
 #include <QPolygonF>
-#include <QQuick3DTextureData>
-#include <QQuaternion>
 #include <QSet>
 #include <QThread>
 #include <QVariantList>
-#include <QVector3D>
+#include <QVariantMap>
 
-#include <memory>
+#include <vector>
 
 namespace drape::widget {
 
 class DrapeWorker;
 
-class DrapeController : public QObject {
+class DRAPE_WIDGET_EXPORT DrapeController : public QObject {
     Q_OBJECT
-    // ---- designable (DrapeView mirrors these) -------------------------------
-    /// Fabric preset: a preset JSON file, a built-in name ("seed-table1"), or
-    /// empty for the parameter table's defaults.
-    Q_PROPERTY(QString fabricPreset READ fabricPreset WRITE setFabricPreset NOTIFY fabricPresetChanged)
-    Q_PROPERTY(double sampleDiameter READ sampleDiameter WRITE setSampleDiameter NOTIFY sampleDiameterChanged) ///< [mm]
-    Q_PROPERTY(double discDiameter READ discDiameter WRITE setDiscDiameter NOTIFY discDiameterChanged)         ///< [mm]
-    Q_PROPERTY(int gridSize READ gridSize WRITE setGridSize NOTIFY gridSizeChanged) ///< nodes across the specimen
-    Q_PROPERTY(QString clothShape READ clothShape WRITE setClothShape NOTIFY clothShapeChanged) ///< "disc" | "square"
-    Q_PROPERTY(QString integrator READ integrator WRITE setIntegrator NOTIFY integratorChanged)
-    Q_PROPERTY(QString texture READ texture WRITE setTexture NOTIFY textureChanged) ///< BMP/PNG/JPEG path, empty = plain colour
-    Q_PROPERTY(bool running READ running WRITE setRunning NOTIFY runningChanged)
-    Q_PROPERTY(double timeStep READ timeStep WRITE setTimeStep NOTIFY timeStepChanged)       ///< [s], 0 = automatic
-    Q_PROPERTY(double restSpeed READ restSpeed WRITE setRestSpeed NOTIFY restSpeedChanged)   ///< [m/s]
-    Q_PROPERTY(double restResidual READ restResidual WRITE setRestResidual NOTIFY restResidualChanged) ///< relative force residual [-]
-    Q_PROPERTY(QString viewPreset READ viewPreset WRITE setViewPreset NOTIFY viewPresetChanged) ///< "top" | "side" | "iso" (lab stations), "close", "free"
-    Q_PROPERTY(QColor clothColor READ clothColor WRITE setClothColor NOTIFY clothColorChanged)
-    Q_PROPERTY(QColor backgroundColor READ backgroundColor WRITE setBackgroundColor NOTIFY backgroundColorChanged)
-    Q_PROPERTY(bool showColliders READ showColliders WRITE setShowColliders NOTIFY showCollidersChanged)
-    Q_PROPERTY(bool showOutlines READ showOutlines WRITE setShowOutlines NOTIFY showOutlinesChanged)
-    Q_PROPERTY(bool pickEnabled READ pickEnabled WRITE setPickEnabled NOTIFY pickEnabledChanged)
-    /// Draws the lab's four calibration chessboards on the floor (drape-lab README), so
-    /// the top and iso views can be laid next to the photos.
-    Q_PROPERTY(bool labFloor READ labFloor WRITE setLabFloor NOTIFY labFloorChanged)
-    // ---- for the QML scene ----------------------------------------------------
-    Q_PROPERTY(drape::widget::ClothGeometry* clothGeometry READ clothGeometry CONSTANT)
+    QML_ELEMENT
+    // ---- designable (drape_properties.hpp; DrapeView has the same) ---------------
+    DRAPE_VIEW_PROPERTIES(DRAPE_DECLARE_Q_PROPERTY)
+    // ---- what the view draws and reports --------------------------------------
+    Q_PROPERTY(drape::widget::Scene* scene READ scene CONSTANT)
+    Q_PROPERTY(drape::widget::MeshGeometry* clothGeometry READ clothGeometry CONSTANT)
     Q_PROPERTY(drape::widget::LineGeometry* simulatedOutline READ simulatedOutline CONSTANT)
     Q_PROPERTY(drape::widget::LineGeometry* measuredOutline READ measuredOutline CONSTANT)
-    Q_PROPERTY(QQuick3DTextureData* textureData READ textureData CONSTANT)
-    Q_PROPERTY(drape::widget::FloorBoardsGeometry* floorBoards READ floorBoards CONSTANT)
-    /// labFloor and the scene has a horizontal floor to draw the boards on.
-    Q_PROPERTY(bool floorBoardsVisible READ floorBoardsVisible NOTIFY labFloorChanged)
     Q_PROPERTY(bool hasTexture READ hasTexture NOTIFY textureChanged)
     Q_PROPERTY(QVariantList colliders READ colliders NOTIFY collidersChanged)
     Q_PROPERTY(QVariantList pinnedPositions READ pinnedPositions NOTIFY pinnedChanged)
@@ -78,67 +66,64 @@ class DrapeController : public QObject {
     Q_PROPERTY(double simulatedTime READ simulatedTime NOTIFY frameApplied) ///< [s]
     Q_PROPERTY(QString statusText READ statusText NOTIFY frameApplied)
     Q_PROPERTY(bool jobRunning READ jobRunning NOTIFY jobRunningChanged)
+    /// A drape to rest: progress in [0, 1] (negative = none running or unknown).
+    Q_PROPERTY(double progressFraction READ progressFraction NOTIFY frameApplied)
+    /// The last rest state's drape coefficient [%] (drapemeter shapes; NaN before the first rest).
+    Q_PROPERTY(double drapeCoefficient READ drapeCoefficient NOTIFY resultsReady)
+    Q_PROPERTY(int nodeCount READ nodeCount NOTIFY resultsReady) ///< folds at rest (drapemeter), -1 before
+    Q_PROPERTY(bool hasResults READ hasResults NOTIFY resultsReady)
 
 public:
     explicit DrapeController(QObject* parent = nullptr);
     ~DrapeController() override;
 
-    QString fabricPreset() const { return m_fabricPreset; }
-    void setFabricPreset(const QString& preset);
-    double sampleDiameter() const { return m_sampleDiameterMm; }
-    void setSampleDiameter(double mm);
-    double discDiameter() const { return m_discDiameterMm; }
-    void setDiscDiameter(double mm);
-    int gridSize() const { return m_gridSize; }
-    void setGridSize(int n);
-    QString clothShape() const { return m_shape; }
-    void setClothShape(const QString& shape);
-    QString integrator() const { return m_integrator; }
-    void setIntegrator(const QString& name);
-    QString texture() const { return m_texture; }
-    void setTexture(const QString& path);
-    bool running() const { return m_running; }
-    void setRunning(bool on);
-    double timeStep() const { return m_timeStep; }
-    void setTimeStep(double dt);
-    double restSpeed() const { return m_restSpeed; }
-    void setRestSpeed(double v);
-    double restResidual() const { return m_restResidual; }
-    void setRestResidual(double r);
-    QString viewPreset() const { return m_viewPreset; }
-    void setViewPreset(const QString& name);
-    QColor clothColor() const { return m_clothColor; }
-    void setClothColor(const QColor& c);
-    QColor backgroundColor() const { return m_backgroundColor; }
-    void setBackgroundColor(const QColor& c);
-    bool showColliders() const { return m_showColliders; }
-    void setShowColliders(bool on);
-    bool showOutlines() const { return m_showOutlines; }
-    void setShowOutlines(bool on);
-    bool pickEnabled() const { return m_pickEnabled; }
-    void setPickEnabled(bool on);
-    bool labFloor() const { return m_labFloor; }
-    void setLabFloor(bool on);
-    FloorBoardsGeometry* floorBoards() const { return m_floorBoards; }
-    bool floorBoardsVisible() const { return m_labFloor && m_hasFloor; }
+    // Getters and setters of the designable properties: fabricPreset() /
+    // setFabricPreset(const QString&), sampleDiameter() / setSampleDiameter(double) ...
+#define DRAPE_CONTROLLER_ACCESSORS(Type, Arg, name, setter, init) \
+    Type name() const { return m_settings.name; }                 \
+    void setter(Arg value);
+    DRAPE_VIEW_PROPERTIES(DRAPE_CONTROLLER_ACCESSORS)
+#undef DRAPE_CONTROLLER_ACCESSORS
 
-    ClothGeometry* clothGeometry() const { return m_cloth; }
+    Scene* scene() const { return m_scene; }
+    MeshGeometry* clothGeometry() const { return m_cloth->meshGeometry(); }
     LineGeometry* simulatedOutline() const { return m_simOutline; }
     LineGeometry* measuredOutline() const { return m_measOutline; }
-    QQuick3DTextureData* textureData() const { return m_textureData; }
-    bool hasTexture() const { return m_hasTexture; }
+    bool hasTexture() const { return m_cloth->textured(); }
     QVariantList colliders() const { return m_colliders; }
     QVariantList pinnedPositions() const { return m_pinnedPositions; }
-    QVector3D cameraPosition() const { return m_camera.scenePosition(); }
-    QQuaternion cameraRotation() const { return m_camera.sceneRotation(); }
-    double fieldOfView() const { return m_camera.fovYDegrees(); }
+    QVector3D cameraPosition() const { return m_scene->cameraPosition(); }
+    QQuaternion cameraRotation() const { return m_scene->cameraRotation(); }
+    double fieldOfView() const { return m_scene->fieldOfView(); }
     int vertexCount() const;
     double simulatedTime() const;
     QString statusText() const;
     bool jobRunning() const { return m_job.running(); }
+    double progressFraction() const { return m_progressFraction; }
+    double drapeCoefficient() const;
+    int nodeCount() const;
+    bool hasResults() const { return m_results != nullptr; }
 
-    const OrbitCamera& camera() const { return m_camera; }
-    OrbitCamera& camera() { return m_camera; }
+    // ---- the fabric, the body, the garment (C++) -----------------------------------
+    /// Drapes this typed preset (e.g. one a CAD keeps in its own material list).
+    /// `label` is what fabricPreset then reads (default: the preset's name).
+    void setFabric(const fabric::FabricPreset& preset, const QString& label = {});
+    /// A body the host already has (importers::load_mannequin, or its own mesh
+    /// as a Mannequin): drawn, and the garment shapes collide with it. Null = none
+    /// (bodyFile is used again). Takes effect at the next build.
+    void setBody(std::shared_ptr<const importers::Mannequin> body);
+    std::shared_ptr<const importers::Mannequin> body() const;
+    /// A garment mesh (positions [m] world frame, triangles, pinned vertices);
+    /// switches clothShape to GarmentMesh.
+    void setGarmentMesh(const GarmentMesh& garment);
+    /// Positions of the cloth as last shown [m], n x 3 (empty before the first frame).
+    cloth::Positions positions() const;
+    /// The last rest state (null before one): positions, solver status, the
+    /// engine's drape metrics (drapemeter) and the body clearance.
+    DrapeResultsPtr lastResults() const { return m_results; }
+
+    const OrbitCamera& camera() const { return m_scene->camera(); }
+    OrbitCamera& camera() { return m_scene->camera(); }
     /// Latest frame shown (may be null before the first one).
     DrapeFramePtr currentFrame() const { return m_frame; }
     DrapeMeshPtr currentMesh() const { return m_mesh; }
@@ -165,12 +150,17 @@ public slots:
     void clearMeasuredOutline();
     void clearPins();
     void clearExtraColliders();
+    /// Brings the cloth to rest with the static solver whatever the integrator,
+    /// with drapeProgress(fraction, status); resultsReady and restReached follow.
+    void drapeToRest();
+    /// Stops a running drape or simulation where it is (running becomes false).
+    void cancel();
 
 public:
     // ---- interaction (QML-callable) -------------------------------------------
-    Q_INVOKABLE void orbit(double dxPixels, double dyPixels);
-    Q_INVOKABLE void pan(double dxPixels, double dyPixels, double viewHeight);
-    Q_INVOKABLE void zoom(double wheelDelta);
+    Q_INVOKABLE void orbit(double dxPixels, double dyPixels) { m_scene->orbit(dxPixels, dyPixels); }
+    Q_INVOKABLE void pan(double dxPixels, double dyPixels, double viewHeight) { m_scene->pan(dxPixels, dyPixels, viewHeight); }
+    Q_INVOKABLE void zoom(double wheelDelta) { m_scene->zoom(wheelDelta); }
     /// Vertex under view point (x, y) of a w x h view, or -1.
     Q_INVOKABLE int pickVertex(double x, double y, double w, double h) const;
     /// Pins the vertex under the point, or unpins it when pinned. Returns it (-1 = none).
@@ -198,93 +188,65 @@ public:
     Q_INVOKABLE void setMeasuredOutline(const QVariantList& points);
     /// Uses an in-memory image as texture (e.g. the record's top photo).
     Q_INVOKABLE bool setTextureImage(const QImage& image);
+    /// The cloth's positions [m] for QML (world frame, z up).
+    Q_INVOKABLE QList<QVector3D> vertexPositions() const;
+    /// The last rest state for QML: {vertices, outcome, newtonIterations,
+    /// residual, wallSeconds, drapeCoefficientPercent, nodeCount, shadowAreaM2,
+    /// meanRadiusM, hemMinZM, hemMaxZM, minBodyDistanceM, verticesInsideBody}
+    /// (the drapemeter's and body's entries when they apply); empty before one.
+    Q_INVOKABLE QVariantMap results() const;
 
 signals:
-    void fabricPresetChanged(const QString& preset);
-    void sampleDiameterChanged(double mm);
-    void discDiameterChanged(double mm);
-    void gridSizeChanged(int n);
-    void clothShapeChanged(const QString& shape);
-    void integratorChanged(const QString& name);
-    void textureChanged(const QString& path);
-    void runningChanged(bool running);
-    void timeStepChanged(double dt);
-    void restSpeedChanged(double v);
-    void restResidualChanged(double r);
-    void viewPresetChanged(const QString& name);
-    void clothColorChanged(const QColor& c);
-    void backgroundColorChanged(const QColor& c);
-    void showCollidersChanged(bool on);
-    void showOutlinesChanged(bool on);
-    void pickEnabledChanged(bool on);
-    void labFloorChanged(bool on);
+    DRAPE_VIEW_PROPERTIES(DRAPE_DECLARE_CHANGED_SIGNAL)
+    DRAPE_VIEW_SIGNALS(DRAPE_DECLARE_SIGNAL)
     void collidersChanged();
     void pinnedChanged();
     void cameraChanged();
     void meshChanged();
     void frameApplied();
     void fabricParametersChanged();
-    void jobRunningChanged();
-
-    /// Simulation progress: simulated time [s] and the fastest free vertex [m/s].
-    void progress(double simulatedTime, double maxSpeed);
-    /// The cloth came to rest (speed and residual below restSpeed / restResidual).
-    void restReached();
-    /// Bad input or engine trouble, as a readable message. The view stays usable.
-    void errorOccurred(const QString& message);
-    void resultsSaved(const QString& jsonPath, const QString& objPath);
     void jobStarted(const QString& name);
-    void jobProgress(double fraction, const QString& message);
-    void jobFinished(bool ok, const QString& message);
+    void jobRunningChanged();
 
 private:
     bool applyFabricPreset(const QString& preset);
-    void uploadTexture(const QImage& image);
-    void rebuildColliderList();
     void scheduleRebuild();
     void rebuildNow();
     void onMesh(const DrapeMeshPtr& mesh);
     void onFrame(const DrapeFramePtr& frame);
+    void onResults(const DrapeResultsPtr& results);
+    void showBody(const std::shared_ptr<const importers::Mannequin>& body);
+    void applyViewPreset();
     void onWorkerRunning(bool on);
+    void showColliders(const std::vector<ColliderShape>& shapes);
+    void updateVisibility();
     void updatePinnedPositions();
     void fail(const QString& message);
+    QObject* workerObject() const;
+    /// Runs `f` on the worker's thread, after the commands sent before.
     template <class F>
-    void toWorker(F&& f);
+    void toWorker(F&& f)
+    {
+        QMetaObject::invokeMethod(workerObject(), std::forward<F>(f), Qt::QueuedConnection);
+    }
 
-    QString m_fabricPreset;
+    DrapeSettings m_settings;
     fabric::FabricPreset m_preset;
-    double m_sampleDiameterMm = 300;
-    double m_discDiameterMm = 150;
-    int m_gridSize = 40;
-    QString m_shape = QStringLiteral("disc");
-    // Semi-implicit Euler: cheap steps, so a small cloth drapes live; "implicit"
-    // and "static" are there for large or stiff cloths.
-    QString m_integrator = QStringLiteral("symplectic");
-    QString m_texture;
-    bool m_running = false;
-    double m_timeStep = 0;
-    double m_restSpeed = 1e-3;
-    double m_restResidual = 1e-3;
-    QString m_viewPreset = QStringLiteral("iso");
-    QColor m_clothColor{0xb0, 0x3a, 0x48};
-    QColor m_backgroundColor{0x2b, 0x2f, 0x36};
-    bool m_showColliders = true;
-    bool m_showOutlines = false;
-    bool m_pickEnabled = true;
-    bool m_labFloor = true;
-    bool m_hasTexture = false;
     bool m_rebuildPending = false;
-    bool m_playAfterBuild = false;
+    std::shared_ptr<const importers::Mannequin> m_body;       ///< the host's (setBody)
+    std::shared_ptr<const importers::Mannequin> m_drawnBody;  ///< the one in the scene
+    std::shared_ptr<const GarmentMesh> m_garment;
+    DrapeResultsPtr m_results;
+    double m_progressFraction = -1;
 
-    OrbitCamera m_camera;
-    ClothGeometry* m_cloth = nullptr;
+    Scene* m_scene = nullptr;
+    SceneMesh* m_cloth = nullptr;
     LineGeometry* m_simOutline = nullptr;
     LineGeometry* m_measOutline = nullptr;
-    QQuick3DTextureData* m_textureData = nullptr;
     FloorBoardsGeometry* m_floorBoards = nullptr;
     bool m_hasFloor = false;
+    QStringList m_colliderItems; ///< scene item names of the drawn colliders
     QVariantList m_colliders;
-    std::vector<ColliderShape> m_colliderShapes;
     QVariantList m_pinnedPositions;
     QSet<int> m_pinned;
     DrapeMeshPtr m_mesh;

@@ -5,9 +5,8 @@
 // with signals carrying immutable copies (DrapeMeshPtr, DrapeFramePtr), so the
 // GUI thread never waits for a time step.
 #include "widget/drape_frame.hpp"
+#include "widget/drape_setup.hpp"
 
-#include "engine/cloth/drape.hpp"
-#include "engine/fabric/preset.hpp"
 #include "engine/cloth/solver.hpp"
 
 #include <QElapsedTimer>
@@ -22,19 +21,6 @@ class QTimer;
 
 namespace drape::widget {
 
-/// Everything needed to build a cloth scene.
-struct DrapeSpec {
-    fabric::FabricPreset preset;
-    QString presetName;          ///< as given by the user (path or built-in name)
-    cloth::DrapeSetup setup;     ///< diameters [m], grid, floor ...
-    QString shape = "disc";      ///< "disc" (drapemeter specimen) or "square" (sheet of side sample diameter)
-};
-
-struct SphereSpec {
-    Eigen::Vector3d centre; ///< world [m]
-    double radius;          ///< [m]
-};
-
 class DrapeWorker : public QObject {
     Q_OBJECT
 public:
@@ -43,6 +29,9 @@ public:
 
     // ---- commands: call on the worker thread (queued) ----------------------
     void rebuild(std::shared_ptr<const DrapeSpec> spec);
+    /// Brings the cloth to rest with the static solver (whatever the integrator),
+    /// reporting a progress fraction; results follow (resultsReady).
+    void drapeToRest();
     void setIntegrator(cloth::Integrator integ);
     void setTimeStep(double dt);                   ///< [s], 0 = automatic
     void setRestCriteria(double speed, double residual); ///< [m/s], relative residual [-]
@@ -69,22 +58,34 @@ signals:
     void frameReady(drape::widget::DrapeFramePtr frame);
     void runningChanged(bool running);
     void restReached(double simTime, double residual);
+    void resultsReady(drape::widget::DrapeResultsPtr results);
     void errorOccurred(const QString& message);
     void resultsSaved(const QString& jsonPath, const QString& objPath);
 
 private:
     void advance();
     void runStatic(long maxNewton);
-    void publish(bool force);
+    /// Positions still as built (no step, pin, mass or collider change since)?
+    bool pristine() const { return !m_touched; }
+    void publish(bool force, double fraction = -1, const QString& status = {});
+    void computeResults(const cloth::SolverStatus& status);
+    std::shared_ptr<const importers::Mannequin> bodyFor(const DrapeSpec& spec);
     void setRunning(bool on);
     double effectiveTimeStep();
     void makeStepper();
     void fail(const QString& what, const std::exception& e);
     void emitMesh();
+    bool remakeStepper(); ///< makeStepper, reporting a failure as errorOccurred
 
     std::unique_ptr<cloth::ClothSystem> m_sys;
     std::unique_ptr<cloth::Stepper> m_stepper;
     std::shared_ptr<const DrapeSpec> m_spec;
+    std::shared_ptr<const importers::Mannequin> m_body; ///< in use
+    /// Imported files kept while their path is asked for (a rebuild with a new fabric keeps the body).
+    QString m_bodyPath, m_garmentPath;
+    std::shared_ptr<const importers::Mannequin> m_bodyLoaded;
+    std::shared_ptr<const GarmentMesh> m_garmentLoaded;
+    bool m_touched = false;
     std::vector<std::shared_ptr<const cloth::Collider>> m_baseColliders;
     DrapeMeshPtr m_mesh;
     cloth::Positions m_x0;
@@ -104,8 +105,5 @@ private:
     std::atomic<bool> m_cancel{false};
     std::atomic<bool> m_uiReady{true};
 };
-
-/// Drawable shapes of a collider tree (pedestal, planes, spheres, groups).
-void describeColliders(const cloth::Collider& c, std::vector<ColliderShape>& out);
 
 } // namespace drape::widget

@@ -3,11 +3,12 @@
 // (shared/data/drape-lab/README.md: 25 mm squares, square (i, j) black when
 // i + j is even), as geometry of the black squares, so the top and iso views
 // can be laid next to the record's photos.
+#include "widget/drape_widget_export.hpp"
 #include <QQuick3DGeometry>
 
 namespace drape::widget {
 
-class FloorBoardsGeometry : public QQuick3DGeometry {
+class DRAPE_WIDGET_EXPORT FloorBoardsGeometry : public QQuick3DGeometry {
     Q_OBJECT
 public:
     explicit FloorBoardsGeometry(QQuick3DObject* parent = nullptr);

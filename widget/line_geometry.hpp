@@ -1,13 +1,17 @@
 #pragma once
 // A closed polyline drawn as line segments (outlines: measured vs simulated).
+#include "widget/drape_widget_export.hpp"
+#include <QtQml/qqmlregistration.h>
 #include "engine/cloth/metrics.hpp"
 
 #include <QQuick3DGeometry>
 
 namespace drape::widget {
 
-class LineGeometry : public QQuick3DGeometry {
+class DRAPE_WIDGET_EXPORT LineGeometry : public QQuick3DGeometry {
     Q_OBJECT
+    QML_ELEMENT
+    QML_UNCREATABLE("use Scene.items")
     Q_PROPERTY(int pointCount READ pointCount NOTIFY pointsChanged)
 public:
     explicit LineGeometry(QQuick3DObject* parent = nullptr);

@@ -3,6 +3,7 @@
 // thread with progress and cancel. The estimator plugs its work in as a
 // function; the widget shows progress and offers cancel, and whatever the job
 // throws becomes a finished(false, message) signal instead of a crash.
+#include "widget/drape_widget_export.hpp"
 #include <QObject>
 #include <QString>
 
@@ -14,7 +15,7 @@ class QThread;
 namespace drape::widget {
 
 /// Handed to the job function (on the job's thread).
-class JobContext {
+class DRAPE_WIDGET_EXPORT JobContext {
 public:
     /// Reports progress: fraction in [0, 1] (negative = unknown) and a message. Thread-safe.
     void report(double fraction, const QString& message);
@@ -30,7 +31,7 @@ private:
 
 using JobFunction = std::function<void(JobContext&)>;
 
-class LongJob : public QObject {
+class DRAPE_WIDGET_EXPORT LongJob : public QObject {
     Q_OBJECT
 public:
     explicit LongJob(QObject* parent = nullptr);

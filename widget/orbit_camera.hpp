@@ -3,6 +3,7 @@
 // the lab's three camera stations as presets. Pure maths (no Qt Quick), so the
 // picking ray and the projection used by tests are the same code that places
 // the Qt Quick 3D camera.
+#include "widget/drape_widget_export.hpp"
 #include <Eigen/Core>
 
 #include <QQuaternion>
@@ -10,7 +11,7 @@
 
 namespace drape::widget {
 
-class OrbitCamera {
+class DRAPE_WIDGET_EXPORT OrbitCamera {
 public:
     enum class Preset { Top, Side, Iso, Close };
 

@@ -15,8 +15,8 @@ cv::Mat rectified_texture(const record::Record& rec, const Measurement& m, doubl
     if (m.top_image.empty() || !m.top.measured)
         throw ParameterError("rectified_texture: the record has no measured top view");
     if (!(metres_per_pixel > 0)) throw ParameterError("rectified_texture: metres_per_pixel must be > 0");
-    const record::Camera cam = m.top_calibration && m.top_calibration->ok ? m.top_calibration->measured : rec.cameras.at("top");
-    const double half = rec.R1;
+    const record::Camera cam = m.view ? m.view->camera : rec.cameras.at("top");
+    const double half = rec.specimen.max_reach();
     const int n = static_cast<int>(std::ceil(2 * half / metres_per_pixel));
     // Hem radius and height per ray, from the traced outline.
     const int rays = static_cast<int>(m.top.outline.size());

@@ -118,6 +118,35 @@ cv::Mat load_image(const record::Record& rec, const std::string& camera)
     return img;
 }
 
+cv::Mat load_photo(const record::Record& rec, const std::string& name)
+{
+    const std::string path = rec.file(name).string();
+    const std::string bytes = read_file(path, std::size_t(256) << 20);
+    if (bytes.empty()) throw FileError(path + ": empty file");
+    if (const auto wh = header_size(bytes)) {
+        if (wh->first < 16 || wh->second < 16 || wh->first > 20000 || wh->second > 20000 ||
+            static_cast<double>(wh->first) * wh->second > 200e6)
+            throw FileError(path + ": image is " + std::to_string(wh->first) + " x " + std::to_string(wh->second) +
+                            " px (accepted: 16 .. 20000 px a side, at most 200 megapixels)");
+    }
+    const bool is_jpeg = bytes.size() > 3 && static_cast<unsigned char>(bytes[0]) == 0xFF && static_cast<unsigned char>(bytes[1]) == 0xD8;
+    if (is_jpeg) {
+        std::size_t end = bytes.size();
+        while (end > 2 && bytes[end - 1] == '\0') --end;
+        if (!(static_cast<unsigned char>(bytes[end - 2]) == 0xFF && static_cast<unsigned char>(bytes[end - 1]) == 0xD9))
+            throw FileError(path + ": truncated JPEG (no end-of-image marker after " + std::to_string(bytes.size()) + " bytes)");
+    }
+    const std::vector<unsigned char> buf(bytes.begin(), bytes.end());
+    cv::Mat img;
+    try {
+        img = cv::imdecode(buf, cv::IMREAD_COLOR);
+    } catch (const cv::Exception& e) {
+        throw FileError(path + ": not a readable image (" + e.what() + ")");
+    }
+    if (img.empty()) throw FileError(path + ": not a readable image");
+    return img;
+}
+
 cv::Matx33d camera_matrix(const record::Camera& c) { return {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1}; }
 
 } // namespace drape::capture

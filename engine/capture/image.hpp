@@ -18,6 +18,11 @@ namespace drape::capture {
 /// 30000 x 30000 px costs nothing.
 cv::Mat load_image(const record::Record& rec, const std::string& camera);
 
+/// A single-camera record's photo `name` (BGR, 8 bit): any size up to 20000 px
+/// a side and 200 megapixels (read from the header before decoding), JPEG
+/// checked for truncation. Throws FileError.
+cv::Mat load_photo(const record::Record& rec, const std::string& name);
+
 /// The intrinsic matrix K of a camera [px].
 cv::Matx33d camera_matrix(const record::Camera& c);
 

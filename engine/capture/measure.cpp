@@ -50,7 +50,26 @@ Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
         }
     };
 
-    if (load("top", out.top_image)) measure_top(rec, opt, stack ? &*stack : nullptr, out);
+    bool have_top = false;
+    if (rec.top_photo) {
+        try {
+            out.top_image = load_photo(rec, rec.top_photo->image);
+            have_top = true;
+        } catch (const Error& e) {
+            out.not_measured.push_back(std::string("top view: ") + e.what());
+        }
+    } else {
+        have_top = load("top", out.top_image);
+    }
+    if (have_top) {
+        try {
+            measure_top(rec, opt, stack ? &*stack : nullptr, out);
+        } catch (const RefusalError& e) {
+            out.refused = e.refusal;
+            out.top.measured = false;
+            out.not_measured.push_back("top view: refused (" + e.refusal.check + "): " + e.refusal.message);
+        }
+    }
     if (!out.top.measured)
         out.not_measured.push_back("drape coefficient and nodes: need a usable top view");
     if (load("side", out.side_image)) {
@@ -69,13 +88,12 @@ Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
         // Height error of the model: what the side view measured where it can
         // see the hem, never less than 3 mm; 10 mm when there is no side view.
         const double dz = out.side.measured ? std::max(out.side.model_rms_diff, 0.003) : 0.010;
-        out.top.height_error_m = dz;
-        out.top.dc_uncertainty_percent = std::hypot(out.top.dc_edge_term, out.top.dc_per_metre_height * dz);
+        set_hem_depth_error(out.top, dz);
     }
 
     // Lowest hem point: the lowest of the evidence. The top view's height
     // model covers every angle; the side view sees the front hem directly.
-    if (out.top.measured && !out.top.outline_z.empty()) {
+    if (out.top.measured && !out.top.outline_z.empty() && out.top.perspective == "hem") {
         out.hem_min_height = *std::min_element(out.top.outline_z.begin(), out.top.outline_z.end());
         out.hem_min_source = std::string("top-view silhouette back-projected with the height model (") +
                              to_string(out.top.height_model) + ")";

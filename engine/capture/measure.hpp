@@ -22,6 +22,12 @@ namespace drape::capture {
 
 struct Measurement {
     std::string specimen_id;
+    /// Set when the top view was refused: a check failed (which, why, what to
+    /// try). Then there is no drape coefficient, never a number.
+    std::optional<Refusal> refused;
+    /// The top camera used and what is known about it (scale source, camera
+    /// height, disc rim, markers); set once the top photo is read.
+    std::optional<ViewGeometry> view;
     std::optional<double> lab_dc_percent;
     std::optional<Calibration> top_calibration;
     TopView top;
@@ -43,6 +49,17 @@ struct MeasureOptions {
     /// both neighbouring troughs: on the set-a overlays 0.05 to 0.10 all give the
     /// counts a person makes by eye, 0.15 drops the weak folds of DL-A01 and DL-A10.
     cloth::MetricOptions metrics;
+    /// Perspective model of the reported D: "auto" (hem when the camera height
+    /// is known, else disc-plane; a record's top_photo.perspective), "none",
+    /// "disc-plane", "hem", "calibration" (hem on a calibrated camera).
+    std::string perspective = "auto";
+    /// "auto" (the lab classifier for calibrated records, the photo segmenter
+    /// for single photos), "photo" (the photo segmenter for any record), "lab"
+    /// (the lab classifier for any record: fabric colour on the disc against
+    /// a floor ring beyond the specimen, by chroma or darkness).
+    std::string segmentation = "auto";
+    /// Manual overrides (threshold, user mask); they select the photo segmenter.
+    SegmentOverrides overrides;
 };
 
 /// Segments and measures a record. Missing or broken optional files

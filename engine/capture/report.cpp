@@ -49,12 +49,22 @@ nlohmann::ordered_json to_json(const Measurement& m)
         top["min_radius_m"] = t.metrics.min_radius_m;
         top["max_radius_m"] = t.metrics.max_radius_m;
         top["rays_beyond_reach"] = t.rays_beyond_reach;
+        top["rays_at_search_limit"] = t.rays_at_limit;
+        top["region_image_fraction"] = t.region_image_fraction;
+        top["specimen_angle_deg"] = t.specimen_angle * 180.0 / M_PI;
         top["height_error_m"] = t.height_error_m;
         top["drape_coefficient_edge_error_percent"] = t.dc_edge_term;
-        top["segmentation"] = {{"by", t.model.chromatic ? "chroma" : "darkness"},
-                               {"contrast_lab", t.model.contrast},
-                               {"fabric_lab", {t.model.fabric_lab[0], t.model.fabric_lab[1], t.model.fabric_lab[2]}},
-                               {"floor_lab", {t.model.floor_lab[0], t.model.floor_lab[1], t.model.floor_lab[2]}}};
+        if (t.photo_segmentation)
+            top["segmentation"] = {{"method", t.segmentation_method},
+                                   {"contrast_lab", t.model.contrast},
+                                   {"lightness_weight", t.lightness_weight},
+                                   {"upper_disc", t.clamp_disc}};
+        else
+            top["segmentation"] = {{"method", t.segmentation_method},
+                                   {"by", t.model.chromatic ? "chroma" : "darkness"},
+                                   {"contrast_lab", t.model.contrast},
+                                   {"fabric_lab", {t.model.fabric_lab[0], t.model.fabric_lab[1], t.model.fabric_lab[2]}},
+                                   {"floor_lab", {t.model.floor_lab[0], t.model.floor_lab[1], t.model.floor_lab[2]}}};
         json mags = json::array();
         for (int k = 1; k <= std::min(12, t.metrics.fourier.harmonics()); ++k) mags.push_back(t.metrics.fourier.magnitude(k));
         top["outline_fourier_a0_m"] = t.metrics.fourier.a0;
@@ -70,6 +80,59 @@ nlohmann::ordered_json to_json(const Measurement& m)
         j["drape_coefficient_percent"] = nullptr;
         j["node_count"] = nullptr;
         j["node_angles_deg"] = nullptr;
+    }
+    if (t.measured) {
+        j["drape_coefficient_uncorrected_percent"] = num(t.uncorrected.dc_percent);
+        j["perspective"] = t.perspective;
+        j["perspective_reason"] = t.perspective_reason;
+    }
+    j["refused"] = m.refused ? json{{"check", m.refused->check}, {"message", m.refused->message}, {"remedy", m.refused->remedy}}
+                             : json(nullptr);
+    if (t.measured) {
+        json models = json::object();
+        for (const PerspectiveValue* v : {&t.uncorrected, &t.disc_plane, &t.hem}) {
+            json terms = json::array();
+            for (const auto& term : v->terms)
+                terms.push_back({{"name", term.name}, {"points_percent", term.points}, {"note", term.note}});
+            models[v->model] = {{"available", v->available},
+                                {"drape_coefficient_percent", num(v->dc_percent)},
+                                {"uncertainty_percent", num(v->uncertainty_percent)},
+                                {"shadow_area_m2", num(v->area_m2)},
+                                {"uncertainty_terms", terms},
+                                {"meaning", v->meaning}};
+        }
+        j["perspective_models"] = models;
+    }
+    if (m.view) {
+        const auto& g = *m.view;
+        json sc = {{"source", record::to_string(g.source)},
+                   {"description", g.source_text},
+                   {"single_camera", g.single_camera},
+                   {"reference_height_m", g.reference_height},
+                   {"reference_height_sigma_m", g.reference_height_sigma},
+                   {"px_per_m", g.scale_px_per_m},
+                   {"scale_sigma_relative", g.scale_sigma_rel},
+                   {"camera_height_m", g.camera_height},
+                   {"camera_height_sigma_m", g.camera_height_sigma},
+                   {"camera_height_known", g.camera_height_known},
+                   {"camera_height_source", g.camera_height_source},
+                   {"disc_centre_px", {g.centre_px.x(), g.centre_px.y()}},
+                   {"disc_centre_source", g.centre_source}};
+        if (g.disc)
+            sc["disc_rim"] = {{"centre_px", {g.disc->centre_px.x(), g.disc->centre_px.y()}},
+                              {"radius_px", g.disc->radius_px},
+                              {"axis_ratio", g.disc->axis_ratio},
+                              {"ray_fraction", g.disc->ray_fraction},
+                              {"rms_px", g.disc->rms_px},
+                              {"edge", g.disc->edge},
+                              {"declared", g.disc->declared}};
+        if (!g.markers.empty()) {
+            json mk = json::array();
+            for (const auto& mm : g.markers) mk.push_back(mm.id);
+            sc["markers_found"] = mk;
+        }
+        if (!g.board_corners_px.empty()) sc["chessboard_corners"] = g.board_corners_px.size();
+        j["scale"] = sc;
     }
     j["hem_min_height_m"] = m.hem_min_height ? json(*m.hem_min_height) : json(nullptr);
     j["hem_min_height_source"] = m.hem_min_source;
@@ -116,18 +179,78 @@ nlohmann::ordered_json to_json(const Measurement& m)
 cv::Mat draw_top_overlay(const record::Record& rec, const Measurement& m)
 {
     if (m.top_image.empty()) throw ParameterError("draw_top_overlay: the record has no readable top photo");
-    const record::Camera cam = m.top_calibration && m.top_calibration->ok ? m.top_calibration->measured : rec.cameras.at("top");
-    // Crop to the specimen's reach and enlarge 2x with cubic interpolation, so
-    // a person can judge the traced edge to a fraction of a pixel.
-    constexpr double zoom = 2.0;
+    if (!m.view && !rec.has_camera("top")) {
+        // Refused before a camera existed (no scale reference found): the photo and why.
+        const double z = std::min(1.0, 1000.0 / std::max(m.top_image.cols, m.top_image.rows));
+        cv::Mat body;
+        cv::resize(m.top_image, body, {}, z, z, cv::INTER_AREA);
+        std::vector<std::string> lines{m.specimen_id + ": REFUSED" + (m.refused ? " (" + m.refused->check + ")" : std::string()) +
+                                       ", no drape coefficient"};
+        std::string msg = m.refused ? m.refused->message : std::string("top view not measured");
+        const std::size_t width = static_cast<std::size_t>(std::max(40.0, body.cols / 9.5));
+        while (!msg.empty() && lines.size() < 6) {
+            std::size_t cut = msg.size() <= width ? msg.size() : msg.rfind(' ', width);
+            if (cut == std::string::npos || cut == 0) cut = std::min(width, msg.size());
+            lines.push_back(msg.substr(0, cut));
+            msg = cut < msg.size() ? msg.substr(cut + 1) : "";
+        }
+        const int banner = 10 + 22 * static_cast<int>(lines.size());
+        cv::Mat img(body.rows + banner, body.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+        body.copyTo(img(cv::Rect(0, banner, body.cols, body.rows)));
+        for (std::size_t i = 0; i < lines.size(); ++i)
+            cv::putText(img, lines[i], {8, 24 + 22 * static_cast<int>(i)}, cv::FONT_HERSHEY_SIMPLEX, i == 0 ? 0.62 : 0.5,
+                        cv::Scalar(0, 0, 200), i == 0 ? 2 : 1, cv::LINE_AA);
+        return img;
+    }
+    const record::Camera cam = m.view ? m.view->camera
+                                      : (m.top_calibration && m.top_calibration->ok ? m.top_calibration->measured : rec.cameras.at("top"));
+    const auto& t = m.top;
+    const bool single = m.view && m.view->single_camera;
+    // Crop to the specimen's reach (and the search limit), enlarged so a
+    // person can judge the traced edge to a fraction of a pixel.
     const Eigen::Vector2d c0 = cam.project({0, 0, 0});
-    const double reach = (cam.project({rec.R1 * 1.12, 0, 0}) - c0).norm();
-    cv::Rect roi(static_cast<int>(c0.x() - reach), static_cast<int>(c0.y() - reach), static_cast<int>(2 * reach),
-                 static_cast<int>(2 * reach) + 40);
-    roi.y -= 40;
+    const double max_reach = rec.specimen.max_reach();
+    cv::Rect roi;
+    if (!single) {
+        const double reach = (cam.project({max_reach * 1.12, 0, 0}) - c0).norm();
+        roi = cv::Rect(static_cast<int>(c0.x() - reach), static_cast<int>(c0.y() - reach), static_cast<int>(2 * reach),
+                       static_cast<int>(2 * reach));
+    } else {
+        std::vector<cv::Point> pts;
+        for (const auto& p : t.limit_px) pts.emplace_back(static_cast<int>(p.x()), static_cast<int>(p.y()));
+        for (int k = 0; k < 72 && pts.empty(); ++k) {
+            const double a = 2 * M_PI * k / 72;
+            const auto u = cam.project({1.1 * max_reach * std::cos(a), 1.1 * max_reach * std::sin(a), 0.0});
+            pts.emplace_back(static_cast<int>(u.x()), static_cast<int>(u.y()));
+        }
+        for (const auto& mk : m.view->markers)
+            for (const auto& q : mk.corners_px) pts.emplace_back(static_cast<int>(q.x()), static_cast<int>(q.y()));
+        roi = cv::boundingRect(pts);
+        const int pad = static_cast<int>(0.06 * std::max(roi.width, roi.height));
+        roi -= cv::Point(pad, pad);
+        roi += cv::Size(2 * pad, 2 * pad);
+    }
     roi &= cv::Rect(0, 0, m.top_image.cols, m.top_image.rows);
-    cv::Mat img;
-    cv::resize(m.top_image(roi), img, {}, zoom, zoom, cv::INTER_CUBIC);
+    if (roi.width < 8 || roi.height < 8) roi = cv::Rect(0, 0, m.top_image.cols, m.top_image.rows);
+    const double zoom = single ? std::clamp(1000.0 / std::max(roi.width, roi.height), 0.25, 2.0) : 2.0;
+    cv::Mat photo = m.top_image(roi).clone();
+    // What was counted: the rest of the photo is faded towards white; a
+    // refused region is tinted red.
+    if (!t.region.empty()) {
+        const cv::Mat reg = t.region(roi);
+        for (int y = 0; y < photo.rows; ++y)
+            for (int x = 0; x < photo.cols; ++x) {
+                cv::Vec3b& v = photo.at<cv::Vec3b>(y, x);
+                if (!reg.at<uchar>(y, x)) {
+                    for (int c = 0; c < 3; ++c) v[c] = cv::saturate_cast<uchar>(0.45 * v[c] + 0.55 * 255);
+                } else if (m.refused) {
+                    const double tint[3] = {40, 40, 255};
+                    for (int c = 0; c < 3; ++c) v[c] = cv::saturate_cast<uchar>(0.6 * v[c] + 0.4 * tint[c]);
+                }
+            }
+    }
+    cv::Mat body;
+    cv::resize(photo, body, {}, zoom, zoom, zoom >= 1 ? cv::INTER_CUBIC : cv::INTER_AREA);
     constexpr int shift = 2; // sub-pixel drawing: coordinates * 4
     auto P = [&](const Eigen::Vector2d& p) {
         return cv::Point(static_cast<int>(std::lround(((p.x() - roi.x + 0.5) * zoom - 0.5) * (1 << shift))),
@@ -137,21 +260,41 @@ cv::Mat draw_top_overlay(const record::Record& rec, const Measurement& m)
         const cv::Point q = P(p);
         return cv::Point(q.x >> shift, q.y >> shift);
     };
-    auto circle_world = [&](double r, double z, const cv::Scalar& col) {
+    auto curve_world = [&](auto radius, double z, const cv::Scalar& col, int thick) {
         std::vector<cv::Point> pts;
-        for (int k = 0; k < 360; ++k) {
-            const double a = 2 * M_PI * k / 360;
+        for (int k = 0; k < 720; ++k) {
+            const double a = 2 * M_PI * k / 720;
+            const double r = radius(a);
             pts.push_back(P(cam.project({r * std::cos(a), r * std::sin(a), z})));
         }
-        cv::polylines(img, pts, true, col, 1, cv::LINE_AA, shift);
+        cv::polylines(body, pts, true, col, thick, cv::LINE_AA, shift);
     };
-    circle_world(rec.R2, 0.0, cv::Scalar(255, 255, 0));  // pedestal edge (cyan)
-    circle_world(rec.R1, 0.0, cv::Scalar(150, 150, 150)); // flat specimen, for scale
-    const auto& t = m.top;
-    if (t.measured) {
+    record::Specimen sp = rec.specimen;
+    sp.angle = t.specimen_angle;
+    if (!t.limit_px.empty() && (single || m.refused)) {
+        std::vector<cv::Point> pts;
+        for (const auto& p : t.limit_px) pts.push_back(P(p));
+        cv::polylines(body, pts, true, cv::Scalar(0, 220, 255), 1, cv::LINE_AA, shift); // search limit (yellow)
+    }
+    curve_world([&](double) { return rec.R2; }, 0.0, cv::Scalar(255, 255, 0), 1);          // disc edge (cyan)
+    curve_world([&](double a) { return sp.reach(a); }, 0.0, cv::Scalar(150, 150, 150), 1); // flat specimen
+    if (m.view) {
+        for (const auto& mk : m.view->markers) {
+            std::vector<cv::Point> q;
+            for (const auto& c : mk.corners_px) q.push_back(P(c));
+            cv::polylines(body, q, true, cv::Scalar(255, 0, 255), 2, cv::LINE_AA, shift);
+            cv::putText(body, std::to_string(mk.id), Pi(mk.corners_px[0]) + cv::Point(3, -4), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                        cv::Scalar(255, 0, 255), 1, cv::LINE_AA);
+        }
+        for (const auto& c : m.view->board_corners_px) cv::circle(body, Pi(c), 3, cv::Scalar(255, 0, 255), 1, cv::LINE_AA);
+    }
+    if (!t.outline_px.empty()) {
         std::vector<cv::Point> pts;
         for (const auto& p : t.outline_px) pts.push_back(P(p));
-        cv::polylines(img, pts, true, cv::Scalar(0, 230, 0), 1, cv::LINE_AA, shift);
+        cv::polylines(body, pts, true, m.refused ? cv::Scalar(0, 0, 230) : cv::Scalar(0, 230, 0), 1, cv::LINE_AA, shift);
+    }
+    for (const auto& p : t.at_limit_px) cv::circle(body, Pi(p), 3, cv::Scalar(0, 0, 255), cv::FILLED, cv::LINE_AA);
+    if (t.measured) {
         const int n = static_cast<int>(t.outline.size());
         for (std::size_t i = 0; i < t.metrics.node_angles_rad.size(); ++i) {
             const double a = t.metrics.node_angles_rad[i];
@@ -171,22 +314,66 @@ cv::Mat draw_top_overlay(const record::Record& rec, const Measurement& m)
             const Eigen::Vector2d p = t.outline_px[static_cast<std::size_t>(best)];
             // Tick from the pedestal edge out to the crest: the fold's axis.
             const Eigen::Vector2d e = cam.project({rec.R2 * std::cos(a), rec.R2 * std::sin(a), 0.0});
-            cv::line(img, P(e), P(p), cv::Scalar(0, 190, 255), 1, cv::LINE_AA, shift);
-            cv::circle(img, Pi(p), 7, cv::Scalar(0, 190, 255), 2, cv::LINE_AA);
-            const Eigen::Vector2d lab = p + (p - c0).normalized() * 12.0;
-            cv::putText(img, std::to_string(i + 1), Pi(lab) + cv::Point(-6, 6), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+            cv::line(body, P(e), P(p), cv::Scalar(0, 190, 255), 1, cv::LINE_AA, shift);
+            cv::circle(body, Pi(p), 7, cv::Scalar(0, 190, 255), 2, cv::LINE_AA);
+            const Eigen::Vector2d lab = p + (p - c0).normalized() * 12.0 / zoom * 2.0;
+            cv::putText(body, std::to_string(i + 1), Pi(lab) + cv::Point(-6, 6), cv::FONT_HERSHEY_SIMPLEX, 0.6,
                         cv::Scalar(0, 90, 230), 2, cv::LINE_AA);
         }
-        char buf[200];
-        std::snprintf(buf, sizeof buf, "%s  D = %.1f%% +-%.1f  nodes %d", m.specimen_id.c_str(),
-                      t.metrics.drape_coefficient_percent, t.dc_uncertainty_percent, t.metrics.node_count);
+    }
+    // The banner: what was measured, how, or why not.
+    std::vector<std::pair<std::string, cv::Scalar>> lines;
+    const cv::Scalar black(0, 0, 0), red(0, 0, 200), grey(90, 90, 90);
+    if (t.measured) {
+        char buf[240];
+        std::snprintf(buf, sizeof buf, "%s  D = %.1f %% +-%.1f (%s)  nodes %d", m.specimen_id.c_str(),
+                      t.metrics.drape_coefficient_percent, t.dc_uncertainty_percent, t.perspective.c_str(), t.metrics.node_count);
         std::string text = buf;
         if (m.lab_dc_percent) text += "  (lab " + fmt("%.1f%%", *m.lab_dc_percent) + ")";
-        cv::putText(img, text, {10, 28}, cv::FONT_HERSHEY_SIMPLEX, 0.75, cv::Scalar(0, 0, 0), 2, cv::LINE_AA);
+        lines.emplace_back(text, black);
+        std::string models = "uncorrected " + fmt("%.1f", t.uncorrected.dc_percent);
+        if (t.disc_plane.available && single) models += "   disc-plane " + fmt("%.1f", t.disc_plane.dc_percent);
+        if (t.hem.available)
+            models += "   hem " + fmt("%.1f", t.hem.dc_percent) + " +-" + fmt("%.1f", t.hem.uncertainty_percent);
+        lines.emplace_back(models, grey);
+    } else if (m.refused) {
+        lines.emplace_back(m.specimen_id + ": REFUSED (" + m.refused->check + "), no drape coefficient", red);
+        // Wrap the message.
+        std::string msg = m.refused->message;
+        const std::size_t width = static_cast<std::size_t>(std::max(40.0, body.cols / 9.5));
+        while (!msg.empty()) {
+            std::size_t cut = msg.size() <= width ? msg.size() : msg.rfind(' ', width);
+            if (cut == std::string::npos || cut == 0) cut = std::min(width, msg.size());
+            lines.emplace_back(msg.substr(0, cut), red);
+            msg = cut < msg.size() ? msg.substr(cut + 1) : "";
+            if (lines.size() > 5) break;
+        }
     } else {
-        cv::putText(img, m.specimen_id + ": top view not measured", {10, 28}, cv::FONT_HERSHEY_SIMPLEX, 0.75,
-                    cv::Scalar(0, 0, 255), 2, cv::LINE_AA);
+        lines.emplace_back(m.specimen_id + ": top view not measured", red);
     }
+    if (m.view && single) lines.emplace_back("scale: " + m.view->source_text, grey);
+    {
+        // Wrap long lines to the picture's width.
+        const std::size_t width = static_cast<std::size_t>(std::max(40.0, body.cols / 9.0));
+        std::vector<std::pair<std::string, cv::Scalar>> wrapped;
+        for (auto [text, col] : lines) {
+            const std::size_t w = wrapped.empty() ? static_cast<std::size_t>(width * 0.8) : width;
+            while (text.size() > w) {
+                std::size_t cut = text.rfind(' ', w);
+                if (cut == std::string::npos || cut == 0) cut = w;
+                wrapped.emplace_back(text.substr(0, cut), col);
+                text = "  " + text.substr(cut + 1);
+            }
+            wrapped.emplace_back(text, col);
+        }
+        lines = wrapped;
+    }
+    const int line_h = 22, banner = 10 + line_h * static_cast<int>(lines.size());
+    cv::Mat img(body.rows + banner, body.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+    body.copyTo(img(cv::Rect(0, banner, body.cols, body.rows)));
+    for (std::size_t i = 0; i < lines.size(); ++i)
+        cv::putText(img, lines[i].first, {8, 24 + line_h * static_cast<int>(i)}, cv::FONT_HERSHEY_SIMPLEX, i == 0 ? 0.62 : 0.5,
+                    lines[i].second, i == 0 ? 2 : 1, cv::LINE_AA);
     return img;
 }
 

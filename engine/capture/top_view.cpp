@@ -4,10 +4,14 @@
 #include "engine/capture/pixels.hpp"
 #include "engine/capture/steps.hpp"
 
+#include "engine/core/error.hpp"
+
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 
 namespace drape::capture {
 
@@ -33,19 +37,29 @@ void append_segment(Section& s, const Eigen::Vector2d& a, const Eigen::Vector2d&
     }
 }
 
+/// Margin of the search beyond the flat specimen's edge [m].
+double search_margin(double reach) { return std::max(0.02, 0.05 * reach); }
+
 /// Section of the chosen height model at ray angle `theta` [rad]. Marching
 /// step 0.2 mm: well below the 0.7 mm footprint of one top-view pixel.
-Section make_section(HeightModel model, double R1, double R2, const record::ContourStack* stack, int k_contour)
+/// `reach` is the flat specimen's edge on this ray; `z_plane` and `H` (camera
+/// height) are for the Plane model: a plane below the disc top is searched
+/// from further out, where the specimen's reach is seen at that depth.
+Section make_section(HeightModel model, double reach, double R2, const record::ContourStack* stack, int k_contour,
+                     double z_plane, double H)
 {
-    constexpr double step = 0.2e-3, beyond = 0.02;
-    const double L = R1 - R2; // hanging length of a radial fibre
+    constexpr double step = 0.2e-3;
+    const double beyond = search_margin(reach);
+    const double L = reach - R2; // hanging length of a radial fibre
     Section s;
     if (model == HeightModel::Plane) {
-        append_segment(s, {R1 + beyond, 0}, {0.3 * R2, 0}, -beyond, L + R2 - 0.3 * R2, step);
+        // Where the flat edge (+ margin) at the disc top is seen, in this plane.
+        const double start = (reach + beyond) * (H > 0 && H > z_plane ? (H - z_plane) / H : 1.0);
+        append_segment(s, {start, z_plane}, {0.3 * R2, z_plane}, -beyond, L + R2 - 0.3 * R2, step);
         return s;
     }
     if (model == HeightModel::Chord) {
-        append_segment(s, {R1 + beyond, 0}, {R1, 0}, L + beyond, L, step);
+        append_segment(s, {reach + beyond, 0}, {reach, 0}, L + beyond, L, step);
         // Circle of radius L around the disc edge: a straight, inextensible
         // radial fibre hanging at angle phi below horizontal.
         const int n = static_cast<int>(std::ceil(L * M_PI / 2 / step));
@@ -82,36 +96,58 @@ struct Trace {
     cloth::Polygon2 outline;
     std::vector<double> z, arc;
     std::vector<Eigen::Vector2d> px;
-    int beyond = 0, missed = 0;
+    std::vector<Eigen::Vector2d> at_limit_px;
+    int beyond = 0, missed = 0, at_limit = 0;
+};
+
+/// What the tracer needs besides the images: the geometry of every ray.
+struct TraceSetup {
+    HeightModel model = HeightModel::Chord;
+    std::vector<double> reach; ///< flat specimen edge per ray [m]
+    double R2 = 0;
+    const record::ContourStack* stack = nullptr;
+    double z_plane = 0; ///< Plane model
+    double H = 0;       ///< camera height (Plane model's search start)
 };
 
 /// Outermost fabric point along every ray: march each section from outside in
 /// and stop at the first point whose image is fabric (p >= 0.5 inside the
 /// central component); the crossing is interpolated linearly in p.
-Trace trace_outline(const record::Camera& cam, const cv::Mat& prob, const cv::Mat& gate, HeightModel model, double R1,
-                    double R2, const record::ContourStack* stack, int rays, const cv::Mat& lightness)
+Trace trace_outline(const record::Camera& cam, const cv::Mat& prob, const cv::Mat& gate, const TraceSetup& ts,
+                    const cv::Mat& lightness)
 {
     Trace tr;
-    const double L = R1 - R2;
+    const int rays = static_cast<int>(ts.reach.size());
+    const HeightModel model = ts.model;
+    const record::ContourStack* stack = ts.stack;
     for (int k = 0; k < rays; ++k) {
         const double th = 2 * M_PI * k / rays;
         const double c = std::cos(th), s = std::sin(th);
+        const double reach = ts.reach[static_cast<std::size_t>(k)];
+        const double L = reach - ts.R2;
         int kc = -1;
         if (stack && !stack->profiles.empty()) {
             const int n = stack->profiles.front().size();
             kc = static_cast<int>(std::lround(th / (2 * M_PI) * n)) % n;
         }
-        const Section sec = make_section(model, R1, R2, stack, kc);
+        const Section sec = make_section(model, reach, ts.R2, stack, kc, ts.z_plane, ts.H);
         double prev_p = 0;
-        bool found = false;
+        bool found = false, first = true;
         for (std::size_t i = 0; i < sec.rz.size(); ++i) {
             const Eigen::Vector3d X(sec.rz[i].x() * c, sec.rz[i].x() * s, sec.rz[i].y());
             const Eigen::Vector2d u = cam.project(X);
             if (!std::isfinite(u.x())) continue;
             const int gx = static_cast<int>(std::lround(u.x())), gy = static_cast<int>(std::lround(u.y()));
-            const bool inside = gx >= 0 && gy >= 0 && gx < gate.cols && gy < gate.rows && gate.at<uchar>(gy, gx);
+            const bool in_image = gx >= 0 && gy >= 0 && gx < gate.cols && gy < gate.rows;
+            const bool inside = in_image && gate.at<uchar>(gy, gx);
             const double p = inside ? bilinear(prob, u.x(), u.y()) : 0.0;
+            const bool was_first = first && in_image;
+            if (in_image) first = false;
             if (p >= 0.5) {
+                if (was_first) {
+                    ++tr.at_limit;
+                    tr.at_limit_px.push_back(u);
+                }
                 double f = 0; // fraction of the way back to the previous (outer) sample
                 if (i > 0 && p > prev_p) f = (p - 0.5) / (p - prev_p);
                 std::size_t j = i > 0 ? i - 1 : i;
@@ -164,7 +200,7 @@ Trace trace_outline(const record::Camera& cam, const cv::Mat& prob, const cv::Ma
                 tr.z.push_back(rz.y());
                 tr.arc.push_back(arc);
                 tr.px.push_back(cam.project({rz.x() * c, rz.x() * s, rz.y()}));
-                if (arc > L + 1e-4 || (model == HeightModel::Chord && rz.x() > R1 + 1e-4)) ++tr.beyond;
+                if (arc > L + 1e-4 || (model == HeightModel::Chord && rz.x() > reach + 1e-4)) ++tr.beyond;
                 found = true;
                 break;
             }
@@ -177,11 +213,55 @@ Trace trace_outline(const record::Camera& cam, const cv::Mat& prob, const cv::Ma
     return tr;
 }
 
-double shoelace_dc(const cloth::Polygon2& poly, double R1, double R2)
+/// D [%] and shadow area [m^2] of an outline; `Req` is the specimen's equal-area radius.
+std::pair<double, double> dc_area(const cloth::Polygon2& poly, double Req, double R2)
 {
-    // Only for the comparison numbers (plane/chord/contours); the reported D
-    // comes from cloth::drape_metrics on the chosen outline.
-    return cloth::drape_metrics(poly, R1, R2).drape_coefficient_percent;
+    const auto m = cloth::drape_metrics(poly, Req, R2);
+    return {m.drape_coefficient_percent, m.shadow_area_m2};
+}
+
+/// Orientation of a non-round specimen from the outline: the rotation that
+/// brings the flat shape's strongest low harmonic (2: a rectangle's long axis;
+/// 4: a square's corners) into phase with the outline's r(theta). Folds at
+/// other harmonics do not disturb it; a square whose folds are not at its
+/// corners is ambiguous (declare the angle then).
+double estimate_angle(const record::Specimen& sp0, const cloth::Polygon2& outline)
+{
+    if (sp0.shape == record::Specimen::Shape::Round || outline.size() < 16) return sp0.angle;
+    const cloth::RadialProfile prof = cloth::radial_profile(outline, 360);
+    record::Specimen sp = sp0;
+    sp.angle = 0;
+    auto coeff = [](auto f, int k) {
+        std::complex<double> c = 0;
+        for (int j = 0; j < 360; ++j) {
+            const double th = 2 * M_PI * j / 360, v = f(j, th);
+            if (std::isfinite(v)) c += v * std::polar(1.0, -k * th);
+        }
+        return c;
+    };
+    int best_k = 2;
+    double best_mag = -1;
+    for (int k = 1; k <= 6; ++k) {
+        const double mag = std::abs(coeff([&](int, double th) { return sp.reach(th); }, k));
+        if (mag > best_mag * 1.2) {
+            best_mag = mag;
+            best_k = k;
+        }
+    }
+    const auto c0 = coeff([&](int, double th) { return sp.reach(th); }, best_k);
+    const auto cr = coeff([&](int j, double) { return prof.r[static_cast<std::size_t>(j)]; }, best_k);
+    double a = -std::arg(cr / c0) / best_k;
+    const double period = 2 * M_PI / best_k;
+    a = std::fmod(std::fmod(a, period) + period, period);
+    return a;
+}
+
+bool touches_border(const cv::Mat& region)
+{
+    if (region.empty()) return false;
+    const int w = region.cols, h = region.rows;
+    return cv::countNonZero(region.row(0)) + cv::countNonZero(region.row(h - 1)) + cv::countNonZero(region.col(0)) +
+               cv::countNonZero(region.col(w - 1)) > 0;
 }
 
 } // namespace
@@ -196,98 +276,360 @@ const char* to_string(HeightModel m)
     return "?";
 }
 
+void detail::set_hem_depth_error(TopView& tv, double dz)
+{
+    tv.height_error_m = dz;
+    auto& hv = tv.hem;
+    double ss = 0;
+    for (auto& t : hv.terms) {
+        if (t.name == "hem_depth") {
+            t.points = tv.dc_per_metre_height * dz;
+            t.note = "the hem's height model +-" + fmt("%.1f", dz * 1e3) + " mm";
+        }
+        ss += t.points * t.points;
+    }
+    hv.uncertainty_percent = std::sqrt(ss);
+    const PerspectiveValue& chosen = tv.perspective == "hem" ? tv.hem : tv.perspective == "disc-plane" ? tv.disc_plane : tv.uncorrected;
+    tv.dc_uncertainty_percent = chosen.uncertainty_percent;
+}
+
 void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, const record::ContourStack* stack, Measurement& out)
 {
-    const record::Camera& declared = rec.cameras.at("top");
-    record::Camera cam = declared;
-    if (opt.calibrate && !rec.boards.empty()) {
-        out.top_calibration = calibrate_camera(rec, "top", out.top_image);
-        for (const auto& w : out.top_calibration->warnings) out.warnings.push_back(w);
-        if (out.top_calibration->ok) cam = out.top_calibration->measured;
-    }
-    const cv::Mat lab = to_lab(out.top_image);
     TopView& tv = out.top;
-    tv.model = fabric_model(rec, cam, lab);
-    if (tv.model.contrast < 8.0) {
-        out.not_measured.push_back("top view: no fabric distinguishable from the floor in " + declared.image +
-                                   " (colour contrast " + fmt("%.1f", tv.model.contrast) + " Lab units < 8)");
-        return;
-    }
-    const cv::Mat prob = fabric_probability(lab, tv.model);
-    const Eigen::Vector2d c0 = cam.project({0, 0, 0});
-    const double reach_px = (cam.project({rec.R1 + 0.02, 0, 0}) - c0).norm();
-    const cv::Mat gate = central_component(prob, c0, reach_px);
-    // The fabric must at least cover the pedestal top; otherwise what sits on
-    // the pedestal is not the specimen (or the photo has none).
-    const double ped_px = (cam.project({rec.R2, 0, 0}) - c0).norm();
-    cv::Mat disc = cv::Mat::zeros(prob.size(), CV_8U);
-    cv::circle(disc, cv::Point(static_cast<int>(c0.x()), static_cast<int>(c0.y())), static_cast<int>(0.9 * ped_px), 255,
-               cv::FILLED);
-    const double covered = static_cast<double>(cv::countNonZero(gate & disc)) / std::max(1, cv::countNonZero(disc));
-    if (covered < 0.9) {
-        out.not_measured.push_back("top view: the support disc in " + declared.image + " is not covered by fabric (" +
-                                   fmt("%.0f", covered * 100) + " % of it): no specimen on the stand?");
-        return;
-    }
+    const std::string image_name = rec.top_image();
+    const cv::Mat lab = to_lab(out.top_image);
+    const bool single = rec.single_camera();
+    const double Req = rec.R1; // equal-area radius: D = (A - disc) / (specimen - disc) for any shape
 
-    const bool have_contours = stack && !stack->profiles.empty();
-    cv::Mat lightness; // L* channel, only for the grey-fabric edge refinement
-    if (!tv.model.chromatic) cv::extractChannel(lab, lightness, 0);
-    const Trace plane = trace_outline(cam, prob, gate, HeightModel::Plane, rec.R1, rec.R2, nullptr, opt.rays, lightness);
-    const Trace chord = trace_outline(cam, prob, gate, HeightModel::Chord, rec.R1, rec.R2, nullptr, opt.rays, lightness);
-    // The chord model is the one used for D: it spans every radius from R1 in
-    // to the disc edge, so the silhouette is always found on it. The contour
-    // model only covers the section at the ray's own angle, but in the top view
-    // a trough is overhung by its neighbouring folds, whose silhouette lies off
-    // that section; it is reported as a cross-check (docs/capture.md).
-    const Trace best = chord;
-    tv.height_model = HeightModel::Chord;
-    if (have_contours) {
-        const Trace cont = trace_outline(cam, prob, gate, HeightModel::Contours, rec.R1, rec.R2, stack, opt.rays, lightness);
-        if (cont.outline.size() >= 8) tv.dc_contours_percent = shoelace_dc(cont.outline, rec.R1, rec.R2);
+    // ---- the camera ----
+    ViewGeometry g;
+    if (single) {
+        const auto& tp = *rec.top_photo;
+        cv::Mat rough;
+        if (!(tp.disc_centre_px && tp.disc_radius_px)) rough = rough_cloth_mask(out.top_image);
+        g = solve_view(rec, out.top_image, lab, rough);
+    } else {
+        const record::Camera& declared = rec.cameras.at("top");
+        g.camera = declared;
+        g.source_text = "full calibration (cameras.top, declared pose)";
+        if (opt.calibrate && !rec.boards.empty()) {
+            out.top_calibration = calibrate_camera(rec, "top", out.top_image);
+            for (const auto& w : out.top_calibration->warnings) out.warnings.push_back(w);
+            if (out.top_calibration->ok) {
+                g.camera = out.top_calibration->measured;
+                g.source_text = "full calibration (cameras.top), pose measured on " +
+                                std::to_string(out.top_calibration->boards_found.size()) + " floor chessboard(s)";
+            }
+        }
+        g.source = record::ScaleSource::Calibration;
+        g.camera_height = g.camera.centre().z();
+        g.camera_height_source = "calibration";
+        g.centre_px = g.camera.project({0, 0, 0});
+        g.centre_source = "calibration";
+        g.scale_px_per_m = (g.camera.project({rec.R2, 0, 0}) - g.centre_px).norm() / rec.R2;
     }
-    if (best.outline.size() < static_cast<std::size_t>(opt.rays) * 9 / 10) {
-        out.not_measured.push_back("top view: fabric edge found on only " + std::to_string(best.outline.size()) + " of " +
-                                   std::to_string(opt.rays) + " rays");
+    for (const auto& w : g.warnings) out.warnings.push_back("top view: " + w);
+    out.view = g;
+    const record::Camera& cam = g.camera;
+    const double H = g.camera_height;
+
+    // ---- the perspective model ----
+    std::string persp = opt.perspective;
+    if (persp == "auto" && single) persp = rec.top_photo->perspective;
+    if (persp == "calibration") {
+        if (single)
+            throw ParameterError("perspective 'calibration' needs a calibrated record (cameras.top); this photo's scale is from " +
+                                 std::string(record::to_string(g.source)));
+        persp = "hem";
+        tv.perspective_reason = "asked for: the hanging-hem model on the calibrated camera";
+    } else if (persp == "auto") {
+        if (single && !g.camera_height_known) {
+            persp = "disc-plane";
+            tv.perspective_reason = "the camera height is not known (declare it, or a focal length, or put the scale "
+                                    "reference at another height than the disc), so the outline is measured in the disc-top "
+                                    "plane; the hem model's value is reported beside it";
+        } else {
+            persp = "hem";
+            tv.perspective_reason = std::string("the camera height is known (") + g.camera_height_source +
+                                    "): the hem is back-projected to where it hangs";
+        }
+    } else if (persp == "none" || persp == "disc-plane" || persp == "hem") {
+        tv.perspective_reason = "asked for";
+    } else {
+        throw ParameterError("perspective '" + persp + "': expected none, disc-plane, hem, calibration or auto");
+    }
+    tv.perspective = persp;
+
+    // ---- segmentation ----
+    SegmentOverrides ov = opt.overrides;
+    if (single && ov.threshold.empty() && ov.mask.empty()) {
+        ov.threshold = rec.top_photo->threshold;
+        if (!rec.top_photo->mask.empty()) {
+            const auto path = rec.file(rec.top_photo->mask);
+            ov.mask = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
+            if (ov.mask.empty()) throw FileError(path.string() + ": the mask named in top_photo.mask is not a readable image");
+            ov.mask_name = rec.top_photo->mask;
+        }
+    }
+    const bool photo_seg = (single && opt.segmentation != "lab") || opt.segmentation == "photo" || !ov.threshold.empty() ||
+                           !ov.mask.empty();
+    const bool round = rec.specimen.shape == record::Specimen::Shape::Round;
+    const bool angle_known = round || !rec.specimen.angle_from_photo;
+    double angle = rec.specimen.angle;
+    cv::Mat prob, gate, lightness;
+    const Eigen::Vector2d c0 = cam.project({0, 0, 0});
+    if (photo_seg) {
+        PhotoSegmentation seg = segment_photo(out.top_image, lab, rec, cam, ov, angle_known ? angle : kNaN);
+        prob = seg.prob;
+        gate = seg.gate;
+        tv.region = seg.region;
+        tv.segmentation_method = seg.method;
+        tv.photo_segmentation = true;
+        tv.lightness_weight = seg.lightness_weight;
+        tv.clamp_disc = seg.clamp_disc;
+        tv.model.contrast = seg.contrast;
+        tv.model.chromatic = seg.lightness_weight < 1;
+        for (const auto& w : seg.warnings) tv.warnings.push_back("top view: " + w);
+    } else {
+        tv.model = fabric_model(rec, cam, lab);
+        tv.segmentation_method = tv.model.chromatic ? "fabric colour on the disc vs floor ring, by chroma"
+                                                    : "fabric colour on the disc vs floor ring, by darkness";
+        if (tv.model.contrast < 8.0) {
+            out.not_measured.push_back("top view: no fabric distinguishable from the floor in " + image_name +
+                                       " (colour contrast " + fmt("%.1f", tv.model.contrast) + " Lab units < 8)");
+            return;
+        }
+        prob = fabric_probability(lab, tv.model);
+        const double reach_px = (cam.project({rec.specimen.max_reach() + 0.02, 0, 0}) - c0).norm();
+        gate = central_component(prob, c0, reach_px);
+        tv.region = (prob >= 0.5f) & gate;
+        // The fabric must at least cover the pedestal top; otherwise what sits on
+        // the pedestal is not the specimen (or the photo has none).
+        const double ped_px = (cam.project({rec.R2, 0, 0}) - c0).norm();
+        cv::Mat disc = cv::Mat::zeros(prob.size(), CV_8U);
+        cv::circle(disc, cv::Point(static_cast<int>(c0.x()), static_cast<int>(c0.y())), static_cast<int>(0.9 * ped_px), 255,
+                   cv::FILLED);
+        const double covered = static_cast<double>(cv::countNonZero(gate & disc)) / std::max(1, cv::countNonZero(disc));
+        if (covered < 0.9) {
+            out.not_measured.push_back("top view: the support disc in " + image_name + " is not covered by fabric (" +
+                                       fmt("%.0f", covered * 100) + " % of it): no specimen on the stand?");
+            return;
+        }
+        if (!tv.model.chromatic) cv::extractChannel(lab, lightness, 0);
+    }
+    tv.region_image_fraction = static_cast<double>(cv::countNonZero(tv.region)) / static_cast<double>(tv.region.total());
+
+    // ---- the outline under every perspective model ----
+    const int rays = opt.rays;
+    auto reach_for = [&](double a, bool circle) {
+        record::Specimen sp = rec.specimen;
+        sp.angle = a;
+        const double rmax = sp.max_reach();
+        std::vector<double> v(static_cast<std::size_t>(rays));
+        for (int k = 0; k < rays; ++k) v[static_cast<std::size_t>(k)] = circle ? rmax : sp.reach(2 * M_PI * k / rays);
+        return v;
+    };
+    TraceSetup base;
+    base.R2 = rec.R2;
+    base.H = H;
+    if (!angle_known) {
+        TraceSetup t0 = base;
+        t0.model = HeightModel::Plane;
+        t0.reach = reach_for(0, true);
+        angle = estimate_angle(rec.specimen, trace_outline(cam, prob, gate, t0, lightness).outline);
+    }
+    tv.specimen_angle = angle;
+    base.reach = reach_for(angle, false);
+    for (const auto& q : search_limit_px(rec, cam, angle_known ? angle : kNaN)) tv.limit_px.emplace_back(q.x, q.y);
+
+    TraceSetup t_ref = base, t_disc = base, t_hem = base;
+    t_ref.model = t_disc.model = HeightModel::Plane;
+    t_ref.z_plane = single ? g.reference_height : 0.0;
+    t_hem.model = HeightModel::Chord;
+    const Trace ref = trace_outline(cam, prob, gate, t_ref, lightness);
+    const Trace disc = t_ref.z_plane == 0.0 ? ref : trace_outline(cam, prob, gate, t_disc, lightness);
+    const Trace hem = trace_outline(cam, prob, gate, t_hem, lightness);
+    tv.height_model = HeightModel::Chord;
+    if (stack && !stack->profiles.empty() && round) {
+        TraceSetup tc = base;
+        tc.model = HeightModel::Contours;
+        tc.stack = stack;
+        const Trace cont = trace_outline(cam, prob, gate, tc, lightness);
+        if (cont.outline.size() >= 8) tv.dc_contours_percent = dc_area(cont.outline, Req, rec.R2).first;
+    }
+    const Trace& best = persp == "hem" ? hem : persp == "disc-plane" ? disc : ref;
+    if (persp != "hem") tv.height_model = HeightModel::Plane;
+
+    // ---- what cannot be ----
+    auto refuse = [&](const std::string& check, const std::string& msg, const std::string& remedy) {
+        tv.outline_px = best.px;
+        tv.at_limit_px = best.at_limit_px;
+        tv.rays_at_limit = best.at_limit;
+        throw RefusalError({check, msg, remedy});
+    };
+    const std::string seg_remedy =
+        "look at the overlay (--overlay), then give a threshold (--threshold L<NN, L>NN, a>NN, ...) or a mask image "
+        "(--mask FILE.png: white = cloth, black = not, grey = let the segmentation decide)";
+    if (tv.region_image_fraction > 0.6)
+        refuse("region-size",
+               "the region counted as cloth covers " + fmt("%.0f", 100 * tv.region_image_fraction) +
+                   " % of the photo: the background was taken for cloth",
+               seg_remedy);
+    if (touches_border(tv.region) && photo_seg)
+        refuse("border", "the region counted as cloth touches the photo's border: the drape runs off the photo, or a "
+                         "shadow or the background joined it",
+               "photograph the whole drape with a margin of background all round; otherwise " + seg_remedy);
+    if (best.outline.size() < static_cast<std::size_t>(rays) * 9 / 10) {
+        const std::string msg = "top view: fabric edge found on only " + std::to_string(best.outline.size()) + " of " +
+                                std::to_string(rays) + " rays";
+        if (single) refuse("edge-not-found", msg, seg_remedy);
+        out.not_measured.push_back(msg);
         return;
     }
-    tv.dc_plane_percent = shoelace_dc(plane.outline, rec.R1, rec.R2);
-    tv.dc_chord_percent = shoelace_dc(chord.outline, rec.R1, rec.R2);
+    if (best.at_limit > std::max(3, rays / 50))
+        refuse("search-limit",
+               "on " + std::to_string(best.at_limit) + " of " + std::to_string(rays) +
+                   " rays the cloth reaches the search limit (the flat specimen's edge + 5 %, where no " + rec.specimen.describe() +
+                   " specimen can hang): a shadow or the background is counted as cloth, or the scale or specimen size is wrong",
+               "check --disc / --specimen and the scale (the overlay shows the limit as a yellow line); otherwise " + seg_remedy);
+    {
+        // A specimen cannot hang further out than its flat edge: where the
+        // outline in the disc-top plane (which, seen from above, is never
+        // further out than the hem really is) lies beyond it by more than 3 %
+        // + 3 mm (off-centring, stretch), the region is not the specimen.
+        int beyond = 0;
+        std::vector<Eigen::Vector2d> where;
+        for (std::size_t i = 0; i < disc.outline.size(); ++i) {
+            const Eigen::Vector2d& p = disc.outline[i];
+            double th = std::atan2(p.y(), p.x());
+            if (th < 0) th += 2 * M_PI;
+            const auto k = static_cast<std::size_t>(std::lround(th / (2 * M_PI) * rays)) % static_cast<std::size_t>(rays);
+            if (p.norm() > 1.03 * base.reach[k] + 0.003) {
+                ++beyond;
+                where.push_back(disc.px[i]);
+            }
+        }
+        if (beyond > rays / 20) {
+            tv.outline_px = best.px;
+            tv.at_limit_px = where;
+            tv.rays_at_limit = beyond;
+            throw RefusalError({"beyond-specimen",
+                                "on " + std::to_string(beyond) + " of " + std::to_string(rays) +
+                                    " rays the counted region lies beyond the flat specimen's edge (" + rec.specimen.describe() +
+                                    "), where no cloth can hang: the specimen or disc size is wrong, the scale is wrong, or "
+                                    "something else (a shadow, the background) is counted as cloth",
+                                "check --specimen, --disc and the scale (the overlay shows the flat specimen in grey); otherwise " +
+                                    seg_remedy});
+        }
+    }
+    tv.dc_plane_percent = dc_area(disc.outline, Req, rec.R2).first;
+    tv.dc_chord_percent = dc_area(hem.outline, Req, rec.R2).first;
     tv.outline = best.outline;
     tv.outline_z = best.z;
     tv.outline_arc = best.arc;
     tv.outline_px = best.px;
     tv.rays_beyond_reach = best.beyond;
-    tv.metrics = cloth::drape_metrics(tv.outline, rec.R1, rec.R2, opt.metrics);
+    tv.rays_at_limit = best.at_limit;
+    tv.at_limit_px = best.at_limit_px;
+    tv.metrics = cloth::drape_metrics(tv.outline, Req, rec.R2, opt.metrics);
     double max_px = 0;
     for (const auto& u : best.px) max_px = std::max(max_px, (u - c0).norm());
+    const double ped_px = (cam.project({rec.R2, 0, 0}) - c0).norm();
     if (max_px < ped_px + 3.0) {
         // Only the pedestal top was found (in the image, nothing reaches past
         // the disc's own edge): a specimen always hangs over the disc.
-        out.not_measured.push_back("top view: nothing hangs over the support disc in " + declared.image +
-                                   " (outline within " + fmt("%.1f", max_px - ped_px) +
-                                   " px of the disc edge): no specimen on the stand?");
+        const std::string msg = "top view: nothing hangs over the support disc in " + image_name + " (outline within " +
+                                fmt("%.1f", max_px - ped_px) + " px of the disc edge): no specimen on the stand?";
+        if (single) refuse("no-drape", msg, "check --disc (the disc's diameter) and the scale; " + seg_remedy);
+        out.not_measured.push_back(msg);
         return;
     }
+    const double D = tv.metrics.drape_coefficient_percent;
+    if (!(D >= 0.0 && D <= 100.0))
+        refuse("dc-range",
+               "the drape coefficient would be " + fmt("%.1f", D) + " %, outside 0..100 %: the counted region is " +
+                   (D > 100 ? "larger than the flat specimen" : "smaller than the disc"),
+               "check --disc and --specimen (diameters, not radii) and the scale; otherwise " + seg_remedy);
+
+    // ---- uncertainty of each model ----
     // Remaining error: (1) edge placement, 0.5 px along the whole perimeter;
-    // (2) the height model: a height error dz scales every radius by
-    // dz / (camera height - z), so dD = 2 A dz / (H - z) / (pi (R1^2 - R2^2)).
-    // dz is set in measure_record from the side view (or a default).
-    double zbar = 0;
-    for (double z : tv.outline_z) zbar += z;
-    zbar /= static_cast<double>(tv.outline_z.size());
-    const double H = cam.centre().z();
-    const double ring = M_PI * (rec.R1 * rec.R1 - rec.R2 * rec.R2);
-    const double px_m = (H - zbar) / cam.fx; // one pixel at the hem [m]
-    tv.dc_edge_term = 2 * M_PI * tv.metrics.mean_radius_m * 0.5 * px_m / ring * 100.0;
-    tv.dc_per_metre_height = 2 * tv.metrics.shadow_area_m2 / (H - zbar) / ring * 100.0;
-    tv.dc_uncertainty_percent = std::hypot(tv.dc_edge_term, tv.dc_per_metre_height * 0.010);
-    if (best.beyond > opt.rays / 20)
+    // (2) the scale reference (its own error, its height); (3) the camera
+    // height (moves every height-corrected radius); (4) the hem's height model:
+    // a height error dz scales every radius by dz / (H - z), so
+    // dD = 2 A dz / (H - z) / (specimen area - disc area).
+    const double ring = rec.specimen.area() - M_PI * rec.R2 * rec.R2;
+    const double z_ref = t_ref.z_plane;
+    auto value = [&](const Trace& t, const std::string& model, bool uses_ref_height, bool uses_H) {
+        PerspectiveValue v;
+        v.model = model;
+        v.available = t.outline.size() >= static_cast<std::size_t>(rays) * 9 / 10;
+        if (!v.available) return v;
+        const auto m = cloth::drape_metrics(t.outline, Req, rec.R2, opt.metrics);
+        v.dc_percent = m.drape_coefficient_percent;
+        v.area_m2 = m.shadow_area_m2;
+        double zbar = 0;
+        for (double z : t.z) zbar += z;
+        zbar /= static_cast<double>(t.z.size());
+        const double px_m = (H - zbar) / cam.fx; // one pixel at the outline [m]
+        const double A = m.shadow_area_m2;
+        v.terms.push_back({"edge", 2 * M_PI * m.mean_radius_m * 0.5 * px_m / ring * 100.0, "0.5 px along the outline"});
+        if (single) {
+            v.terms.push_back({"scale", 2 * A / ring * g.scale_sigma_rel * 100.0,
+                               "scale reference +-" + fmt("%.2f", 100 * g.scale_sigma_rel) + " %"});
+            if (uses_ref_height && g.reference_height_sigma > 0)
+                v.terms.push_back({"scale_reference_height", 2 * A / ring * g.reference_height_sigma / (H - z_ref) * 100.0,
+                                   "reference height +-" + fmt("%.1f", 1e3 * g.reference_height_sigma) + " mm"});
+            if (uses_H && g.camera_height_sigma > 0) {
+                const double Hp = H + g.camera_height_sigma, Hm = std::max(H - g.camera_height_sigma, z_ref + 0.3 * (H - z_ref));
+                TraceSetup ts = model == "hem" ? t_hem : t_disc;
+                double d[2];
+                int i = 0;
+                for (double Hx : {Hp, Hm}) {
+                    ts.H = Hx;
+                    const Trace tx = trace_outline(camera_with_height(g, Hx), prob, gate, ts, lightness);
+                    d[i++] = tx.outline.size() >= static_cast<std::size_t>(rays) / 2 ? dc_area(tx.outline, Req, rec.R2).first : v.dc_percent;
+                }
+                v.terms.push_back({"camera_height", 0.5 * std::abs(d[0] - d[1]),
+                                   "camera height " + fmt("%.0f", 1e3 * H) + " +-" + fmt("%.0f", 1e3 * g.camera_height_sigma) + " mm (" +
+                                       (g.camera_height_known ? "known" : "assumed") + ")"});
+            }
+        }
+        if (model == "hem") {
+            tv.dc_per_metre_height = 2 * A / (H - zbar) / ring * 100.0;
+            v.terms.push_back({"hem_depth", tv.dc_per_metre_height * 0.010, "the hem's height model +-10 mm"});
+        }
+        double ss = 0;
+        for (const auto& term : v.terms) ss += term.points * term.points;
+        v.uncertainty_percent = std::sqrt(ss);
+        return v;
+    };
+    tv.uncorrected = value(ref, "none", false, false);
+    tv.uncorrected.meaning = single ? "outline in the scale reference's plane (z = " + fmt("%.0f", 1e3 * z_ref) +
+                                          " mm), no height correction: what a ruler on the photo gives"
+                                    : "outline in the disc-top plane z = 0, no height correction";
+    tv.disc_plane = t_ref.z_plane == 0.0 ? tv.uncorrected : value(disc, "disc-plane", true, true);
+    tv.disc_plane.model = "disc-plane";
+    tv.disc_plane.meaning = "outline back-projected onto the disc-top plane: low by about hem depth / camera height "
+                            "(the hem hangs below the disc and looks smaller)";
+    tv.hem = value(hem, "hem", true, true);
+    tv.hem.meaning = "the hem back-projected onto a straight inextensible fibre from the disc edge (the vertical projection, "
+                     "as a drapemeter's shadow)";
+    const double hem_edge = tv.hem.terms.empty() ? 0.0 : tv.hem.terms.front().points;
+    tv.dc_edge_term = hem_edge;
+    set_hem_depth_error(tv, 0.010);
+    if (persp == "hem" && tv.hem.available) tv.dc_edge_term = hem_edge;
+    else if (persp == "disc-plane") tv.dc_edge_term = tv.disc_plane.terms.front().points;
+    else tv.dc_edge_term = tv.uncorrected.terms.front().points;
+    if (best.beyond > rays / 20)
         tv.warnings.push_back("top view: on " + std::to_string(best.beyond) +
                               " rays the fabric edge lies beyond the height model's hem (shadow or segmentation spill?)");
-    if (!tv.model.chromatic && tv.model.contrast < 25)
+    if (!photo_seg && !tv.model.chromatic && tv.model.contrast < 25)
         tv.warnings.push_back("top view: grey fabric with low contrast to the floor (" + fmt("%.0f", tv.model.contrast) +
                               " L* units); the edge may include the contact shadow");
+    if (single && persp == "disc-plane" && tv.hem.available)
+        tv.warnings.push_back("top view: D is given in the disc-top plane (" + fmt("%.1f", tv.disc_plane.dc_percent) +
+                              " %); the hem model would give " + fmt("%.1f", tv.hem.dc_percent) + " +- " +
+                              fmt("%.1f", tv.hem.uncertainty_percent) + " % with the camera height " + g.camera_height_source);
     tv.measured = true;
     out.measured.push_back("top view: drape coefficient, nodes, r(theta)");
 }

@@ -2,6 +2,7 @@
 // The top view: the silhouette of the drape traced along rays from the
 // pedestal axis, back-projected onto the height where it really is (a height
 // model of the hanging cloth), measured through the shared metric path.
+#include "engine/capture/scale.hpp"
 #include "engine/capture/segmentation.hpp"
 #include "engine/cloth/metrics.hpp"
 
@@ -20,8 +21,39 @@ enum class HeightModel {
 };
 const char* to_string(HeightModel m);
 
+/// One term of the stated uncertainty of D [points].
+struct UncertaintyTerm {
+    std::string name;   ///< edge, scale, scale_reference_height, camera_height, hem_depth
+    double points = 0;  ///< 1-sigma contribution to D [percentage points]
+    std::string note;   ///< the input sigma, in words
+};
+
+/// D under one perspective model, with its uncertainty.
+struct PerspectiveValue {
+    std::string model;                  ///< none, disc-plane, hem
+    bool available = false;
+    double dc_percent = std::nan("");
+    double area_m2 = std::nan("");
+    double uncertainty_percent = std::nan("");
+    std::vector<UncertaintyTerm> terms;
+    std::string meaning;                ///< one line for a person
+};
+
 struct TopView {
     bool measured = false;
+    std::string perspective = "hem";    ///< the model D is reported with: none, disc-plane, hem
+    std::string perspective_reason;     ///< why that one
+    PerspectiveValue uncorrected, disc_plane, hem; ///< every model, always reported
+    double specimen_angle = 0;          ///< orientation of a non-round specimen used [rad]
+    std::string segmentation_method;
+    bool photo_segmentation = false;    ///< the single-photo segmenter (else the lab classifier in `model`)
+    double lightness_weight = 1;        ///< photo segmenter: weight of L* against a*, b*
+    bool clamp_disc = false;            ///< photo segmenter: the disc top is not cloth-coloured
+    cv::Mat region;                     ///< counted pixels (CV_8U, 255), for the overlay
+    std::vector<Eigen::Vector2d> limit_px;    ///< the search limit in the image
+    std::vector<Eigen::Vector2d> at_limit_px; ///< rays whose edge was found at the search limit
+    int rays_at_limit = 0;
+    double region_image_fraction = 0;   ///< counted pixels / image pixels
     FabricModel model;
     HeightModel height_model = HeightModel::Chord;
     cloth::Polygon2 outline;            ///< corrected shadow outline [m], one vertex per ray

@@ -61,6 +61,12 @@ inline DrapeSetup on_fold_branch(DrapeSetup s, int n, double lift_m = kFoldBranc
 /// grid springs), model, pedestal and floor colliders, perturbed flat start.
 std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const DrapeSetup& setup, const ModelOptions& mopt = {});
 
+/// What make_drape_system does to its disc, for a sheet built elsewhere (e.g. the
+/// widget's square sheet, centred on the pedestal axis): lays it flat just above
+/// the pedestal top, lifts it by the seeded perturbation (DrapeSetup::perturbation,
+/// fold_mode) and adds the pedestal and floor colliders.
+void place_on_drapemeter(ClothSystem& sys, const DrapeSetup& setup);
+
 struct Slice {
     double depth_m;
     RadialProfile profile; ///< NaN where the ray misses; complete() when closed

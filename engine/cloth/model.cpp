@@ -13,6 +13,8 @@ namespace drape::cloth {
 
 namespace {
 
+constexpr double kEulerPinned = 9.869604401089358; // pi^2: a strip with pinned ends
+
 void add_common(ClothModel& m, const ClothMesh& mesh, double contact_depth)
 {
     const int n = mesh.vertex_count();
@@ -116,6 +118,18 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
                 }
             }
         m.description = "grid mass-spring model (stretch, shear, quadratic bending) from continuum parameters";
+        if (opt.buckling == ModelOptions::Buckling::Euler) {
+            // The Euler load of the strip each spring stands for (ModelOptions::buckling):
+            // warp and weft springs a strip of width hv (hu) and length hu (hv); the shear
+            // diagonals a strip of length L = sqrt(hu^2 + hv^2) and width hu hv / L,
+            // bending with the twist closure sqrt(Bu Bv).
+            const double L2 = hu * hu + hv * hv;
+            for (auto& sp : m.springs) {
+                if (sp.kind == SpringKind::StretchU) sp.fc = kEulerPinned * Bu * hv / (hu * hu);
+                else if (sp.kind == SpringKind::StretchV) sp.fc = kEulerPinned * Bv * hu / (hv * hv);
+                else if (sp.kind == SpringKind::Shear) sp.fc = kEulerPinned * std::sqrt(Bu * Bv) * (hu * hv / std::sqrt(L2)) / L2;
+            }
+        }
         return m;
     }
     // General triangle mesh.
@@ -138,6 +152,13 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
         const double len2 = (mesh.uv.row(a) - mesh.uv.row(b)).squaredNorm();
         if (len2 <= 0) throw ParameterError("make_model: zero-length edge between vertices " + std::to_string(a) + " and " + std::to_string(b));
         add_spring(m, mesh, a, b, E * A / len2, cs * A / len2, SpringKind::Edge);
+        if (opt.buckling == ModelOptions::Buckling::Euler) {
+            // The Euler load of the strip along the edge (ModelOptions::buckling):
+            // width A / L (the edge's share of its triangles), bending along the edge.
+            const Eigen::Vector2d d = (mesh.uv.row(b) - mesh.uv.row(a)).transpose();
+            const double c2 = d.x() * d.x() / len2, s2 = d.y() * d.y() / len2;
+            m.springs.back().fc = kEulerPinned * (Bu * c2 + Bv * s2) * (A / std::sqrt(len2)) / len2;
+        }
         if (tris.size() != 2 || !quadratic) continue;
         // The lambda takes copies: clang before 16 cannot capture structured bindings.
         auto opposite = [&, ea = a, eb = b](int t) {

@@ -5,6 +5,7 @@
 #include "engine/cloth/mesh.hpp"
 #include "engine/cloth/params.hpp"
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,13 +14,34 @@ namespace drape::cloth {
 
 enum class SpringKind : unsigned char { StretchU, StretchV, Shear, FlexionU, FlexionV, Edge };
 
-/// Linear spring with a dashpot along it (Provot 1995). Energy 1/2 k (|xi-xj| - rest)^2.
+/// Spring with a dashpot along it (Provot 1995). Energy 1/2 k x^2 in the extension
+/// x = |xi - xj| - rest, except in compression beyond the strip's buckling load:
+/// with fc >= 0 the compressive force never exceeds fc (the energy continues
+/// linearly, C1), the post-buckling response of Choi and Ko 2002 ("Stable but
+/// responsive cloth") in its simplest form: a strip shorter than its rest length
+/// by more than fc / k has buckled at a scale below the mesh.
 struct Spring {
     int i, j;
     double rest; ///< [m]
     double k;    ///< [N/m]
     double d;    ///< [N*s/m]
     SpringKind kind;
+    double fc = -1; ///< [N] largest compressive force; < 0: linear in compression too
+    /// Energy [J], its first and second derivative in the length [N], [N/m].
+    void law(double length, double& e, double& de, double& d2e) const
+    {
+        const double x = length - rest;
+        if (fc >= 0 && k * x < -fc) {
+            const double xc = -fc / k;
+            e = 0.5 * k * xc * xc - fc * (x - xc);
+            de = -fc;
+            d2e = 0;
+            return;
+        }
+        e = 0.5 * k * x * x;
+        de = k * x;
+        d2e = k;
+    }
 };
 
 /// Quadratic bending stencil (after Bergou, Wardetzky, Harmon, Zorin, Grinspun
@@ -50,16 +72,53 @@ struct ModelOptions {
     /// hanging below it cuts the corner of the pedestal (3.9 mm deep at grid 25), and
     /// the laser slices next to the disc come out too narrow. See docs/model-discrepancy.md.
     bool edge_contact = true;
+    /// Buckling below the mesh scale (Spring::fc): every stretch and shear spring
+    /// gives way in compression at the Euler load of the strip of cloth it stands
+    /// for, pi^2 B w / L^2 (B the bending rigidity along the strip, w its width, L
+    /// its length; pinned ends). A coarse mesh cannot form the small folds a
+    /// fabric makes where it is compressed; without this it shortens only by
+    /// stretching its springs, which locks it (a circle skirt crumples, a limp
+    /// drape comes out too stiff on coarse grids: silk D 29.9 % at grid 41 and
+    /// 24.4 % at grid 61). The load grows as 1 / L^2, so refining the mesh takes
+    /// the limit away where the mesh resolves the folds itself. No parameter:
+    /// it follows from the bending rigidity. None: the seed's linear springs, the
+    /// default until the fits have been checked with it (docs/model-discrepancy.md);
+    /// the starter fabrics and garments use Euler.
+    enum class Buckling { None, Euler };
+    Buckling buckling = Buckling::None;
 };
 
-/// A horizontal tether of one vertex to a point: energy 1/2 k |P (x - target)|^2 with P
-/// the projection on the horizontal plane. It stands for the static friction that holds
-/// a specimen's centre on the drapemeter disc: without it a sheet on a frictionless disc
-/// is in unstable equilibrium against sliding sideways (the longer overhang pulls harder).
+/// A horizontal tether of a material point to a place: energy 1/2 k |P (x - target)|^2
+/// with P the projection on the horizontal plane and x = sum_a w_a x_{v_a} the point
+/// interpolated from up to four vertices (a vertex: one weight 1; the middle of a
+/// grid cell: four weights 1/4). It stands for the static friction that holds a
+/// specimen's centre on the drapemeter disc: without it a sheet on a frictionless
+/// disc is in unstable equilibrium against sliding sideways (the longer overhang
+/// pulls harder). Tethering the exact material centre keeps the set-up symmetric
+/// about the pedestal axis: a tether on the vertex nearest the centre (off the axis
+/// on even grids) leaves an almost free rotation that the static solver drifts along.
 struct HorizontalAnchor {
-    int vertex;
-    Eigen::Vector3d target; ///< [m]
-    double k;               ///< [N/m]
+    int n = 1;                          ///< vertices used
+    std::array<int, 4> v{-1, -1, -1, -1};
+    std::array<double, 4> w{1, 0, 0, 0}; ///< interpolation weights, summing to 1
+    Eigen::Vector3d target;             ///< [m]
+    double k;                           ///< [N/m]
+    static HorizontalAnchor at_vertex(int vertex, const Eigen::Vector3d& target, double k)
+    {
+        HorizontalAnchor a;
+        a.v[0] = vertex;
+        a.target = target;
+        a.k = k;
+        return a;
+    }
+    /// The anchored point at positions X.
+    template <class P>
+    Eigen::Vector3d point(const P& X) const
+    {
+        Eigen::Vector3d x = Eigen::Vector3d::Zero();
+        for (int i = 0; i < n; ++i) x += w[static_cast<std::size_t>(i)] * X.row(v[static_cast<std::size_t>(i)]).transpose();
+        return x;
+    }
 };
 
 struct ClothModel {

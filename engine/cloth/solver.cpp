@@ -1,19 +1,18 @@
 #include "engine/cloth/solver.hpp"
 
+#include "engine/cloth/solver_detail.hpp"
+#include "engine/cloth/sparse_cholesky.hpp"
 #include "engine/core/error.hpp"
 
-#include <Eigen/CholmodSupport>
-
+#include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace drape::cloth {
 
-using SpMat = Eigen::SparseMatrix<double>;
-using Cholmod = Eigen::CholmodDecomposition<SpMat, Eigen::Upper>;
+using namespace detail;
 
 Integrator parse_integrator(const std::string& name)
 {
@@ -53,22 +52,6 @@ std::string to_string(SolverStatus::Outcome o)
 
 namespace {
 
-Eigen::Map<Eigen::VectorXd> flat(Positions& P) { return {P.data(), P.size()}; }
-Eigen::Map<const Eigen::VectorXd> flat(const Positions& P) { return {P.data(), P.size()}; }
-
-void mask_pinned(const ClothSystem& s, Positions& f)
-{
-    for (int i = 0; i < s.vertex_count(); ++i)
-        if (s.pinned(i)) f.row(i).setZero();
-}
-
-double weight_norm(const ClothSystem& s)
-{
-    const Positions g = s.gravity_forces();
-    const double w = flat(g).norm();
-    return w > 0 ? w : 1.0;
-}
-
 /// Damping "energy" 1/2 V^T D V for the implicit step (D = dashpots + air).
 double damping_quadratic(const ClothSystem& s, const Positions& X, const Positions& V)
 {
@@ -92,8 +75,7 @@ double relative_residual(const ClothSystem& s)
 struct Stepper::Impl {
     explicit Impl(const ClothSystem& s) : H(s) {}
     HessianAssembler H;
-    Cholmod llt;
-    bool analysed = false;
+    std::unique_ptr<Cholmod> llt; ///< analysed on the first implicit step
     long solves = 0;
     Positions f, k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v, xt, vt;
 };
@@ -240,14 +222,13 @@ bool Stepper::step(double dt)
             mask_pinned(s, g);
             if (flat(g).norm() < 1e-9 * wn) break;
             I.H.assemble(y, md, 1.0 / dt);
-            if (!I.analysed) {
-                I.llt.cholmod().print = 0;
-                I.llt.analyzePattern(I.H.matrix());
-                I.analysed = true;
+            if (!I.llt) {
+                bool reused = false;
+                I.llt = take_analysed(I.H.matrix(), reused);
             }
-            I.llt.factorize(I.H.matrix());
-            if (I.llt.info() != Eigen::Success) return false;
-            Eigen::VectorXd dx = I.llt.solve(flat(g));
+            I.llt->factorize(I.H.matrix());
+            if (I.llt->info() != Eigen::Success) return false;
+            Eigen::VectorXd dx = I.llt->solve(flat(g));
             ++I.solves;
             Positions D = Eigen::Map<Positions>(dx.data(), n, 3);
             const double p0 = phi(y);
@@ -348,162 +329,11 @@ SolverStatus run_dynamic(ClothSystem& s, const RestOptions& opt)
     return st;
 }
 
-/// Static solver: the rest state as a minimum of the potential energy, found by
-/// Newton's method regularised with a proximal mass term M/h^2 (a fully damped
-/// implicit step of pseudo-time h). h grows while full Newton steps are
-/// accepted and shrinks when the line search cuts them, so the method behaves
-/// like damped dynamics far from rest (the folds form as they would in a real
-/// fall) and like pure Newton near it. The proximal term also removes the
-/// neutral modes of a frictionless contact (sliding and spinning on the disc).
-SolverStatus run_static(ClothSystem& s, const RestOptions& opt)
-{
-    SolverStatus st;
-    const auto t0 = Clock::now();
-    const long f0 = s.force_evaluations;
-    const int n = s.vertex_count();
-    HessianAssembler H(s);
-    Cholmod llt;
-    bool analysed = false;
-    const auto& mass = s.model().mass;
-    const double wn = weight_norm(s);
-    double h = opt.dt > 0 ? opt.dt : 0.02;
-    const double h_max = 50.0, h_min = 1e-6;
-    Positions f, trial;
-    s.v.setZero();
-    int exact_ok = 1;
-    auto last_report = t0;
-    // Energy scale for rounding: the whole cloth lowered by 1 m [J].
-    const double e_scale = s.model().total_mass() * 9.81;
-    while (true) {
-        s.conservative_forces(s.x, f);
-        ++s.force_evaluations;
-        mask_pinned(s, f);
-        st.residual = flat(f).norm() / wn;
-        if (!std::isfinite(st.residual)) {
-            st.outcome = SolverStatus::Outcome::Diverged;
-            st.message = "non-finite force at iteration " + std::to_string(st.steps);
-            break;
-        }
-        if (st.residual < opt.residual) {
-            st.outcome = SolverStatus::Outcome::Converged;
-            break;
-        }
-        if (st.steps >= opt.max_newton) {
-            st.outcome = SolverStatus::Outcome::NotConverged;
-            st.message = "residual " + std::to_string(st.residual) + " after " + std::to_string(st.steps) + " Newton iterations";
-            break;
-        }
-        st.force_evaluations = s.force_evaluations - f0;
-        const auto now = Clock::now();
-        st.wall_seconds = std::chrono::duration<double>(now - t0).count();
-        // The cancel flag is read every iteration, the progress callback at most
-        // five times a second (a terminal or a log needs no more).
-        const bool report = st.steps == 0 || now - last_report > std::chrono::milliseconds(200);
-        if (report) last_report = now;
-        if ((opt.cancel && opt.cancel->load()) || (report && opt.progress && !opt.progress(st))) {
-            st.outcome = SolverStatus::Outcome::Cancelled;
-            break;
-        }
-        const Eigen::VectorXd md = mass / (h * h);
-        // The exact Hessian (compressed springs' negative stiffness, the contact
-        // normal's turning) whenever it is positive definite: it halves the
-        // iterations against the projected one, which is the fallback for a few
-        // iterations after a failed factorisation.
-        const bool exact = exact_ok > 0;
-        H.assemble(s.x, md, 0.0, !exact);
-        if (!analysed) {
-            llt.cholmod().print = 0; // numerical outcomes are reported through the status, not stderr
-            llt.setMode(Eigen::CholmodSupernodalLLt);
-            llt.analyzePattern(H.matrix());
-            analysed = true;
-            if (opt.trace)
-                std::fprintf(stderr, "static solver: %ld unknowns, %ld Hessian entries, factor %g entries, %g flop per factorisation (method %d)\n", (long)H.matrix().rows(), (long)H.matrix().nonZeros(),
-                             llt.cholmod().lnz, llt.cholmod().fl, llt.cholmod().selected);
-        }
-        llt.factorize(H.matrix());
-        ++st.steps;
-        if (llt.info() != Eigen::Success && exact) {
-            exact_ok = -5; // back off from the exact Hessian for a few iterations
-            continue;
-        }
-        if (exact_ok <= 0) ++exact_ok;
-        if (llt.info() != Eigen::Success) {
-            h *= 0.25;
-            if (h < h_min) {
-                st.outcome = SolverStatus::Outcome::Diverged;
-                st.message = "Hessian not positive definite even with strong regularisation";
-                break;
-            }
-            continue;
-        }
-        const Eigen::VectorXd dx = llt.solve(flat(f));
-        ++st.newton_iterations;
-        const Eigen::Map<const Positions> D(dx.data(), n, 3);
-        const double e0 = s.potential_energy(s.x);
-        const double slope = -flat(f).dot(dx);
-        const double mdx = [&] {
-            double q = 0;
-            for (int i = 0; i < n; ++i) q += md(i) * D.row(i).squaredNorm();
-            return q;
-        }();
-        double alpha = 1;
-        bool accepted = false;
-        // Near rest the predicted energy decrease falls below the rounding error
-        // of the energy sum; there the step is judged by the force residual instead.
-        const double e_round = 1e-12 * (std::abs(e0) + e_scale);
-        for (int ls = 0; ls < 40; ++ls) {
-            trial = s.x + alpha * D;
-            const double phi = s.potential_energy(trial) + 0.5 * alpha * alpha * mdx;
-            if (phi <= e0 + 1e-4 * alpha * slope) {
-                accepted = true;
-                break;
-            }
-            if (-alpha * slope < e_round) {
-                Positions ft;
-                s.conservative_forces(trial, ft);
-                mask_pinned(s, ft);
-                if (flat(ft).norm() < flat(f).norm()) {
-                    accepted = true;
-                    break;
-                }
-            }
-            alpha *= 0.5;
-        }
-        if (!accepted) {
-            h *= 0.25;
-            if (h < h_min) {
-                st.outcome = SolverStatus::Outcome::NotConverged;
-                st.message = "line search failed at residual " + std::to_string(st.residual);
-                break;
-            }
-            continue;
-        }
-        s.x = trial;
-        if (opt.trace)
-        {
-            int imax = 0;
-            f.rowwise().norm().maxCoeff(&imax);
-            std::fprintf(stderr, "it %ld res %.3e h %.3g alpha %.3g E %.9g  worst v%d r=%.4f z=%.5f |f|/mg=%.3g\n", st.steps, st.residual, h, alpha, e0,
-                         imax, std::hypot(s.x(imax, 0), s.x(imax, 1)), s.x(imax, 2), f.row(imax).norm() / (mass(imax) * 9.81));
-        }
-        if (alpha == 1.0) h = std::min(h * 2.0, h_max);
-        else if (alpha < 0.25) h = std::max(h * 0.5, h_min);
-    }
-    st.max_speed = 0;
-    if (s.model().friction > 0)
-        st.message += std::string(st.message.empty() ? "" : "; ") +
-                      "the static solver treats contact as frictionless (a rest state with friction depends on the path: use "
-                      "the implicit or an explicit integrator)";
-    st.force_evaluations = s.force_evaluations - f0;
-    st.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    return st;
-}
-
 } // namespace
 
 SolverStatus run_to_rest(ClothSystem& s, const RestOptions& opt)
 {
-    if (opt.integrator == Integrator::Static) return run_static(s, opt);
+    if (opt.integrator == Integrator::Static) return detail::run_static(s, opt);
     return run_dynamic(s, opt);
 }
 

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 
 namespace drape::cloth {
 
@@ -44,21 +46,6 @@ void ClothSystem::set_mass(int vertex, double mass)
 }
 
 namespace {
-/// Penetration of the offset surface: phi = distance - offset; < 0 in contact.
-template <class F>
-void for_each_contact(const ClothSystem& s, const Positions& X, F&& f)
-{
-    const auto& m = s.model();
-    const double off = m.contact_offset;
-    for (const auto& c : s.colliders())
-        for (int i = 0; i < X.rows(); ++i) {
-            if (m.pinned[static_cast<std::size_t>(i)]) continue;
-            ContactSample cs;
-            if (!c->query(X.row(i).transpose(), off, cs)) continue;
-            const double phi = cs.distance - off;
-            if (phi < 0) f(i, phi, cs.normal, *c);
-        }
-}
 
 /// One edge in contact at an interior point: p(t) = (1 - t) x_a + t x_b is the
 /// point of the edge deepest in the offset surface (phi(p(t)) minimal in t).
@@ -237,6 +224,85 @@ bool edge_deepest_point(const Collider& c, const Vec3& xa, const Vec3& xb, doubl
     return true;
 }
 
+} // namespace
+
+/// A vertex in contact: phi = distance - offset < 0 [m], outward normal n.
+struct VertexContact {
+    int i;
+    double phi;
+    Vec3 n;
+    const Collider* collider;
+};
+
+/// The contacts at one set of positions, for one set of colliders, offset and
+/// pinned vertices: forces, energy and Hessian at the same positions (a Newton
+/// iteration asks for all three) query the colliders once. The key is compared
+/// in full (positions bit for bit), so a stale answer is impossible.
+struct ContactCache {
+    Positions x;
+    double offset = std::numeric_limits<double>::quiet_NaN();
+    std::vector<char> pinned;
+    std::vector<const Collider*> colliders;
+    bool edge_flag = false;
+    bool vertex_valid = false, edge_valid = false;
+    std::vector<VertexContact> vertex;
+    std::vector<EdgeContact> edge;
+
+    void use(const ClothSystem& s, const Positions& X)
+    {
+        const auto& m = s.model();
+        const auto& cs = s.colliders();
+        bool same = x.rows() == X.rows() && offset == m.contact_offset && edge_flag == m.edge_contact && pinned == m.pinned &&
+                    colliders.size() == cs.size();
+        for (std::size_t k = 0; same && k < cs.size(); ++k) same = colliders[k] == cs[k].get();
+        same = same && std::memcmp(x.data(), X.data(), sizeof(double) * static_cast<std::size_t>(X.size())) == 0;
+        if (same) return;
+        x = X;
+        offset = m.contact_offset;
+        edge_flag = m.edge_contact;
+        pinned = m.pinned;
+        colliders.clear();
+        for (const auto& c : cs) colliders.push_back(c.get());
+        vertex_valid = edge_valid = false;
+    }
+};
+
+ContactCacheHolder::ContactCacheHolder() : m_p(std::make_unique<ContactCache>()) {}
+ContactCacheHolder::~ContactCacheHolder() = default;
+ContactCacheHolder::ContactCacheHolder(const ContactCacheHolder&) : m_p(std::make_unique<ContactCache>()) {}
+ContactCacheHolder& ContactCacheHolder::operator=(const ContactCacheHolder&)
+{
+    m_p = std::make_unique<ContactCache>();
+    return *this;
+}
+
+namespace {
+
+/// Calls f(i, phi, n, collider) for every free vertex inside a collider's offset
+/// surface (phi = distance - offset < 0), collider by collider.
+template <class F>
+void for_each_contact(const ClothSystem& s, const Positions& X, F&& f)
+{
+    ContactCache& cc = s.contact_cache();
+    cc.use(s, X);
+    if (!cc.vertex_valid) {
+        ProfileScope timer(s.profile ? &s.profile->vertex_contact : nullptr);
+        const auto& m = s.model();
+        const double off = m.contact_offset;
+        cc.vertex.clear();
+        for (const auto& c : s.colliders())
+            for (int i = 0; i < X.rows(); ++i) {
+                if (m.pinned[static_cast<std::size_t>(i)]) continue;
+                ContactSample cs;
+                if (!c->query(X.row(i).transpose(), off, cs)) continue;
+                const double phi = cs.distance - off;
+                if (phi < 0) cc.vertex.push_back({i, phi, cs.normal, c.get()});
+            }
+        cc.vertex_valid = true;
+    }
+    for (const auto& c : cc.vertex) f(c.i, c.phi, c.n, *c.collider);
+}
+
 /// Calls f(EdgeContact) for every mesh edge whose deepest point in a curved
 /// collider is inside the edge and in contact.
 template <class F>
@@ -244,20 +310,31 @@ void for_each_edge_contact(const ClothSystem& s, const Positions& X, F&& f)
 {
     const auto& m = s.model();
     if (!m.edge_contact) return;
-    const double off = m.contact_offset;
-    const auto& edges = s.edges();
-    for (const auto& c : s.colliders()) {
-        const std::string kind = c->kind();
-        if (kind != "pedestal" && kind != "sphere") continue;
-        for (std::size_t ei = 0; ei < edges.size(); ++ei) {
-            const int a = edges[ei][0], b = edges[ei][1];
-            if (m.pinned[static_cast<std::size_t>(a)] && m.pinned[static_cast<std::size_t>(b)]) continue;
-            EdgeContact ec;
-            if (!edge_deepest_point(*c, X.row(a).transpose(), X.row(b).transpose(), off, ec)) continue;
-            ec.edge = static_cast<int>(ei);
-            ec.k = 0.5 * (m.contact_stiffness(a) + m.contact_stiffness(b));
-            f(ec);
+    ContactCache& cc = s.contact_cache();
+    cc.use(s, X);
+    if (!cc.edge_valid) {
+        ProfileScope timer(s.profile ? &s.profile->edge_contact : nullptr);
+        const double off = m.contact_offset;
+        const auto& edges = s.edges();
+        cc.edge.clear();
+        for (const auto& c : s.colliders()) {
+            const std::string kind = c->kind();
+            if (kind != "pedestal" && kind != "sphere") continue;
+            for (std::size_t ei = 0; ei < edges.size(); ++ei) {
+                const int a = edges[ei][0], b = edges[ei][1];
+                if (m.pinned[static_cast<std::size_t>(a)] && m.pinned[static_cast<std::size_t>(b)]) continue;
+                EdgeContact ec;
+                if (!edge_deepest_point(*c, X.row(a).transpose(), X.row(b).transpose(), off, ec)) continue;
+                ec.edge = static_cast<int>(ei);
+                cc.edge.push_back(ec);
+            }
         }
+        cc.edge_valid = true;
+    }
+    for (auto& ec : cc.edge) {
+        const auto& e = s.edges()[static_cast<std::size_t>(ec.edge)];
+        ec.k = 0.5 * (m.contact_stiffness(e[0]) + m.contact_stiffness(e[1]));
+        f(static_cast<const EdgeContact&>(ec));
     }
 }
 } // namespace
@@ -269,12 +346,22 @@ std::vector<int> ClothSystem::edges_in_contact(const Positions& X) const
     return out;
 }
 
+int ClothSystem::vertex_contact_count(const Positions& X) const
+{
+    int k = 0;
+    for_each_contact(*this, X, [&](int, double, const Vec3&, const Collider&) { ++k; });
+    return k;
+}
+
 double ClothSystem::potential_energy(const Positions& X) const
 {
+    ProfileScope timer(profile ? &profile->energy : nullptr);
     double e = 0;
     for (const auto& sp : m_model.springs) {
         const double l = (X.row(sp.i) - X.row(sp.j)).norm();
-        e += 0.5 * sp.k * (l - sp.rest) * (l - sp.rest);
+        double es, de, d2e;
+        sp.law(l, es, de, d2e);
+        e += es;
     }
     const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening;
     for (const auto& b : m_model.bends) {
@@ -286,7 +373,7 @@ double ClothSystem::potential_energy(const Positions& X) const
     }
     for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
     for (const auto& a : m_model.anchors) {
-        const Vec3 d = X.row(a.vertex).transpose() - a.target;
+        const Vec3 d = a.point(X) - a.target;
         e += 0.5 * a.k * (d.x() * d.x() + d.y() * d.y());
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3&, const Collider&) { e += 0.5 * m_model.contact_stiffness(i) * phi * phi; });
@@ -312,12 +399,15 @@ Positions ClothSystem::gravity_forces() const
 
 void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
 {
+    ProfileScope timer(profile ? &profile->forces : nullptr);
     f.setZero(X.rows(), 3);
     for (const auto& sp : m_model.springs) {
         const Vec3 u = X.row(sp.i) - X.row(sp.j);
         const double l = u.norm();
         if (l <= 1e-300) continue;
-        const Vec3 fi = -sp.k * (l - sp.rest) / l * u;
+        double es, de, d2e;
+        sp.law(l, es, de, d2e);
+        const Vec3 fi = -de / l * u;
         f.row(sp.i) += fi.transpose();
         f.row(sp.j) -= fi.transpose();
     }
@@ -331,9 +421,12 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
     }
     for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();
     for (const auto& a : m_model.anchors) {
-        const Vec3 d = X.row(a.vertex).transpose() - a.target;
-        f(a.vertex, 0) -= a.k * d.x();
-        f(a.vertex, 1) -= a.k * d.y();
+        const Vec3 d = a.point(X) - a.target;
+        for (int i = 0; i < a.n; ++i) {
+            const auto k = static_cast<std::size_t>(i);
+            f(a.v[k], 0) -= a.k * a.w[k] * d.x();
+            f(a.v[k], 1) -= a.k * a.w[k] * d.y();
+        }
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3& n, const Collider&) { f.row(i) -= (m_model.contact_stiffness(i) * phi * n).transpose(); });
     for_each_edge_contact(*this, X, [&](const EdgeContact& c) {
@@ -410,6 +503,9 @@ HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
         for (int p = 0; p < b.n; ++p)
             for (int q = p + 1; q < b.n; ++q) link(b.v[p], b.v[q]);
     for (const auto& e : s.edges()) link(e[0], e[1]);
+    for (const auto& a : m.anchors)
+        for (int p = 0; p < a.n; ++p)
+            for (int q = p + 1; q < a.n; ++q) link(a.v[static_cast<std::size_t>(p)], a.v[static_cast<std::size_t>(q)]);
     std::vector<int> colptr(static_cast<std::size_t>(3 * n + 1), 0);
     long nnz = 0;
     for (int j = 0; j < n; ++j) {
@@ -463,8 +559,10 @@ HessianAssembler::Block HessianAssembler::block(int i, int j) const
     return bl;
 }
 
-void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project)
+void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, Projection projection)
 {
+    const bool project_springs = projection != Projection::None, project_contacts = projection == Projection::All;
+    ProfileScope timer(m_s.profile ? &m_s.profile->assemble : nullptr);
     const auto& m = m_s.model();
     double* val = m_H.valuePtr();
     std::fill(val, val + m_H.nonZeros(), 0.0);
@@ -486,9 +584,13 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         if (l <= 1e-300) continue;
         u /= l;
         const Eigen::Matrix3d nn = u * u.transpose();
-        double t = 1.0 - sp.rest / l;
-        if (project && t < 0) t = 0;
-        Eigen::Matrix3d K = sp.k * (nn + t * (I - nn));
+        // E''(l) along the spring, E'(l) / l across it (negative in compression:
+        // the projected form drops it).
+        double es, de, d2e;
+        sp.law(l, es, de, d2e);
+        double t = de / l;
+        if (project_springs && t < 0) t = 0;
+        Eigen::Matrix3d K = d2e * nn + t * (I - nn);
         if (damping_scale != 0) K += damping_scale * sp.d * nn;
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.i)], K);
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.j)], K);
@@ -520,16 +622,25 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         if (damping_scale != 0) d += damping_scale * m.air_damping * m.mass(i);
         if (d != 0) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], d * I);
     }
-    for (const auto& a : m.anchors) {
-        Eigen::Matrix3d K = Eigen::Matrix3d::Zero();
-        K(0, 0) = K(1, 1) = a.k;
-        add_diag(m_diag_blocks[static_cast<std::size_t>(a.vertex)], K);
+    for (std::size_t ai = 0; ai < m.anchors.size(); ++ai) {
+        const auto& a = m.anchors[ai];
+        Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
+        P(0, 0) = P(1, 1) = a.k;
+        for (int i = 0; i < a.n; ++i) {
+            const auto ki = static_cast<std::size_t>(i);
+            add_diag(m_diag_blocks[static_cast<std::size_t>(a.v[ki])], a.w[ki] * a.w[ki] * P);
+            for (int j = i + 1; j < a.n; ++j) {
+                const auto kj = static_cast<std::size_t>(j);
+                // Off-diagonal blocks are stored once, (min, max); P is symmetric.
+                add_off(block(std::min(a.v[ki], a.v[kj]), std::max(a.v[ki], a.v[kj])), a.w[ki] * a.w[kj] * P);
+            }
+        }
     }
     for_each_contact(m_s, X, [&](int i, double phi, const Vec3& nrm, const Collider& c) {
         Eigen::Matrix3d K = nrm * nrm.transpose();
         // Exact: the normal turns as the point moves (curved collider surfaces);
         // with phi < 0 this term is negative, so the projected form drops it.
-        if (!project) K += phi * c.distance_hessian(X.row(i).transpose());
+        if (!project_contacts) K += phi * c.distance_hessian(X.row(i).transpose());
         add_diag(m_diag_blocks[static_cast<std::size_t>(i)], m.contact_stiffness(i) * K);
     });
     for_each_edge_contact(m_s, X, [&](const EdgeContact& c) {
@@ -538,7 +649,7 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         const auto& ed = m_s.edges()[static_cast<std::size_t>(c.edge)];
         Eigen::Matrix<double, 6, 1> grad;
         Eigen::Matrix<double, 6, 6> K;
-        edge_gradients(c, grad, &K, !project);
+        edge_gradients(c, grad, &K, !project_contacts);
         K *= c.k;
         add_diag(m_diag_blocks[static_cast<std::size_t>(ed[0])], K.block<3, 3>(0, 0));
         add_diag(m_diag_blocks[static_cast<std::size_t>(ed[1])], K.block<3, 3>(3, 3));

@@ -5,6 +5,7 @@
 #include "engine/cloth/colliders.hpp"
 #include "engine/cloth/mesh.hpp"
 #include "engine/cloth/model.hpp"
+#include "engine/cloth/profile.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -15,6 +16,27 @@
 
 namespace drape::cloth {
 
+struct ContactCache; // system.cpp
+
+/// Holds the contact cache of one ClothSystem; a copy starts empty (a copied
+/// system may get other colliders).
+class ContactCacheHolder {
+public:
+    ContactCacheHolder();
+    ~ContactCacheHolder();
+    ContactCacheHolder(const ContactCacheHolder&);
+    ContactCacheHolder& operator=(const ContactCacheHolder&);
+    ContactCache& get() const { return *m_p; }
+
+private:
+    std::unique_ptr<ContactCache> m_p;
+};
+
+/// Not safe for concurrent use from several threads, not even through const
+/// methods: forces, energy and Hessian share a cache of the contacts found at
+/// the last positions they were asked about (a Newton iteration asks for all
+/// three at the same positions; the collider queries are its costliest part on
+/// a body mesh).
 class ClothSystem {
 public:
     ClothSystem(ClothMesh mesh, ClothModel model);
@@ -52,6 +74,9 @@ public:
     void add_damping_forces(const Positions& X, const Positions& V, Positions& f) const;
 
     mutable long force_evaluations = 0;
+    /// When set, forces, energies, contact queries and Hessian assembly add their
+    /// wall time here (see profile.hpp). Not owned.
+    mutable SolveProfile* profile = nullptr;
 
     /// Gravity force per vertex [N] (zero on pinned vertices).
     Positions gravity_forces() const;
@@ -64,6 +89,11 @@ public:
     /// Indices into edges() of the edges whose deepest point in a curved
     /// collider is inside the edge and in contact (ModelOptions::edge_contact).
     std::vector<int> edges_in_contact(const Positions& X) const;
+    /// Free vertices in contact with any collider at X (a vertex in two counts once per collider).
+    int vertex_contact_count(const Positions& X) const;
+
+    /// Internal (system.cpp): the contacts found at the last positions asked about.
+    ContactCache& contact_cache() const { return m_contact_cache.get(); }
 
 private:
     friend class HessianAssembler;
@@ -71,6 +101,7 @@ private:
     ClothModel m_model;
     std::vector<std::shared_ptr<const Collider>> m_colliders;
     std::vector<std::array<int, 2>> m_edges;
+    ContactCacheHolder m_contact_cache;
 };
 
 /// Sparse symmetric Hessian of the potential energy with a fixed sparsity
@@ -83,9 +114,19 @@ private:
 class HessianAssembler {
 public:
     explicit HessianAssembler(const ClothSystem& s);
-    /// H = d2E/dx2 (projected if `project`) + diag(extra_diag_i I) + damping_scale * D(X),
+    /// Which terms of the Hessian are projected to positive semidefinite.
+    enum class Projection {
+        None,     ///< the exact Hessian
+        Springs,  ///< compressed springs lose their negative transverse stiffness; contact exact
+        All,      ///< springs and contact (the Gauss-Newton n n^T term only)
+    };
+    /// H = d2E/dx2 (with `projection`) + diag(extra_diag_i I) + damping_scale * D(X),
     /// with D the dashpot and air damping matrix. Pinned rows and columns become identity.
-    void assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project = true);
+    void assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, Projection projection);
+    void assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, bool project = true)
+    {
+        assemble(X, extra_diag, damping_scale, project ? Projection::All : Projection::None);
+    }
     const Eigen::SparseMatrix<double>& matrix() const { return m_H; }
 
 private:

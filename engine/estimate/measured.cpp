@@ -47,6 +47,9 @@ MeasuredDrape load_record(const std::string& dir, bool use_photos)
 {
     const record::Record rec = record::read_record(dir);
     const std::string meta_path = (rec.dir / "meta.json").string();
+    if (rec.specimen.shape != record::Specimen::Shape::Round)
+        throw FileError(meta_path + ": field 'configuration.specimen' is not round; the fit simulates round specimens only "
+                                    "(drape measure measures other shapes)");
     MeasuredDrape m;
     m.source = dir;
     m.id = rec.specimen_id;

@@ -75,6 +75,128 @@ fs::path Record::file(const std::string& name) const
     return full;
 }
 
+std::string Record::top_image() const
+{
+    if (top_photo) return top_photo->image;
+    if (const auto it = cameras.find("top"); it != cameras.end()) return it->second.image;
+    return {};
+}
+
+// ---- Specimen -----------------------------------------------------------------
+
+namespace {
+
+/// Outermost crossing of the ray from the origin at angle th with a closed polygon [m]; 0 when none.
+double polygon_reach(const std::vector<Eigen::Vector2d>& poly, double th)
+{
+    const Eigen::Vector2d d(std::cos(th), std::sin(th));
+    double best = 0;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const Eigen::Vector2d a = poly[i], b = poly[(i + 1) % poly.size()];
+        const Eigen::Vector2d e = b - a;
+        const double den = d.x() * (-e.y()) - d.y() * (-e.x());
+        if (std::abs(den) < 1e-15) continue;
+        // a + u e = s d  ->  s d - u e = a
+        const double s = (a.x() * (-e.y()) - a.y() * (-e.x())) / den;
+        const double u = (d.x() * a.y() - d.y() * a.x()) / den;
+        if (s > 0 && u >= -1e-12 && u <= 1 + 1e-12) best = std::max(best, s);
+    }
+    return best;
+}
+
+} // namespace
+
+double Specimen::area() const
+{
+    switch (shape) {
+    case Shape::Round: return M_PI * radius * radius;
+    case Shape::Rectangle: return width * length;
+    case Shape::Polygon: {
+        double a = 0;
+        for (std::size_t i = 0; i < polygon.size(); ++i) {
+            const auto& p = polygon[i];
+            const auto& q = polygon[(i + 1) % polygon.size()];
+            a += p.x() * q.y() - q.x() * p.y();
+        }
+        return std::abs(a) / 2;
+    }
+    }
+    return 0;
+}
+
+double Specimen::reach(double theta) const
+{
+    const double t = theta - angle;
+    switch (shape) {
+    case Shape::Round: return radius;
+    case Shape::Rectangle: {
+        const double c = std::abs(std::cos(t)), s = std::abs(std::sin(t));
+        const double rx = c > 1e-12 ? 0.5 * width / c : std::numeric_limits<double>::infinity();
+        const double ry = s > 1e-12 ? 0.5 * length / s : std::numeric_limits<double>::infinity();
+        return std::min(rx, ry);
+    }
+    case Shape::Polygon: return polygon_reach(polygon, t);
+    }
+    return 0;
+}
+
+double Specimen::max_reach() const
+{
+    double m = 0;
+    for (int k = 0; k < 1440; ++k) m = std::max(m, reach(2 * M_PI * k / 1440));
+    if (shape == Shape::Rectangle) m = 0.5 * std::hypot(width, length);
+    if (shape == Shape::Polygon)
+        for (const auto& p : polygon) m = std::max(m, p.norm());
+    return m;
+}
+
+double Specimen::min_reach() const
+{
+    double m = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 1440; ++k) m = std::min(m, reach(2 * M_PI * k / 1440));
+    return m;
+}
+
+double Specimen::equivalent_radius() const { return std::sqrt(area() / M_PI); }
+
+const char* Specimen::shape_name() const
+{
+    switch (shape) {
+    case Shape::Round: return "round";
+    case Shape::Rectangle: return "rectangle";
+    case Shape::Polygon: return "polygon";
+    }
+    return "?";
+}
+
+std::string Specimen::describe() const
+{
+    std::ostringstream o;
+    o.precision(4);
+    switch (shape) {
+    case Shape::Round: o << "round, diameter " << 2e3 * radius << " mm"; break;
+    case Shape::Rectangle: o << "rectangle " << 1e3 * width << " x " << 1e3 * length << " mm"; break;
+    case Shape::Polygon: o << "polygon of " << polygon.size() << " vertices, " << area() * 1e4 << " cm^2"; break;
+    }
+    if (shape != Shape::Round) {
+        if (angle_from_photo) o << ", orientation from the photo";
+        else o << " at " << angle * 180 / M_PI << " deg";
+    }
+    return o.str();
+}
+
+const char* to_string(ScaleSource s)
+{
+    switch (s) {
+    case ScaleSource::Calibration: return "calibration";
+    case ScaleSource::Disc: return "disc";
+    case ScaleSource::Markers: return "markers";
+    case ScaleSource::Chessboard: return "chessboard";
+    case ScaleSource::PxPerMm: return "px-per-mm";
+    }
+    return "?";
+}
+
 bool Record::has_contours() const
 {
     std::error_code ec;
@@ -148,9 +270,154 @@ Camera read_camera(const JsonReader& m, const json& root, const std::string& nam
 
 } // namespace
 
+namespace {
+
+Specimen read_specimen(const JsonReader& m, const json& root, std::optional<double> d1_mm)
+{
+    Specimen sp;
+    const json* js = JsonReader::find(root, "configuration.specimen");
+    if (!js) {
+        if (!d1_mm) m.need(root, "configuration.specimen_diameter_D1_mm"); // names the missing field
+        sp.radius = 0.5e-3 * *d1_mm;
+        return sp;
+    }
+    if (!js->is_object()) m.fail("configuration.specimen", "must be an object, got " + describe_json(*js));
+    const std::string shape = JsonReader::find(root, "configuration.specimen.shape")
+                                  ? m.string(root, "configuration.specimen.shape")
+                                  : "round";
+    auto angle = [&] {
+        const json* a = JsonReader::find(root, "configuration.specimen.angle_deg");
+        if (!a) return;
+        if (a->is_string() && a->get<std::string>() == "auto") {
+            sp.angle_from_photo = true;
+            return;
+        }
+        sp.angle = m.number_in(root, "configuration.specimen.angle_deg", -360, 360, "deg") * M_PI / 180;
+    };
+    if (shape == "round") {
+        sp.radius = 0.5e-3 * m.number_in(root, "configuration.specimen.diameter_mm", 1, kMaxDiameterMm, "mm");
+        if (d1_mm && std::abs(*d1_mm - 2e3 * sp.radius) > 1e-6)
+            m.fail("configuration.specimen.diameter_mm", "= " + format_value(2e3 * sp.radius) +
+                                                             " mm disagrees with specimen_diameter_D1_mm = " + format_value(*d1_mm) + " mm");
+    } else if (shape == "rectangle" || shape == "square") {
+        const bool square = shape == "square";
+        sp.shape = Specimen::Shape::Rectangle;
+        sp.width = 1e-3 * m.number_in(root, square ? "configuration.specimen.side_mm" : "configuration.specimen.width_mm", 1,
+                                      kMaxDiameterMm, "mm");
+        sp.length = square ? sp.width : 1e-3 * m.number_in(root, "configuration.specimen.length_mm", 1, kMaxDiameterMm, "mm");
+        angle();
+    } else if (shape == "polygon") {
+        sp.shape = Specimen::Shape::Polygon;
+        const json& pts = m.need(root, "configuration.specimen.points_mm");
+        if (!pts.is_array() || pts.size() < 3 || pts.size() > 100000)
+            m.fail("configuration.specimen.points_mm", "must be an array of 3 to 100000 [x, y] pairs, got " + describe_json(pts));
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            const std::string f = "configuration.specimen.points_mm[" + std::to_string(i) + "]";
+            if (!pts[i].is_array() || pts[i].size() != 2 || !pts[i][0].is_number() || !pts[i][1].is_number())
+                m.fail(f, "must be [x, y] in mm, got " + describe_json(pts[i]));
+            const double x = pts[i][0].get<double>(), y = pts[i][1].get<double>();
+            if (!std::isfinite(x) || !std::isfinite(y) || std::hypot(x, y) > kMaxDiameterMm)
+                m.fail(f, "lies outside " + format_value(kMaxDiameterMm) + " mm of the disc centre");
+            sp.polygon.emplace_back(1e-3 * x, 1e-3 * y);
+        }
+        angle();
+        // The disc centre must be inside: every ray from it crosses the edge.
+        for (int k = 0; k < 360; ++k)
+            if (!(sp.reach(2 * M_PI * k / 360) > 0))
+                m.fail("configuration.specimen.points_mm", "does not enclose the disc centre (0, 0) (no edge at " +
+                                                               std::to_string(k) + " deg)");
+    } else {
+        m.fail("configuration.specimen.shape", "must be \"round\", \"rectangle\", \"square\" or \"polygon\", got \"" + shape + "\"");
+    }
+    return sp;
+}
+
+TopPhoto read_top_photo(const JsonReader& m, const json& root, const Record& rec)
+{
+    const json& tp = m.need(root, "top_photo");
+    if (!tp.is_object()) m.fail("top_photo", "must be an object, got " + describe_json(tp));
+    TopPhoto p;
+    p.image = m.string(root, "top_photo.image");
+    const std::string src = JsonReader::find(root, "top_photo.scale.source") ? m.string(root, "top_photo.scale.source") : "disc";
+    if (src == "disc") p.scale = ScaleSource::Disc;
+    else if (src == "markers") p.scale = ScaleSource::Markers;
+    else if (src == "chessboard") p.scale = ScaleSource::Chessboard;
+    else if (src == "px-per-mm" || src == "px_per_mm") p.scale = ScaleSource::PxPerMm;
+    else if (src == "calibration") p.scale = ScaleSource::Calibration;
+    else
+        m.fail("top_photo.scale.source", "must be \"disc\", \"markers\", \"chessboard\", \"px-per-mm\" or \"calibration\", got \"" + src + "\"");
+    const double ped_mm = 1e3 * rec.pedestal_height;
+    auto opt_len = [&](const std::string& f, double lo, double hi) -> std::optional<double> {
+        if (!JsonReader::find(root, f)) return std::nullopt;
+        return 1e-3 * m.number_in(root, f, lo, hi, "mm");
+    };
+    if (auto z = opt_len("top_photo.scale.height_mm", -ped_mm - 1000, 1000)) p.reference_height = *z;
+    p.reference_height_sigma = opt_len("top_photo.scale.height_sigma_mm", 0, 500);
+    if (p.scale == ScaleSource::PxPerMm) {
+        p.px_per_mm = m.number_in(root, "top_photo.scale.px_per_mm", 1e-3, 1e4, "px/mm");
+        if (JsonReader::find(root, "top_photo.scale.sigma_percent"))
+            p.px_per_mm_sigma_rel = 1e-2 * m.number_in(root, "top_photo.scale.sigma_percent", 0, 50, "%");
+    }
+    if (p.scale == ScaleSource::Markers) {
+        if (JsonReader::find(root, "top_photo.scale.dictionary")) p.marker_dictionary = m.string(root, "top_photo.scale.dictionary");
+        p.marker_size = 1e-3 * m.number_in(root, "top_photo.scale.size_mm", 1, 2000, "mm");
+        if (const json* lay = JsonReader::find(root, "top_photo.scale.layout_mm")) {
+            if (!lay->is_object()) m.fail("top_photo.scale.layout_mm", "must be an object {\"id\": [x, y], ...}, got " + describe_json(*lay));
+            for (const auto& [k, v] : lay->items()) {
+                const std::string f = "top_photo.scale.layout_mm." + k;
+                double idd = 0;
+                if (!parse_number(k, idd) || idd < 0 || idd > 10000 || idd != std::floor(idd))
+                    m.fail(f, "the key must be a marker id 0..10000");
+                if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number() ||
+                    !std::isfinite(v[0].get<double>()) || !std::isfinite(v[1].get<double>()) ||
+                    std::abs(v[0].get<double>()) > 1e4 || std::abs(v[1].get<double>()) > 1e4)
+                    m.fail(f, "must be the marker centre [x, y] in mm on the sheet, got " + describe_json(v));
+                p.marker_layout[static_cast<int>(idd)] = Eigen::Vector2d(v[0].get<double>(), v[1].get<double>()) * 1e-3;
+            }
+        }
+    }
+    if (p.scale == ScaleSource::Chessboard) {
+        const auto ic = m.numbers(root, "top_photo.scale.inner_corners", 2);
+        for (double v : ic)
+            if (v < 2 || v > 100 || v != std::floor(v)) m.fail("top_photo.scale.inner_corners", "must be two whole numbers 2..100");
+        p.board_cols = static_cast<int>(ic[0]);
+        p.board_rows = static_cast<int>(ic[1]);
+        p.board_square = 1e-3 * m.number_in(root, "top_photo.scale.square_mm", 1, 1000, "mm");
+    }
+    if (p.scale == ScaleSource::Calibration && !rec.has_camera("top"))
+        m.fail("top_photo.scale.source", "is \"calibration\" but there is no 'cameras.top'");
+    if (JsonReader::find(root, "top_photo.disc_px")) {
+        const auto c = m.numbers(root, "top_photo.disc_px.centre", 2);
+        p.disc_centre_px = Eigen::Vector2d(c[0], c[1]);
+        if (JsonReader::find(root, "top_photo.disc_px.radius"))
+            p.disc_radius_px = m.number_in(root, "top_photo.disc_px.radius", 2, kMaxImageSide, "px");
+    }
+    if (auto e = opt_len("top_photo.disc_edge_sigma_mm", 0, 50)) p.disc_edge_sigma = *e;
+    p.camera_height = opt_len("top_photo.camera_height_mm", 50, 20000);
+    p.camera_height_sigma = opt_len("top_photo.camera_height_sigma_mm", 0, 10000);
+    if (JsonReader::find(root, "top_photo.focal_px")) p.focal_px = m.number_in(root, "top_photo.focal_px", 10, 1e6, "px");
+    if (JsonReader::find(root, "top_photo.perspective")) {
+        p.perspective = m.string(root, "top_photo.perspective");
+        if (p.perspective != "none" && p.perspective != "disc-plane" && p.perspective != "hem" && p.perspective != "auto")
+            m.fail("top_photo.perspective", "must be \"none\", \"disc-plane\", \"hem\" or \"auto\", got \"" + p.perspective + "\"");
+    }
+    if (JsonReader::find(root, "top_photo.mask")) p.mask = m.string(root, "top_photo.mask");
+    if (JsonReader::find(root, "top_photo.threshold")) p.threshold = m.string(root, "top_photo.threshold");
+    rec.file(p.image); // a photo outside the record is refused here
+    if (!p.mask.empty()) rec.file(p.mask);
+    return p;
+}
+
+} // namespace
+
 Record parse_meta(const std::string& text, const fs::path& dir, const std::string& where)
 {
     const json root = parse_json(text, where);
+    return parse_meta_json(root, dir, where);
+}
+
+Record parse_meta_json(const json& root, const fs::path& dir, const std::string& where)
+{
     if (!root.is_object()) throw FileError(where + ": top level must be a JSON object, got " + describe_json(root));
     const JsonReader m(where);
     Record rec;
@@ -160,12 +427,17 @@ Record parse_meta(const std::string& text, const fs::path& dir, const std::strin
     rec.specimen_id = JsonReader::find(root, "specimen_id") ? m.string(root, "specimen_id") : printable(dir.filename().string(), 200);
 
     // Lengths in meta.json are mm (README "World frame and units").
-    rec.R1 = 0.5e-3 * m.number_in(root, "configuration.specimen_diameter_D1_mm", 1, kMaxDiameterMm, "mm");
+    std::optional<double> d1_mm;
+    if (JsonReader::find(root, "configuration.specimen_diameter_D1_mm") || !JsonReader::find(root, "configuration.specimen"))
+        d1_mm = m.number_in(root, "configuration.specimen_diameter_D1_mm", 1, kMaxDiameterMm, "mm");
+    rec.specimen = read_specimen(m, root, d1_mm);
+    rec.R1 = rec.specimen.shape == Specimen::Shape::Round ? rec.specimen.radius : rec.specimen.equivalent_radius();
     rec.R2 = 0.5e-3 * m.number_in(root, "configuration.support_disc_diameter_D2_mm", 1, kMaxDiameterMm, "mm");
-    if (rec.R2 >= rec.R1)
-        m.fail("configuration.support_disc_diameter_D2_mm", "= " + format_value(2e3 * rec.R2) +
-                                                                " mm must be smaller than specimen_diameter_D1_mm = " +
-                                                                format_value(2e3 * rec.R1) + " mm");
+    if (rec.R2 >= rec.specimen.min_reach())
+        m.fail("configuration.support_disc_diameter_D2_mm",
+               "= " + format_value(2e3 * rec.R2) + " mm: the specimen (" + rec.specimen.describe() +
+                   ") must cover the disc (its nearest edge is " + format_value(1e3 * rec.specimen.min_reach()) +
+                   " mm from the centre)");
     if (JsonReader::find(root, "configuration.pedestal_height_mm"))
         rec.pedestal_height = 1e-3 * m.number_in(root, "configuration.pedestal_height_mm", 1, 5000, "mm");
     if (JsonReader::find(root, "fabric.areal_density_g_m2"))
@@ -226,10 +498,11 @@ Record parse_meta(const std::string& text, const fs::path& dir, const std::strin
     if (JsonReader::find(root, "lab_drape_coefficient_percent"))
         rec.lab_drape_coefficient_percent = m.number_in(root, "lab_drape_coefficient_percent", 0, 100, "%");
     if (JsonReader::find(root, "node_count")) rec.node_count = m.integer(root, "node_count", 0, 60);
+    if (JsonReader::find(root, "top_photo")) rec.top_photo = read_top_photo(m, root, rec);
 
     static const std::set<std::string> known = {
         "specimen_id", "configuration", "fabric", "gravity_m_s2", "units", "world_frame", "cameras",
-        "camera_model", "calibration_boards", "contours", "lab_drape_coefficient_percent", "node_count"};
+        "camera_model", "calibration_boards", "contours", "lab_drape_coefficient_percent", "node_count", "top_photo"};
     for (const auto& [k, v] : root.items()) {
         (void)v;
         if (!known.count(k)) rec.unknown_fields.push_back(k);
@@ -383,8 +656,8 @@ ContourStack parse_contours(const std::string& text, const std::string& path, do
 
 ContourStack read_contours(const Record& rec)
 {
-    return read_contours_file(rec.file(rec.contours_file), rec.contour_theta_step_deg.value_or(0.0), rec.R1, rec.R2,
-                              rec.pedestal_height);
+    return read_contours_file(rec.file(rec.contours_file), rec.contour_theta_step_deg.value_or(0.0),
+                              std::max(rec.R1, rec.specimen.max_reach()), rec.R2, rec.pedestal_height);
 }
 
 } // namespace drape::record

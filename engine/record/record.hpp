@@ -65,11 +65,77 @@ struct ContourStack {
     std::vector<std::vector<Eigen::Vector2d>> points; ///< the measured (x, y) points [m] per depth
 };
 
+/// The flat specimen, centred on the disc (world frame, metres). Round is the
+/// lab's case; a rectangle (width along x, length along y before rotation) or
+/// any star-shaped polygon around the axis are the others. D of any shape is
+/// (A - disc area) / (specimen area - disc area).
+struct Specimen {
+    enum class Shape { Round, Rectangle, Polygon };
+    Shape shape = Shape::Round;
+    double radius = 0;                     ///< round [m]
+    double width = 0, length = 0;          ///< rectangle: along x, along y before rotation [m]
+    double angle = 0;                      ///< rotation about the axis, +x towards +y [rad]
+    bool angle_from_photo = false;         ///< "angle_deg": "auto": estimated from the outline
+    std::vector<Eigen::Vector2d> polygon;  ///< polygon vertices [m] before rotation (origin = disc centre)
+
+    double area() const;                   ///< flat area [m^2]
+    /// Distance from the axis to the flat edge along the ray at theta [rad] [m]
+    /// (the outermost crossing for a polygon), with the rotation `angle`.
+    double reach(double theta) const;
+    double max_reach() const;              ///< largest reach over all angles [m]
+    double min_reach() const;              ///< smallest reach [m]
+    double equivalent_radius() const;      ///< sqrt(area / pi) [m]: the R1 the round formulas take
+    const char* shape_name() const;        ///< "round", "rectangle", "polygon"
+    std::string describe() const;          ///< e.g. "rectangle 300 x 400 mm at 0 deg"
+};
+
+/// How the scale of a single top photo is known (top_photo.scale.source).
+enum class ScaleSource {
+    Calibration, ///< cameras.top: a full pinhole calibration (the lab's rig)
+    Disc,        ///< the support disc's rim seen in the photo: a circle of known diameter at a known height
+    Markers,     ///< printed ArUco markers of known size at a declared height
+    Chessboard,  ///< a printed chessboard of known square size at a declared height
+    PxPerMm,     ///< a ruler / a known number of pixels per mm at a declared height
+};
+const char* to_string(ScaleSource s);
+
+/// The single-camera record's top photo (meta.json "top_photo"): a photo and
+/// what a lab actually knows about it. Everything optional except the image
+/// and the scale source; capture finds the rest in the photo.
+struct TopPhoto {
+    std::string image;                        ///< file inside the record
+    ScaleSource scale = ScaleSource::Disc;
+    double reference_height = 0;              ///< z of the scale reference relative to the disc top [m] (floor: -pedestal height)
+    std::optional<double> reference_height_sigma; ///< its uncertainty [m] (default: capture's)
+    std::optional<double> px_per_mm;          ///< PxPerMm: pixels per mm at reference_height [px/mm]
+    std::optional<double> px_per_mm_sigma_rel;///< its relative uncertainty [-]
+    // Markers (ArUco).
+    std::string marker_dictionary = "DICT_4X4_50";
+    double marker_size = 0.05;                ///< black square's edge [m]
+    std::map<int, Eigen::Vector2d> marker_layout; ///< optional: marker centre on the sheet by id [m]
+    // Chessboard.
+    int board_cols = 0, board_rows = 0;       ///< inner corners
+    double board_square = 0.025;              ///< [m]
+    // Disc position in the photo (optional; else detected).
+    std::optional<Eigen::Vector2d> disc_centre_px;
+    std::optional<double> disc_radius_px;
+    double disc_edge_sigma = 1.0e-3;          ///< where the rim's image edge may lie off the true rim [m]
+    // What is known about the camera (optional).
+    std::optional<double> camera_height;      ///< optical centre above the disc top [m]
+    std::optional<double> camera_height_sigma;///< [m]
+    std::optional<double> focal_px;           ///< focal length [px]
+    std::string perspective = "auto";         ///< none | disc-plane | hem | auto
+    // Segmentation overrides.
+    std::string mask;                         ///< a user mask image inside the record ("" = none)
+    std::string threshold;                    ///< e.g. "L<60" ("" = none)
+};
+
 /// meta.json of a record, validated and in SI units.
 struct Record {
     std::filesystem::path dir;
     std::string specimen_id;
-    double R1 = 0;                 ///< specimen radius D1/2 [m]
+    double R1 = 0;                 ///< specimen radius D1/2 [m]; the equal-area radius of a non-round specimen
+    Specimen specimen;             ///< the flat specimen's shape (round: radius = R1)
     double R2 = 0;                 ///< support-disc radius D2/2 [m]
     double pedestal_height = 0.12; ///< [m]
     std::optional<double> areal_density;   ///< [kg/m^2]
@@ -83,6 +149,7 @@ struct Record {
     double contour_sigma = 0.3e-3;         ///< profiler repeatability, 1 sigma per coordinate [m]
     std::optional<double> lab_drape_coefficient_percent; ///< drapemeter reading [%]
     std::optional<int> node_count;         ///< folds, when the lab states them
+    std::optional<TopPhoto> top_photo;     ///< a single-camera record's photo (meta.json "top_photo")
     nlohmann::json raw;                    ///< the whole meta.json, unknown fields included
     std::vector<std::string> unknown_fields; ///< top-level keys this reader does not use (kept in raw)
 
@@ -93,6 +160,10 @@ struct Record {
     bool has_camera(const std::string& name) const { return cameras.count(name) != 0; }
     /// True when the contours file exists in the record.
     bool has_contours() const;
+    /// True for a single-camera record whose scale does not come from cameras.top.
+    bool single_camera() const { return top_photo && top_photo->scale != ScaleSource::Calibration; }
+    /// The top photo's file name (top_photo.image, else cameras.top.image; "" when neither).
+    std::string top_image() const;
 };
 
 /// Reads and validates RECORD_DIR/meta.json. Throws FileError naming the file,
@@ -101,6 +172,8 @@ Record read_record(const std::filesystem::path& dir);
 
 /// Parses meta.json text (for tests and tools); `where` names it in messages.
 Record parse_meta(const std::string& text, const std::filesystem::path& dir, const std::string& where);
+/// The same from a parsed document (what `drape measure --top` builds from its flags).
+Record parse_meta_json(const nlohmann::json& root, const std::filesystem::path& dir, const std::string& where);
 
 /// Reads the contours CSV named in meta.json (header depth_mm,theta_deg,x_mm,y_mm
 /// in any column order). Throws FileError naming the line and column on a

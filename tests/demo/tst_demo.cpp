@@ -138,10 +138,17 @@ void TstDemo::skirtDrapesOnBody()
     QVERIFY2(st.outcome == cloth::SolverStatus::Outcome::Converged ||
                  st.outcome == cloth::SolverStatus::Outcome::NotConverged,
              cloth::to_string(st.outcome).c_str());
-    const importers::Scene* s = v->scene();
-    QVERIFY(s && s->mannequin);
+    QVERIFY(v->mannequin());
+    QVERIFY(v->garment() == demo::GarmentChoice::Skirt);
+    // The scene the view draped, rebuilt headless from the same body and fabric (deterministic).
+    const importers::Scene ref = importers::make_skirt_scene(v->mannequin(), w.fabrics()[std::size_t(cotton)].preset);
+    const importers::Scene* s = &ref;
     const cloth::Positions x = v->lastPositions();
     QCOMPARE(int(x.rows()), s->system->vertex_count());
+    std::vector<int> pinned;
+    for (int i = 0; i < s->system->vertex_count(); ++i)
+        if (s->system->pinned(i)) pinned.push_back(i);
+    QVERIFY(v->controller()->currentMesh()->pinnedAtStart == pinned); // the waistband
     QVERIFY(x.allFinite());
 
     // The test: no cloth vertex inside the body at rest.

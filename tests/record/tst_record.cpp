@@ -228,6 +228,115 @@ private slots:
         const QString e = file_error([&] { record::parse_meta(meta.dump(), d, "m.json"); });
         QVERIFY2(e.contains("'configuration.specimen_diameter_D1_mm' is missing"), qPrintable(e));
     }
+
+    void specimens_of_any_shape()
+    {
+        // A rectangle: D's denominator is its area, the search reaches its corners.
+        json meta = minimal_meta();
+        meta["configuration"].erase("specimen_diameter_D1_mm");
+        meta["configuration"]["specimen"] = {{"shape", "rectangle"}, {"width_mm", 300}, {"length_mm", 400}, {"angle_deg", 90}};
+        const auto rec = record::parse_meta(meta.dump(), "/tmp/x", "m.json");
+        QCOMPARE(rec.specimen.shape, record::Specimen::Shape::Rectangle);
+        QVERIFY(std::abs(rec.specimen.area() - 0.12) < 1e-12);
+        QVERIFY(std::abs(rec.R1 - std::sqrt(0.12 / M_PI)) < 1e-12); // the equal-area radius the round formulas take
+        // Rotated by 90 deg: the 400 mm side lies along x.
+        QVERIFY(std::abs(rec.specimen.reach(0) - 0.200) < 1e-9);
+        QVERIFY(std::abs(rec.specimen.reach(M_PI / 2) - 0.150) < 1e-9);
+        QVERIFY(std::abs(rec.specimen.max_reach() - 0.250) < 1e-9);
+        QVERIFY(rec.specimen.describe().find("300 x 400") != std::string::npos);
+        // "auto": the orientation comes from the photo.
+        meta["configuration"]["specimen"]["angle_deg"] = "auto";
+        QVERIFY(record::parse_meta(meta.dump(), "/tmp/x", "m.json").specimen.angle_from_photo);
+        // A square and a polygon (a hexagon of circumradius 160 mm).
+        meta["configuration"]["specimen"] = {{"shape", "square"}, {"side_mm", 300}};
+        QVERIFY(std::abs(record::parse_meta(meta.dump(), "/tmp/x", "m.json").specimen.area() - 0.09) < 1e-12);
+        json hex = json::array();
+        for (int k = 0; k < 6; ++k) hex.push_back({160 * std::cos(k * M_PI / 3), 160 * std::sin(k * M_PI / 3)});
+        meta["configuration"]["specimen"] = {{"shape", "polygon"}, {"points_mm", hex}};
+        const auto hr = record::parse_meta(meta.dump(), "/tmp/x", "m.json");
+        QVERIFY(std::abs(hr.specimen.area() - 1.5 * std::sqrt(3.0) * 0.16 * 0.16) < 1e-9);
+        QVERIFY(std::abs(hr.specimen.reach(0) - 0.160) < 1e-9);
+        QVERIFY(std::abs(hr.specimen.reach(M_PI / 6) - 0.16 * std::cos(M_PI / 6)) < 1e-9);
+        // A specimen that does not cover the disc, a polygon not around the
+        // centre, an unknown shape: errors naming the field.
+        meta["configuration"]["specimen"] = {{"shape", "rectangle"}, {"width_mm", 140}, {"length_mm", 400}};
+        QVERIFY(file_error([&] { record::parse_meta(meta.dump(), "/tmp/x", "m.json"); }).contains("must cover the disc"));
+        json off = json::array({json::array({100, 100}), json::array({300, 100}), json::array({200, 300})});
+        meta["configuration"]["specimen"] = {{"shape", "polygon"}, {"points_mm", off}};
+        QVERIFY(file_error([&] { record::parse_meta(meta.dump(), "/tmp/x", "m.json"); }).contains("does not enclose the disc centre"));
+        meta["configuration"]["specimen"] = {{"shape", "oval"}};
+        QVERIFY(file_error([&] { record::parse_meta(meta.dump(), "/tmp/x", "m.json"); }).contains("configuration.specimen.shape"));
+        // Round given twice must agree.
+        meta = minimal_meta();
+        meta["configuration"]["specimen"] = {{"shape", "round"}, {"diameter_mm", 280}};
+        QVERIFY(file_error([&] { record::parse_meta(meta.dump(), "/tmp/x", "m.json"); }).contains("disagrees"));
+    }
+
+    void single_camera_top_photo()
+    {
+        // The minimal single-camera record: disc, specimen, a photo, a scale source.
+        const json minimal = json::parse(R"({"configuration": {"support_disc_diameter_D2_mm": 180, "specimen_diameter_D1_mm": 300},
+                                             "top_photo": {"image": "photo.jpg", "scale": {"source": "disc"}}})");
+        const auto rec = record::parse_meta(minimal.dump(), "/tmp/x", "m.json");
+        QVERIFY(rec.top_photo.has_value());
+        QVERIFY(rec.single_camera());
+        QCOMPARE(rec.top_image(), std::string("photo.jpg"));
+        QCOMPARE(rec.top_photo->scale, record::ScaleSource::Disc);
+        QVERIFY(rec.unknown_fields.empty());
+        QCOMPARE(rec.specimen_id, std::string("x")); // the folder's name
+        // Every field, in SI.
+        json full = minimal;
+        full["top_photo"] = json::parse(R"({"image": "p.jpg",
+            "scale": {"source": "markers", "size_mm": 50, "height_mm": -120, "height_sigma_mm": 2, "dictionary": "DICT_5X5_100",
+                      "layout_mm": {"0": [-200, 200], "7": [200, -200]}},
+            "disc_px": {"centre": [640, 480], "radius": 141.5}, "camera_height_mm": 700, "camera_height_sigma_mm": 10,
+            "focal_px": 1100, "perspective": "hem", "mask": "mask.png", "threshold": "L<60"})");
+        const auto f = record::parse_meta(full.dump(), "/tmp/x", "m.json").top_photo.value();
+        QCOMPARE(f.scale, record::ScaleSource::Markers);
+        QCOMPARE(f.marker_size, 0.05);
+        QCOMPARE(f.reference_height, -0.12);
+        QCOMPARE(*f.reference_height_sigma, 0.002);
+        QCOMPARE(f.marker_dictionary, std::string("DICT_5X5_100"));
+        QCOMPARE(f.marker_layout.size(), std::size_t(2));
+        QVERIFY((f.marker_layout.at(7) - Eigen::Vector2d(0.2, -0.2)).norm() < 1e-12);
+        QCOMPARE(*f.disc_radius_px, 141.5);
+        QCOMPARE(*f.camera_height, 0.7);
+        QCOMPARE(*f.focal_px, 1100.0);
+        QCOMPARE(f.perspective, std::string("hem"));
+        // px-per-mm, chessboard, calibration.
+        json p = minimal;
+        p["top_photo"]["scale"] = {{"source", "px-per-mm"}, {"px_per_mm", 4.2}};
+        QCOMPARE(*record::parse_meta(p.dump(), "/tmp/x", "m.json").top_photo->px_per_mm, 4.2);
+        p["top_photo"]["scale"] = {{"source", "chessboard"}, {"inner_corners", {9, 6}}, {"square_mm", 20}};
+        QCOMPARE(record::parse_meta(p.dump(), "/tmp/x", "m.json").top_photo->board_cols, 9);
+        // Bad declarations name their field.
+        struct Bad {
+            json scale;
+            const char* expect;
+        };
+        for (const auto& b : std::vector<Bad>{{{{"source", "ruler"}}, "top_photo.scale.source"},
+                                               {{{"source", "markers"}}, "top_photo.scale.size_mm"},
+                                               {{{"source", "px-per-mm"}, {"px_per_mm", -3}}, "top_photo.scale.px_per_mm"},
+                                               {{{"source", "chessboard"}, {"inner_corners", {9.5, 6}}, {"square_mm", 20}}, "inner_corners"},
+                                               {{{"source", "calibration"}}, "cameras.top"},
+                                               {{{"source", "markers"}, {"size_mm", 50}, {"layout_mm", {{"x", {0, 0}}}}}, "layout_mm.x"}}) {
+            json m = minimal;
+            m["top_photo"]["scale"] = b.scale;
+            const QString e = file_error([&] { record::parse_meta(m.dump(), "/tmp/x", "m.json"); });
+            QVERIFY2(e.contains(b.expect), qPrintable(e));
+        }
+        json q = minimal;
+        q["top_photo"]["perspective"] = "fisheye";
+        QVERIFY(file_error([&] { record::parse_meta(q.dump(), "/tmp/x", "m.json"); }).contains("top_photo.perspective"));
+        q = minimal;
+        q["top_photo"]["image"] = "../elsewhere/photo.jpg";
+        QVERIFY(file_error([&] { record::parse_meta(q.dump(), "/tmp/x", "m.json"); }).contains("climbs out"));
+        q = minimal;
+        q["top_photo"]["mask"] = "/etc/mask.png";
+        QVERIFY(file_error([&] { record::parse_meta(q.dump(), "/tmp/x", "m.json"); }).contains("absolute"));
+        // A lab record (cameras, no top_photo) is not single-camera.
+        QVERIFY(!record::parse_meta(minimal_meta().dump(), "/tmp/x", "m.json").single_camera());
+    }
 };
 
 QTEST_APPLESS_MAIN(TestRecord)

@@ -80,7 +80,7 @@ private slots:
         QCOMPARE(view->sampleDiameter(), 240.0);
         QCOMPARE(view->discDiameter(), 180.0);
         QCOMPARE(view->gridSize(), 14);
-        QCOMPARE(view->viewPreset(), QStringLiteral("top"));
+        QCOMPARE(view->viewPreset(), drape::widget::Drape::Top);
         QVERIFY(view->running());
         QSignalSpy errors(view, &DrapeView::errorOccurred);
         QSignalSpy progress(view, &DrapeView::progress);

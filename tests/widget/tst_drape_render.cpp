@@ -15,6 +15,7 @@
 
 using drape::widget::DrapeController;
 using drape::widget::DrapeView;
+namespace Drape = drape::widget::Drape;
 
 namespace {
 
@@ -62,10 +63,10 @@ private slots:
         m_view->setBackgroundColor(kBackground);
         m_view->setClothColor(kCloth);
         m_view->setShowColliders(false); // background everywhere the cloth is not
-        m_view->setViewPreset(QStringLiteral("top"));
+        m_view->setViewPreset(Drape::Top);
         // A dynamic drape to rest (the widget's default integrator): what a user watches.
         m_view->setGridSize(20);
-        m_view->setIntegrator(QStringLiteral("symplectic"));
+        m_view->setIntegrator(Drape::Symplectic);
         m_view->show();
         QVERIFY(QTest::qWaitForWindowExposed(m_view.get()));
         QSignalSpy mesh(m_view->controller(), &DrapeController::meshChanged);
@@ -174,7 +175,7 @@ private slots:
         QTest::mousePress(qw, Qt::LeftButton, Qt::NoModifier, c);
         for (int k = 1; k <= 10; ++k) QTest::mouseMove(qw, c + QPoint(6 * k, 0));
         QTest::mouseRelease(qw, Qt::LeftButton, Qt::NoModifier, c + QPoint(60, 0));
-        QTRY_COMPARE_WITH_TIMEOUT(m_view->viewPreset(), QStringLiteral("free"), 5000);
+        QTRY_COMPARE_WITH_TIMEOUT(m_view->viewPreset(), Drape::Free, 5000);
         QVERIFY(std::abs(QQuaternion::dotProduct(m_view->controller()->cameraRotation(), rotBefore)) < 0.999);
         QVERIFY((m_view->controller()->cameraPosition() - before).length() < 1e-5);
         QTest::mousePress(qw, Qt::LeftButton, Qt::NoModifier, c);
@@ -186,7 +187,7 @@ private slots:
         m_view->controller()->zoom(120);
         QVERIFY(m_view->controller()->camera().distance < d0);
         // Back to the lab's side station.
-        m_view->setViewPreset(QStringLiteral("side"));
+        m_view->setViewPreset(Drape::Side);
         const Eigen::Vector3d pos = m_view->controller()->camera().position();
         QVERIFY((pos - Eigen::Vector3d(0, -1, 0)).norm() < 1e-9);
     }

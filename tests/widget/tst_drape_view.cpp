@@ -23,6 +23,7 @@
 
 using drape::widget::DrapeController;
 using drape::widget::DrapeView;
+namespace Drape = drape::widget::Drape;
 
 class TstDrapeView : public QObject {
     Q_OBJECT
@@ -51,7 +52,9 @@ private slots:
         QCOMPARE(v.sampleDiameter(), 300.0);
         QCOMPARE(v.discDiameter(), 150.0);
         QCOMPARE(v.gridSize(), 40);
-        QCOMPARE(v.integrator(), QStringLiteral("symplectic"));
+        QCOMPARE(v.integrator(), Drape::Symplectic);
+        QCOMPARE(v.clothShape(), Drape::Disc);
+        QCOMPARE(v.viewPreset(), Drape::Iso);
         QCOMPARE(v.running(), false);
         QVERIFY(v.texture().isEmpty());
         QVERIFY(v.fabricPreset().isEmpty());
@@ -80,12 +83,12 @@ private slots:
         v.setDiscDiameter(180.0);
         QCOMPARE(disc.count(), 1);
 
-        v.setIntegrator(QStringLiteral("rk4"));
-        v.setIntegrator(QStringLiteral("rk4"));
+        v.setIntegrator(Drape::RK4);
+        v.setIntegrator(Drape::RK4);
         QCOMPARE(integ.count(), 1);
-        QCOMPARE(v.integrator(), QStringLiteral("rk4"));
+        QCOMPARE(v.integrator(), Drape::RK4);
 
-        v.setViewPreset(QStringLiteral("top"));
+        v.setViewPreset(Drape::Top);
         QCOMPARE(view.count(), 1);
         QCOMPARE(errors.count(), 0);
 
@@ -93,6 +96,18 @@ private slots:
         QVERIFY(v.setProperty("gridSize", 30));
         QCOMPARE(v.gridSize(), 30);
         QCOMPARE(grid.count(), 2);
+        // The choices are enums: Designer's drop-downs, uic's constants, QML's Drape.Static.
+        const QMetaObject* mo = v.metaObject();
+        for (const char* name : {"integrator", "viewPreset", "clothShape"}) {
+            const QMetaProperty p = mo->property(mo->indexOfProperty(name));
+            QVERIFY2(p.isEnumType(), name);
+            QVERIFY2(p.isDesignable(), name);
+            QVERIFY2(p.enumerator().isValid() && p.enumerator().keyCount() >= 2, name);
+        }
+        QVERIFY(v.setProperty("integrator", QStringLiteral("Static")));
+        QCOMPARE(v.integrator(), Drape::Static);
+        QCOMPARE(QString::fromLatin1(mo->property(mo->indexOfProperty("integrator")).enumerator().valueToKey(Drape::Implicit)),
+                 QStringLiteral("Implicit"));
     }
 
     void badValuesAreRejectedWithAnError()
@@ -106,17 +121,17 @@ private slots:
         QCOMPARE(errors.count(), 1);
         QVERIFY(errors.at(0).at(0).toString().contains(QStringLiteral("gridSize")));
 
-        v.setIntegrator(QStringLiteral("leapfrog-ish"));
-        QCOMPARE(v.integrator(), QStringLiteral("symplectic"));
+        v.setIntegrator(static_cast<Drape::Integrator>(42));
+        QCOMPARE(v.integrator(), Drape::Symplectic);
         QCOMPARE(errors.count(), 2);
-        QVERIFY(errors.at(1).at(0).toString().contains(QStringLiteral("leapfrog-ish")));
+        QVERIFY(errors.at(1).at(0).toString().contains(QStringLiteral("integrator")));
 
         v.setSampleDiameter(std::nan(""));
-        v.setViewPreset(QStringLiteral("ceiling"));
+        v.setViewPreset(static_cast<Drape::ViewPreset>(42));
         v.setTimeStep(-1.0);
         QCOMPARE(errors.count(), 5);
         QCOMPARE(v.sampleDiameter(), 300.0);
-        QCOMPARE(v.viewPreset(), QStringLiteral("iso"));
+        QCOMPARE(v.viewPreset(), Drape::Iso);
         QCOMPARE(v.timeStep(), 0.0);
 
         // A disc wider than the specimen passes the setter but not the engine's
@@ -150,7 +165,7 @@ private slots:
     {
         DrapeView v;
         v.setGridSize(12);
-        v.setClothShape(QStringLiteral("square"));
+        v.setClothShape(Drape::Square);
         QVERIFY(waitForCloth(v));
         QCOMPARE(v.controller()->vertexCount(), 12 * 12); // a full grid: nothing cut away
         QSignalSpy colliders(v.controller(), &DrapeController::collidersChanged);
@@ -168,7 +183,7 @@ private slots:
         QCOMPARE(spheres, 1);
         QSignalSpy errors(&v, &DrapeView::errorOccurred);
         v.controller()->addSphereCollider(QVector3D(0, 0, 0), -1.0);
-        v.setClothShape(QStringLiteral("hexagon"));
+        v.setClothShape(static_cast<Drape::ClothShape>(42));
         QCOMPARE(errors.count(), 2);
         v.controller()->clearExtraColliders();
         QVERIFY(colliders.wait(30000));
@@ -356,7 +371,7 @@ private slots:
         QTemporaryDir dir;
         DrapeView v;
         v.setGridSize(16);
-        v.setIntegrator(QStringLiteral("static"));
+        v.setIntegrator(Drape::Static);
         QVERIFY(waitForCloth(v));
         QSignalSpy rest(&v, &DrapeView::restReached);
         QSignalSpy errors(&v, &DrapeView::errorOccurred);
@@ -437,15 +452,15 @@ private slots:
         drape::widget::registerDrapeQmlTypes();
         QQmlEngine engine;
         QQmlComponent c(&engine);
-        c.setData("import QtQuick\nimport Drapekit 1.0\n"
-                  "DrapeScene { width: 320; height: 240; controller: DrapeController { gridSize: 12; viewPreset: \"top\" } }",
+        c.setData("import QtQuick\nimport Drapekit\n"
+                  "DrapeScene { width: 320; height: 240; controller: DrapeController { gridSize: 12; viewPreset: Drape.Top } }",
                   QUrl());
         std::unique_ptr<QObject> root(c.create());
         QVERIFY2(root, qPrintable(c.errorString()));
         auto* ctl = root->property("controller").value<DrapeController*>();
         QVERIFY(ctl);
         QCOMPARE(ctl->gridSize(), 12);
-        QCOMPARE(ctl->viewPreset(), QStringLiteral("top"));
+        QCOMPARE(ctl->viewPreset(), Drape::Top);
         QTRY_VERIFY_WITH_TIMEOUT(ctl->vertexCount() > 0, 30000);
     }
 };

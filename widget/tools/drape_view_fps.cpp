@@ -2,9 +2,16 @@
 // the cloth, then rendered frames per second, cloth frames per second and the
 // event loop's worst stall while a cloth simulates. Prints numbers; asserts nothing.
 //
-//   drape_view_fps [--grid 113] [--seconds 10] [--integrator implicit] [--preset FILE|seed-table1]
-//                  [--size 800x600]
+//   drape_view_fps [--grid 113] [--seconds 10] [--integrator implicit] [--preset FILE|seed-table1|NAME]
+//                  [--size 800x600] [--rest] [--library-ops N]
+//
+// --rest: instead of running the integrator live, drape to rest with the static
+// solver (DrapeView::drapeToRest) and measure the worst stall during that.
+// --library-ops N: afterwards, set the fabric by a library name N times (a
+// temporary library with the starter fabrics) and print the slowest.
 #include "widget/drape_view.hpp"
+
+#include "engine/library/resolve.hpp"
 
 #include <QApplication>
 #include <QCommandLineParser>
@@ -28,6 +35,8 @@ int main(int argc, char** argv)
     cl.addOption({"integrator", "integrator name", "name", "implicit"});
     cl.addOption({"preset", "fabric preset file or built-in name (default: the table defaults written to a file)", "preset", ""});
     cl.addOption({"size", "view size WxH", "size", "800x600"});
+    cl.addOption({"rest", "drape to rest with the static solver instead of the live integrator"});
+    cl.addOption({"library-ops", "set the fabric by a library name this many times and time it", "n", "0"});
     cl.process(app);
     const QStringList wh = cl.value("size").split('x');
     const int width = wh.value(0).toInt() > 0 ? wh.value(0).toInt() : 800;
@@ -51,7 +60,12 @@ int main(int argc, char** argv)
     QObject::connect(view.controller(), &drape::widget::DrapeController::frameApplied, [&] { ++applied; });
 
     // ---- load preset -> first frame --------------------------------------------
-    view.setIntegrator(cl.value("integrator"));
+    const auto integ = drape::widget::parseIntegrator(cl.value("integrator"));
+    if (!integ) {
+        std::fprintf(stderr, "error: unknown --integrator %s\n", qPrintable(cl.value("integrator")));
+        return 2;
+    }
+    view.setIntegrator(*integ);
     QTemporaryDir tmp;
     QString preset = cl.value("preset");
     if (preset.isEmpty()) { // a real file, so the measurement includes reading and parsing it
@@ -75,7 +89,7 @@ int main(int argc, char** argv)
     });
     while (firstRenderAt < 0 && t.elapsed() < 120000) app.processEvents(QEventLoop::AllEvents, 5);
     const int n = view.controller()->vertexCount();
-    std::printf("particles: %d (grid %d, integrator %s)\n", n, view.gridSize(), qPrintable(view.integrator()));
+    std::printf("particles: %d (grid %d, integrator %s)\n", n, view.gridSize(), qPrintable(drape::widget::toString(view.integrator())));
     std::printf("load preset -> mesh built: %lld ms, -> first cloth frame applied: %lld ms, -> first frame rendered: %lld ms\n",
                 static_cast<long long>(meshAt), static_cast<long long>(firstFrameAt), static_cast<long long>(firstRenderAt));
 
@@ -91,13 +105,17 @@ int main(int argc, char** argv)
     const double simStart = view.controller()->simulatedTime();
     rendered = 0;
     applied = 0;
-    view.setRunning(true);
+    const bool toRest = cl.isSet("rest");
+    bool rest = false;
+    QObject::connect(&view, &DrapeView::restReached, [&] { rest = true; });
+    double lastFraction = -1;
+    QObject::connect(&view, &DrapeView::drapeProgress, [&](double f, const QString&) { lastFraction = f; });
+    if (toRest) view.drapeToRest();
+    else view.setRunning(true);
     QElapsedTimer run;
     run.start();
     gapClock.start();
     tick.start();
-    bool rest = false;
-    QObject::connect(&view, &DrapeView::restReached, [&] { rest = true; });
     while (run.elapsed() < seconds * 1000 && !rest) {
         // Keep the view busy like a user would: orbit a little every frame, so it renders continuously.
         view.controller()->orbit(0.5, 0.0);
@@ -111,5 +129,28 @@ int main(int argc, char** argv)
                 wall, rest ? " (cloth reached rest)" : "", rendered / wall, applied / wall,
                 view.controller()->simulatedTime() - simStart, (view.controller()->simulatedTime() - simStart) / wall,
                 f ? f->steps : 0L, static_cast<long long>(worstGap));
+    if (toRest)
+        std::printf("drape to rest: %s, last progress fraction %.2f\n", rest ? "reached rest" : "stopped by --seconds", lastFraction);
+
+    // ---- library operations on the GUI thread ------------------------------------
+    if (const int ops = cl.value("library-ops").toInt(); ops > 0) {
+        QTemporaryDir libDir;
+        const QString path = libDir.filePath("library.sqlite");
+        auto lib = drape::library::open_library(path.toStdString(), drape::library::FabricLibrary::Mode::ReadWrite);
+        drape::library::add_starter_fabrics(lib);
+        view.setLibraryPath(path);
+        const QStringList names = {"Silk (class preset)", "Denim (class preset)", "Wool worsted (class preset)",
+                                   "Cotton plain weave (class preset)"};
+        qint64 worstOp = 0;
+        for (int i = 0; i < ops; ++i) {
+            QElapsedTimer op;
+            op.start();
+            view.setFabricPreset(names[i % names.size()]);
+            worstOp = std::max(worstOp, op.elapsed());
+            app.processEvents(QEventLoop::AllEvents, 5);
+        }
+        std::printf("library: %d fabric lookups by name on the GUI thread, slowest %lld ms\n", ops,
+                    static_cast<long long>(worstOp));
+    }
     return 0;
 }

@@ -3,6 +3,7 @@
 //
 //   drape_view_shot --out shot.png [--view iso|top|side] [--grid 40] [--integrator implicit]
 //                   [--preset FILE] [--texture IMG] [--time T] [--size 800x600] [--outline]
+//                   [--shape disc|square] [--pin X,Y]
 #include "widget/drape_view.hpp"
 
 #include <QApplication>
@@ -31,6 +32,7 @@ int main(int argc, char** argv)
     cl.addOption({"size", "WxH", "size", "800x600"});
     cl.addOption({"outline", "show the simulated shadow outline and a circle of the flat specimen as 'measured'"});
     cl.addOption({"pin", "pin the vertex nearest to this world point x,y [m] before running", "x,y", ""});
+    cl.addOption({"shape", "cloth shape: disc or square", "shape", "disc"});
     cl.process(app);
     const QStringList wh = cl.value("size").split('x');
 
@@ -42,10 +44,18 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "error: %s\n", qPrintable(m));
     });
     view.setGridSize(cl.value("grid").toInt());
-    view.setIntegrator(cl.value("integrator"));
+    const auto integ = drape::widget::parseIntegrator(cl.value("integrator"));
+    const auto viewPreset = drape::widget::parseViewPreset(cl.value("view"));
+    const auto shape = drape::widget::parseClothShape(cl.value("shape"));
+    if (!integ || !viewPreset || !shape) {
+        std::fprintf(stderr, "error: unknown --integrator, --view or --shape\n");
+        return 2;
+    }
+    view.setIntegrator(*integ);
     view.setFabricPreset(cl.value("preset"));
     view.setTexture(cl.value("texture"));
-    view.setViewPreset(cl.value("view"));
+    view.setViewPreset(*viewPreset);
+    view.setClothShape(*shape);
     view.show();
     bool rest = false;
     QObject::connect(&view, &DrapeView::restReached, [&] { rest = true; });
@@ -57,6 +67,20 @@ int main(int argc, char** argv)
         const double r = view.sampleDiameter() * 0.5e-3;
         for (int k = 0; k < 360; ++k) circle << QPointF(r * std::cos(k * M_PI / 180), r * std::sin(k * M_PI / 180));
         view.showMeasuredOutline(circle);
+    }
+    if (cl.isSet("pin")) {
+        while (!view.controller()->currentFrame() && clock.elapsed() < 30000) app.processEvents(QEventLoop::AllEvents, 20);
+        const QStringList xy = cl.value("pin").split(',');
+        const Eigen::Vector2d p(xy.value(0).toDouble(), xy.value(1).toDouble());
+        const auto frame = view.controller()->currentFrame();
+        int nearest = -1;
+        double best = 1e300;
+        for (int i = 0; frame && i < frame->x.rows(); ++i)
+            if (const double d = (frame->x.row(i).head<2>().transpose() - p).norm(); d < best) {
+                best = d;
+                nearest = i;
+            }
+        if (nearest >= 0) view.controller()->setPinned(nearest, true);
     }
     const double until = cl.value("time").toDouble();
     view.setRunning(true);

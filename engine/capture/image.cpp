@@ -123,14 +123,16 @@ cv::Mat load_photo(const record::Record& rec, const std::string& name)
     const std::string path = rec.file(name).string();
     const std::string bytes = read_file(path, std::size_t(256) << 20);
     if (bytes.empty()) throw FileError(path + ": empty file");
-    if (const auto wh = header_size(bytes)) {
-        if (wh->first < 16 || wh->second < 16 || wh->first > 20000 || wh->second > 20000 ||
-            static_cast<double>(wh->first) * wh->second > 200e6)
-            throw FileError(path + ": image is " + std::to_string(wh->first) + " x " + std::to_string(wh->second) +
-                            " px (accepted: 16 .. 20000 px a side, at most 200 megapixels)");
-    }
-    const bool is_jpeg = bytes.size() > 3 && static_cast<unsigned char>(bytes[0]) == 0xFF && static_cast<unsigned char>(bytes[1]) == 0xD8;
-    if (is_jpeg) {
+    const Format format = format_of(bytes);
+    if (format == Format::Other)
+        throw FileError(path + ": not a JPEG, PNG or BMP image (the formats whose size is read before the pixels are decoded)");
+    const auto wh = header_size(bytes, format);
+    if (!wh) throw FileError(path + ": no image size in the file's header (a damaged or truncated image)");
+    if (wh->first < 16 || wh->second < 16 || wh->first > 20000 || wh->second > 20000 ||
+        static_cast<double>(wh->first) * wh->second > 200e6)
+        throw FileError(path + ": image is " + std::to_string(wh->first) + " x " + std::to_string(wh->second) +
+                        " px (accepted: 16 .. 20000 px a side, at most 200 megapixels)");
+    if (format == Format::Jpeg) {
         std::size_t end = bytes.size();
         while (end > 2 && bytes[end - 1] == '\0') --end;
         if (!(static_cast<unsigned char>(bytes[end - 2]) == 0xFF && static_cast<unsigned char>(bytes[end - 1]) == 0xD9))

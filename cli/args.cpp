@@ -4,6 +4,8 @@
 #include "engine/core/error.hpp"
 #include "engine/core/units.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -121,15 +123,28 @@ double Args::get_double(const std::string& flag, double fallback) const
 {
     auto s = get(flag);
     if (!s) return fallback;
-    std::size_t pos = 0;
+    // The one strict parser (units.hpp): a whole decimal number, finite ("inf",
+    // "nan", "1e400", "0x1p-3" and "81.5abc" are refused).
     double v = 0;
-    try {
-        v = std::stod(*s, &pos);
-    } catch (const std::exception&) {
-        pos = 0;
-    }
-    if (pos != s->size() || pos == 0 || !std::isfinite(v)) throw UsageError(flag + ": '" + *s + "' is not a finite number");
+    if (!parse_number(*s, v)) throw UsageError(flag + ": '" + *s + "' is not a finite number");
     return v;
+}
+
+double Args::get_double_in(const std::string& flag, double fallback, double lo, double hi, const std::string& unit) const
+{
+    const double v = get_double(flag, fallback);
+    if (has(flag) && (v < lo || v > hi)) {
+        const std::string u = unit.empty() ? "" : " " + unit;
+        throw UsageError(flag + ": " + *get(flag) + u + " is outside [" + format_value(lo) + ", " + format_value(hi) + "]" + u);
+    }
+    return v;
+}
+
+std::string dump_json(const nlohmann::json& j, int indent)
+{
+    // Text from the command line or from file names need not be UTF-8; it is
+    // written with U+FFFD instead of failing the whole output.
+    return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 double Args::get_length(const std::string& flag, double fallback) const

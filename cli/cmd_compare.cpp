@@ -3,9 +3,11 @@
 // preset against records it was not fitted to, and to predict the signature
 // of a model change (docs/model-discrepancy.md).
 #include "cli/command.hpp"
+#include "cli/checks.hpp"
 #include "cli/setup.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
 #include "engine/fabric/preset.hpp"
 #include "engine/cloth/blas_threads.hpp"
 #include "engine/estimate/fit.hpp"
@@ -87,16 +89,32 @@ int run(const std::vector<std::string>& argv)
             if (!quiet) std::fprintf(stderr, "%s: seed %d/%d (grid %d)...\n", m.id.c_str(), s + 1, seeds, grid);
             const cloth::DrapeResult r = cloth::simulate_drape(p, setup, ro, mopt);
             all_converged = all_converged && r.status.converged();
+            if (!check_drape_result(r, setup)) {
+                std::fprintf(stderr, "%s: seed %d of %d: nothing compared\n", m.id.c_str(), s + 1, seeds);
+                return 4;
+            }
             fs.push_back(estimate::drape_features(r, m));
         }
         std::vector<double> closed;
         const estimate::DrapeFeatures sim = estimate::average_features(fs, &closed);
         const auto terms = estimate::residual_terms(0, meas, sim, closed, noise);
+        const double chi2 = estimate::chi_square(terms);
+        // A comparison that cannot be right is refused, not printed.
+        if (!std::isfinite(chi2)) {
+            std::string which;
+            for (const auto& t : terms)
+                if (!std::isfinite(t.whitened())) {
+                    which = t.kind + (t.depth_m > 0 ? " at depth " + format_value(t.depth_m * 1e3) + " mm" : std::string()) +
+                            ": simulated " + format_value(t.simulated) + ", measured " + format_value(t.measured);
+                    break;
+                }
+            throw Error(m.id + ": the comparison's chi2 is not finite (" + which + ")");
+        }
         nlohmann::json rec = {{"record", m.id},
                               {"grid", grid},
                               {"seeds", seeds},
                               {"fold_branch", folds > 0 ? nlohmann::json(folds) : nlohmann::json(nullptr)},
-                              {"chi2", estimate::chi_square(terms)},
+                              {"chi2", chi2},
                               {"terms", static_cast<int>(terms.size())}};
         nlohmann::json depths = nlohmann::json::array();
         for (const auto& t : terms) {
@@ -107,24 +125,39 @@ int run(const std::vector<std::string>& argv)
             else if (t.kind == "hem")
                 rec["hem_min_z_m"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
         }
+        // Radii of a simulated slice that does not close in any seed are not a
+        // contour (a cut through a few triangles): no error is computed for
+        // that depth; it is reported as not closed. The RMS runs over the
+        // depths that closed.
+        int unclosed = 0;
+        double sr = 0, sf = 0;
+        int n_closed = 0;
         for (std::size_t d = 0; d < meas.contours.size() && d < sim.contours.size(); ++d) {
             const auto& mc = meas.contours[d];
             const auto& sc = sim.contours[d];
-            depths.push_back({{"depth_m", mc.depth_m},
-                              {"closed_fraction", d < closed.size() ? closed[d] : 0.0},
-                              {"mean_radius_error_m", sc.mean_radius_m - mc.mean_radius_m},
-                              {"fold_rms_error_m", sc.fold_rms_m - mc.fold_rms_m},
-                              {"cos2_error_m", sc.cos2_m - mc.cos2_m}});
+            const double cf = d < closed.size() ? closed[d] : 0.0;
+            nlohmann::json dj = {{"depth_m", mc.depth_m}, {"closed_fraction", cf}, {"closed", cf > 0}};
+            const double er = sc.mean_radius_m - mc.mean_radius_m, ef = sc.fold_rms_m - mc.fold_rms_m;
+            if (cf > 0 && std::isfinite(er) && std::isfinite(ef)) {
+                dj["mean_radius_error_m"] = er;
+                dj["fold_rms_error_m"] = ef;
+                dj["cos2_error_m"] = sc.cos2_m - mc.cos2_m;
+                sr += er * er;
+                sf += ef * ef;
+                ++n_closed;
+            } else {
+                dj["mean_radius_error_m"] = nullptr;
+                dj["fold_rms_error_m"] = nullptr;
+                dj["cos2_error_m"] = nullptr;
+                ++unclosed;
+            }
+            depths.push_back(dj);
         }
         rec["depths"] = depths;
-        double sr = 0, sf = 0;
-        for (const auto& d : depths) {
-            sr += std::pow(d["mean_radius_error_m"].get<double>(), 2);
-            sf += std::pow(d["fold_rms_error_m"].get<double>(), 2);
-        }
-        if (!depths.empty()) {
-            rec["mean_radius_rms_error_m"] = std::sqrt(sr / static_cast<double>(depths.size()));
-            rec["fold_rms_rms_error_m"] = std::sqrt(sf / static_cast<double>(depths.size()));
+        rec["unclosed_depths"] = unclosed;
+        if (n_closed > 0) {
+            rec["mean_radius_rms_error_m"] = std::sqrt(sr / n_closed);
+            rec["fold_rms_rms_error_m"] = std::sqrt(sf / n_closed);
         }
         out.push_back(rec);
         if (!json_out) {
@@ -140,15 +173,25 @@ int run(const std::vector<std::string>& argv)
                 std::printf("  hem    sim %5.1f mm meas %5.1f mm err %+5.1f mm\n", 1e3 * v("hem_min_z_m", "simulated"),
                             1e3 * v("hem_min_z_m", "measured"), 1e3 * v("hem_min_z_m", "error"));
             if (rec.contains("mean_radius_rms_error_m"))
-                std::printf("  contours: RMS over depths of the mean-radius error %.2f mm, of the fold-amplitude error %.2f mm\n",
+                std::printf("  contours: RMS over the closed depths of the mean-radius error %.2f mm, of the fold-amplitude error %.2f mm\n",
                             1e3 * rec["mean_radius_rms_error_m"].get<double>(), 1e3 * rec["fold_rms_rms_error_m"].get<double>());
+            if (unclosed > 0)
+                std::printf("  %d depth(s) where the simulated slice does not close (the drape does not reach that deep all round):"
+                            " no radius error there; chi2 counts them as closure misses\n",
+                            unclosed);
             std::printf("  depth [mm]  mean radius err [mm]  fold RMS err [mm]\n");
-            for (const auto& d : depths)
-                std::printf("  %6.0f      %+6.2f                %+6.2f\n", 1e3 * d["depth_m"].get<double>(),
-                            1e3 * d["mean_radius_error_m"].get<double>(), 1e3 * d["fold_rms_error_m"].get<double>());
+            for (const auto& d : depths) {
+                if (d["mean_radius_error_m"].is_null()) {
+                    std::printf("  %6.0f      not closed\n", 1e3 * d["depth_m"].get<double>());
+                    continue;
+                }
+                std::printf("  %6.0f      %+6.2f                %+6.2f%s\n", 1e3 * d["depth_m"].get<double>(),
+                            1e3 * d["mean_radius_error_m"].get<double>(), 1e3 * d["fold_rms_error_m"].get<double>(),
+                            d["closed_fraction"].get<double>() < 1 ? "   (closed in some seeds only)" : "");
+            }
         }
     }
-    if (json_out) std::cout << out.dump(2) << "\n";
+    if (json_out) std::cout << dump_json(out) << "\n";
     return all_converged ? 0 : 4;
 }
 

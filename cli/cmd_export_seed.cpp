@@ -70,9 +70,9 @@ int run(const std::vector<std::string>& argv)
                           {"matched", e.matched},
                           {"simulations", e.simulations},
                           {"note", e.note}};
-    drape::write_file_atomic(*out, j.dump(2) + "\n");
+    drape::write_file_atomic(*out, cli::dump_json(j) + "\n");
     if (json) {
-        std::cout << j.dump(2) << "\n";
+        std::cout << cli::dump_json(j) << "\n";
     } else {
         std::printf("seed-19 constants for %d x %d patches written to %s\n", e.seed.u, e.seed.v, out->c_str());
         std::printf("drape coefficient  preset %.1f %%, seed constants %.1f %% (%s)\n", e.target_dc_percent, e.seed_dc_percent,

@@ -4,10 +4,15 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
+#include "engine/core/text.hpp"
+#include "engine/core/units.hpp"
 #include "engine/fabric/preset.hpp"
 #include "engine/estimate/fit.hpp"
+#include "engine/estimate/measured.hpp"
+#include "engine/estimate/objective.hpp"
 #include "engine/estimate/report.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -61,6 +66,35 @@ Ctrl-C stops the fit and keeps the best point so far (marked cancelled).)";
 std::atomic<bool> g_cancel{false};
 extern "C" void on_sigint(int) { g_cancel.store(true); }
 
+std::string join(const std::vector<std::string>& v)
+{
+    std::string out;
+    for (const auto& s : v) out += (out.empty() ? "" : ",") + s;
+    return out;
+}
+
+/// Residual terms of a record's own measurement in the fitted channels (a
+/// measured value to match; NaN = not measured).
+int fitted_terms(const estimate::MeasuredDrape& m, const std::vector<std::string>& channels)
+{
+    const estimate::DrapeFeatures f = estimate::drape_features(m);
+    const std::vector<double> closed(f.contours.size(), 1.0);
+    int n = 0;
+    for (const auto& t : estimate::residual_terms(0, f, f, closed, estimate::NoiseModel{}))
+        if (std::isfinite(t.measured) && std::find(channels.begin(), channels.end(), estimate::channel_of(t.kind)) != channels.end())
+            ++n;
+    return n;
+}
+
+/// A measured value for a table, "  -" where the record has none.
+std::string measured_text(double v, const char* fmt)
+{
+    if (!std::isfinite(v)) return "    -";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, fmt, v);
+    return buf;
+}
+
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid"},
@@ -104,8 +138,16 @@ int run(const std::vector<std::string>& argv)
         fo.start = fabric::load_fabric(*s).params; // a seed-19 preset starts from its continuum equivalent
     }
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
+    if (const auto n = a.get("--name"); n && !try_normalize_name(*n))
+        throw UsageError("--name: '" + printable(*n) + "' is not a name (1..200 characters of UTF-8 text, no control characters)");
     std::vector<estimate::MeasuredDrape> recs;
     for (const auto& dir : a.positionals()) recs.push_back(estimate::load_record(dir));
+    // Every record must give the fit something to match in a fitted channel;
+    // one that gives nothing would be "fitted" to nothing.
+    for (const auto& m : recs)
+        if (fitted_terms(m, fo.channels) == 0)
+            throw ParameterError(m.id + ": no measured value in the fitted channels (" + join(fo.channels) +
+                                 "): nothing to fit it to (add the record's photos or contours, or fit other --channels)");
     Progress progress("fit", quiet);
     if (!quiet)
         fo.progress = [&progress](const estimate::FitProgress& p) {
@@ -120,9 +162,20 @@ int run(const std::vector<std::string>& argv)
     estimate::FitResult r = estimate::fit_fabric(recs, fo);
     std::signal(SIGINT, old);
     progress.finish(r.cancelled ? "cancelled" : "done", !r.cancelled);
+    // A result that cannot be right is not written as if it were fitted.
+    if (r.evaluations == 0 || r.records.empty()) {
+        if (r.cancelled) {
+            std::fprintf(stderr, "fit cancelled before its first evaluation; nothing written\n");
+            return 3;
+        }
+        throw Error("the fit made no evaluation (" + std::to_string(r.records.size()) + " records): nothing written to " + *out);
+    }
+    if (!std::isfinite(r.chi2))
+        throw Error("the fit's objective is not finite (chi2 = " + format_value(r.chi2) + "): nothing written to " + *out);
+    r.params.validate("the fitted preset");
     r.name = a.get_or("--name", recs.front().id);
     nlohmann::json preset = estimate::fit_to_json(r);
-    drape::write_file_atomic(*out, preset.dump(2) + "\n");
+    drape::write_file_atomic(*out, dump_json(preset) + "\n");
     std::vector<std::string> files;
     if (const auto rep = a.get("--report")) files = estimate::write_fit_report(r, *rep, *out);
     if (json) {
@@ -134,20 +187,29 @@ int run(const std::vector<std::string>& argv)
         j["fit"] = preset["fit"];
         j["residual"] = preset["residual"];
         if (const auto rep = a.get("--report")) j["report_dir"] = *rep;
-        std::cout << j.dump(2) << "\n";
+        std::cout << dump_json(j) << "\n";
     } else {
         std::printf("%s", estimate::parameter_table_markdown(r).c_str());
         std::printf("\n");
+        for (const auto& rf : r.records) {
+            const bool has_dc = std::isfinite(rf.measured_features.drape_coefficient_percent);
+            const bool has_nodes = rf.measured_features.node_count >= 0;
+            std::printf("%-10s D measured %s %%  fitted %5.1f %%  (error %s)   nodes measured %s  fitted %4.1f  (error %s)\n",
+                        rf.measured.id.c_str(), measured_text(rf.measured_features.drape_coefficient_percent, "%5.1f").c_str(),
+                        rf.simulated_features.drape_coefficient_percent,
+                        measured_text(has_dc ? rf.dc_error_percent : NAN, "%+5.1f").c_str(),
+                        measured_text(has_nodes ? rf.measured_features.node_count : NAN, "%2.0f").c_str(),
+                        rf.simulated_features.node_count, measured_text(has_nodes ? rf.node_error : NAN, "%+4.1f").c_str());
+        }
         for (const auto& rf : r.records)
-            std::printf("%-10s D measured %5.1f %%  fitted %5.1f %%  (error %+5.1f)   nodes measured %2.0f  fitted %4.1f  (error %+4.1f)\n",
-                        rf.measured.id.c_str(), rf.measured_features.drape_coefficient_percent,
-                        rf.simulated_features.drape_coefficient_percent, rf.dc_error_percent, rf.measured_features.node_count,
-                        rf.simulated_features.node_count, rf.node_error);
-        for (const auto& rf : r.records)
-            if (rf.cold_seeds > 0)
-                std::printf("%-10s draped from flat (%d seeds): D %5.1f %% (error %+5.1f)   nodes %4.1f (error %+4.1f)\n", rf.measured.id.c_str(),
-                            rf.cold_seeds, rf.cold_features.drape_coefficient_percent, rf.cold_dc_error_percent, rf.cold_features.node_count,
-                            rf.cold_node_error);
+            if (rf.cold_seeds > 0) {
+                const bool has_dc = std::isfinite(rf.measured_features.drape_coefficient_percent);
+                const bool has_nodes = rf.measured_features.node_count >= 0;
+                std::printf("%-10s draped from flat (%d seeds): D %5.1f %% (error %s)   nodes %4.1f (error %s)\n", rf.measured.id.c_str(),
+                            rf.cold_seeds, rf.cold_features.drape_coefficient_percent,
+                            measured_text(has_dc ? rf.cold_dc_error_percent : NAN, "%+5.1f").c_str(), rf.cold_features.node_count,
+                            measured_text(has_nodes ? rf.cold_node_error : NAN, "%+4.1f").c_str());
+            }
         std::printf("\nchi2 %.1f for %d degrees of freedom; residual %s the measurement noise (contour RMS %.2f mm)\n", r.chi2, r.dof,
                     r.residual.exceeds_noise ? "EXCEEDS" : "is within", r.residual.rms_m * 1e3);
         if (r.residual.held_out_terms > 0)

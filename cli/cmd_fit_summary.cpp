@@ -193,7 +193,7 @@ int run(const std::vector<std::string>& argv)
         md << buf;
     }
     drape::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());
-    drape::write_file_atomic((std::filesystem::path(*out) / "summary.json").string(), js.dump(2) + "\n");
+    drape::write_file_atomic((std::filesystem::path(*out) / "summary.json").string(), dump_json(js) + "\n");
 
     // D error per record (one row each), one marker per label.
     {

@@ -117,7 +117,7 @@ int run(const std::vector<std::string>& argv)
         namespace fs = std::filesystem;
         const fs::path dir(*out);
         cloth::write_obj((dir / "rest.obj").string(), sys.x, sys.mesh().F, &sys.mesh().uv);
-        write_file_atomic((dir / "summary.json").string(), j.dump(2) + "\n");
+        write_file_atomic((dir / "summary.json").string(), dump_json(j) + "\n");
         char title[256];
         std::snprintf(title, sizeof title, "%s, %s: hem radius %.0f mm, %d folds, %s", scene.garment_name.c_str(),
                       preset.name.c_str(), gm.hem_mean_radius_m * 1e3, gm.hem_fold_count, cloth::to_string(st.outcome).c_str());
@@ -127,7 +127,7 @@ int run(const std::vector<std::string>& argv)
                                     title);
     }
     if (json) {
-        std::cout << j.dump(2) << "\n";
+        std::cout << dump_json(j) << "\n";
     } else {
         std::printf("garment            %s on %s\n", scene.garment_name.c_str(), body->c_str());
         std::printf("fabric             %s\n", preset.name.c_str());

@@ -56,7 +56,7 @@ int run_import(const std::vector<std::string>& argv)
                                    {"vertices", m.vertex_count()},
                                    {"triangles", m.triangle_count()},
                                    {"bounding_box_m", box_json(m.bounds())}});
-        std::cout << j.dump(2) << "\n";
+        std::cout << cli::dump_json(j) << "\n";
         return 0;
     }
     std::printf("%s  (%s)\n", path.c_str(), scene.format.c_str());

@@ -66,6 +66,17 @@ double parse_percent(const std::string& flag, const std::string& text)
     return v;
 }
 
+/// A fabric name given on the command line: a usage error (exit 2) when the
+/// library would refuse it, with the library's reason.
+void check_name_flag(const std::string& name, const std::string& what = "--name")
+{
+    try {
+        library::validate_name(name);
+    } catch (const ParameterError& e) {
+        throw cli::UsageError(what + ": " + e.what());
+    }
+}
+
 OnConflict parse_conflict(const std::string& s)
 {
     if (s == "fail") return OnConflict::Fail;
@@ -77,8 +88,8 @@ OnConflict parse_conflict(const std::string& s)
 
 void write_output(const json& j, const std::optional<std::string>& out)
 {
-    if (out && *out != "-") drape::write_file_atomic(*out, j.dump(2) + "\n");
-    else std::cout << j.dump(2) << "\n";
+    if (out && *out != "-") drape::write_file_atomic(*out, cli::dump_json(j) + "\n");
+    else std::cout << cli::dump_json(j) << "\n";
 }
 
 const std::set<std::string> kCommon = {"--library"};
@@ -110,14 +121,17 @@ int run_library(const std::vector<std::string>& argv)
         f.composition = a.get_or("--composition", "");
         f.text = a.get_or("--search", "");
         // Weights on the command line in g/m^2, the unit on fabric labels.
-        if (a.get("--weight-min")) f.weight_min = a.get_double("--weight-min", 0) * 1e-3;
-        if (a.get("--weight-max")) f.weight_max = a.get_double("--weight-max", 0) * 1e-3;
         if (auto s = a.get("--d-min")) f.drape_min = parse_percent("--d-min", *s);
         if (auto s = a.get("--d-max")) f.drape_max = parse_percent("--d-max", *s);
-        if (a.get("--fit-min")) f.fit_min = a.get_double("--fit-min", 0);
-        if (a.get("--fit-max")) f.fit_max = a.get_double("--fit-max", 0);
+        if (a.get("--weight-min")) f.weight_min = a.get_double_in("--weight-min", 0, 0, 1e4, "g/m^2") * 1e-3;
+        if (a.get("--weight-max")) f.weight_max = a.get_double_in("--weight-max", 0, 0, 1e4, "g/m^2") * 1e-3;
+        if (a.get("--fit-min")) f.fit_min = a.get_double_in("--fit-min", 0, 0, 1e300);
+        if (a.get("--fit-max")) f.fit_max = a.get_double_in("--fit-max", 0, 0, 1e300);
         f.modified_from = a.get_or("--since", "");
         f.modified_to = a.get_or("--until", "");
+        for (const auto& [flag, date] : {std::pair{"--since", f.modified_from}, {"--until", f.modified_to}})
+            if (!date.empty() && !is_iso_date(date))
+                throw cli::UsageError(std::string(flag) + ": '" + date + "' is not an ISO 8601 date such as 2026-11-22 or 2026-11-22T10:30");
         const std::string sort = a.get_or("--sort", "name");
         if (sort == "name") f.sort = SortKey::Name;
         else if (sort == "weight") f.sort = SortKey::Weight;
@@ -132,7 +146,7 @@ int run_library(const std::vector<std::string>& argv)
         if (a.has("--json")) {
             json j = {{"library", lib.path()}, {"count", rows.size()}, {"fabrics", json::array()}};
             for (const auto& r : rows) j["fabrics"].push_back(record_json(r, false));
-            std::cout << j.dump(2) << "\n";
+            std::cout << cli::dump_json(j) << "\n";
             return 0;
         }
         std::printf("%-34s %-22s %8s %7s %10s  %s\n", "name", "composition", "g/m^2", "D [%]", "fit", "modified");
@@ -149,7 +163,7 @@ int run_library(const std::vector<std::string>& argv)
         const FabricLibrary lib = open(a, FabricLibrary::Mode::ReadOnly);
         const FabricRecord r = lib.get(a.positionals().front());
         if (a.has("--json")) {
-            std::cout << record_json(r, true).dump(2) << "\n";
+            std::cout << cli::dump_json(record_json(r, true)) << "\n";
             return 0;
         }
         std::printf("name:         %s\ncomposition:  %s\nformat:       %s\nweight:       %.1f g/m^2\n", r.name.c_str(),
@@ -162,10 +176,10 @@ int run_library(const std::vector<std::string>& argv)
             for (const auto& s : cloth::param_table())
                 std::printf("  %-24s %-14.6g %s\n", std::string(s.key).c_str(), r.preset.params[s.id], std::string(s.unit).c_str());
         } else {
-            std::printf("seed-19 constants:\n%s\n", fabric::seed_to_json(*r.preset.seed).dump(2).c_str());
+            std::printf("seed-19 constants:\n%s\n", cli::dump_json(fabric::seed_to_json(*r.preset.seed)).c_str());
         }
         for (const char* k : {"source", "notes", "provenance"})
-            if (r.preset_json.contains(k)) std::printf("%s: %s\n", k, r.preset_json[k].dump().c_str());
+            if (r.preset_json.contains(k)) std::printf("%s: %s\n", k, cli::dump_json(r.preset_json[k], -1).c_str());
         return 0;
     }
     if (sub == "add" || sub == "update") {
@@ -174,6 +188,8 @@ int run_library(const std::vector<std::string>& argv)
         if (update ? a.positionals().size() != 2 : a.positionals().size() != 1)
             throw cli::UsageError(update ? "library update needs NAME FILE" : "library add needs one preset FILE (or seed-table1)");
         const std::string file = a.positionals().back();
+        if (const auto n = a.get("--name")) check_name_flag(*n);
+        if (update) check_name_flag(a.positionals().front(), "NAME");
         const fabric::FabricPreset p = resolve_fabric(file, a.get_or("--library", ""));
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
         std::string name = update ? a.positionals().front() : a.get_or("--name", "");
@@ -186,16 +202,17 @@ int run_library(const std::vector<std::string>& argv)
             else lib.add(p, name);
         }
         const FabricRecord r = lib.get(name);
-        if (a.has("--json")) std::cout << record_json(r, false).dump(2) << "\n";
+        if (a.has("--json")) std::cout << cli::dump_json(record_json(r, false)) << "\n";
         else std::printf("%s '%s' (revision %d) in %s\n", update ? "updated" : "stored", r.name.c_str(), r.revision, lib.path().c_str());
         return 0;
     }
     if (sub == "rename") {
         cli::Args a(rest, with_common({}), {"--json"});
         if (a.positionals().size() != 2) throw cli::UsageError("library rename needs OLD NEW");
+        check_name_flag(a.positionals()[1], "NEW");
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
         lib.rename(a.positionals()[0], a.positionals()[1]);
-        if (a.has("--json")) std::cout << json{{"renamed", a.positionals()[0]}, {"to", a.positionals()[1]}}.dump(2) << "\n";
+        if (a.has("--json")) std::cout << cli::dump_json(json{{"renamed", a.positionals()[0]}, {"to", a.positionals()[1]}}) << "\n";
         else std::printf("renamed '%s' to '%s'\n", a.positionals()[0].c_str(), a.positionals()[1].c_str());
         return 0;
     }
@@ -204,7 +221,7 @@ int run_library(const std::vector<std::string>& argv)
         if (a.positionals().empty()) throw cli::UsageError("library remove needs NAME [NAME ...]");
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
         lib.remove(a.positionals()); // all or nothing
-        if (a.has("--json")) std::cout << json{{"removed", a.positionals()}, {"count", lib.count()}}.dump(2) << "\n";
+        if (a.has("--json")) std::cout << cli::dump_json(json{{"removed", a.positionals()}, {"count", lib.count()}}) << "\n";
         else std::printf("removed %zu fabric(s); %d left\n", a.positionals().size(), lib.count());
         return 0;
     }
@@ -231,7 +248,7 @@ int run_library(const std::vector<std::string>& argv)
                 const auto out = a.get("--out");
                 if (out && *out != "-") {
                     drape::write_file_atomic(*out, script);
-                    if (a.has("--json")) std::cout << json{{"exported", what}, {"out", *out}, {"format", "blender"}}.dump(2) << "\n";
+                    if (a.has("--json")) std::cout << cli::dump_json(json{{"exported", what}, {"out", *out}, {"format", "blender"}}) << "\n";
                     else std::printf("exported %s to %s (Blender cloth settings: run it in Blender with the garment selected)\n",
                                      what.c_str(), out->c_str());
                 } else {
@@ -249,7 +266,7 @@ int run_library(const std::vector<std::string>& argv)
         const auto out = a.get("--out");
         write_output(doc, out);
         if (out && *out != "-") {
-            if (a.has("--json")) std::cout << json{{"exported", what}, {"out", *out}}.dump(2) << "\n";
+            if (a.has("--json")) std::cout << cli::dump_json(json{{"exported", what}, {"out", *out}}) << "\n";
             else std::printf("exported %s to %s\n", what.c_str(), out->c_str());
         }
         return 0;
@@ -281,7 +298,8 @@ int run_library(const std::vector<std::string>& argv)
         if (is_u3m(j)) j = fabric::fabric_to_json(preset_from_u3m(j, file, &u3m_note)); // a U3M material: its preset
         FabricLibrary lib = open(a, FabricLibrary::Mode::ReadWrite);
         ImportReport rep;
-        if (j.is_array() || (j.is_object() && j.value("format", std::string()) == "drapekit-fabric-library")) {
+        if (const auto n = a.get("--name")) check_name_flag(*n);
+        if (j.is_array() || (j.is_object() && j.contains("format") && j["format"] == "drapekit-fabric-library")) {
             if (a.get("--name")) throw cli::UsageError("--name applies to a single preset, not a library export");
             rep = lib.import_all(j, file, oc);
         } else {
@@ -300,7 +318,7 @@ int run_library(const std::vector<std::string>& argv)
             json out = {{"added", rep.added}, {"replaced", rep.replaced}, {"skipped", rep.skipped},
                         {"renamed", rep.renamed}, {"names", rep.names}, {"count", lib.count()}};
             if (!u3m_note.empty()) out["u3m"] = u3m_note;
-            std::cout << out.dump(2) << "\n";
+            std::cout << cli::dump_json(out) << "\n";
         } else {
             if (!u3m_note.empty()) std::printf("U3M: %s\n", u3m_note.c_str());
             std::printf("imported from %s: %d added, %d replaced, %d skipped, %d renamed; %d fabric(s) in %s\n", file.c_str(),

@@ -314,7 +314,7 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
         else if (!check.empty()) std::fprintf(stderr, " (%s)", check.c_str());
         std::fprintf(stderr, "   %.0f s, about %.0f s left\n", elapsed, elapsed / static_cast<double>(i + 1) * static_cast<double>(photos.size() - i - 1));
     }
-    write_file_atomic(*table, as_json ? json({{"folder", folder.string()}, {"photos", rows}}).dump(1) + "\n" : csv.str());
+    write_file_atomic(*table, as_json ? cli::dump_json(json({{"folder", folder.string()}, {"photos", rows}}), 1) + "\n" : csv.str());
     std::fprintf(stderr, "%zu photos: %zu measured, %d refused or failed; table in %s\n", photos.size(),
                  photos.size() - static_cast<std::size_t>(failed), failed, table->c_str());
     return failed ? 1 : 0;
@@ -342,7 +342,7 @@ int run_measure(const std::vector<std::string>& argv)
         std::error_code ec;
         if (!fs::is_regular_file(p, ec)) throw FileError(*top + ": no such photo");
         const json meta = meta_from_flags(a, p.filename().string(), p.stem().string());
-        if (auto out = a.get("--write-meta")) write_file_atomic(*out, meta.dump(1) + "\n");
+        if (auto out = a.get("--write-meta")) write_file_atomic(*out, cli::dump_json(meta, 1) + "\n");
         rec = record::parse_meta_json(meta, p.parent_path(), "the command line (as meta.json)");
         photo = true;
         what = *top;
@@ -358,7 +358,7 @@ int run_measure(const std::vector<std::string>& argv)
     const capture::Measurement m = capture::measure_record(rec, opt);
     progress.finish();
     write_outputs(a, rec, m);
-    if (a.has("--json")) std::cout << capture::to_json(m).dump(1) << "\n";
+    if (a.has("--json")) std::cout << cli::dump_json(capture::to_json(m), 1) << "\n";
     else print_text(m);
     return verdict(m, photo, what);
 }

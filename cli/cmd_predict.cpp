@@ -1,5 +1,6 @@
 // drape predict: simulate a fitted preset on another drape set-up.
 #include "cli/command.hpp"
+#include "cli/checks.hpp"
 #include "cli/progress.hpp"
 #include "cli/setup.hpp"
 
@@ -8,6 +9,7 @@
 #include "engine/fabric/preset.hpp"
 #include "engine/cloth/blas_threads.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -28,11 +30,15 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
   --pedestal-height L   pedestal height (default 120mm)
   --areal-density G     override the preset's areal density [g/m^2] (another cut of the fabric)
   --grid N              nodes across the specimen (default: the fit's grid scaled to the new
-                        diameter when the preset carries provenance, else 31)
+                        diameter when the preset carries provenance, within 9..201, else 31)
   --seed K              perturbation seed (default 1)
   --folds N             start on an N-fold branch (a 5 mm N-fold lift; default: the seeded mix)
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr)";
+
+/// Range of the grid predict derives from a fit's (odd, so the centre is a node).
+constexpr int kMinDefaultGrid = 9;
+constexpr int kMaxDefaultGrid = 201;
 
 int run(const std::vector<std::string>& argv)
 {
@@ -41,9 +47,10 @@ int run(const std::vector<std::string>& argv)
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     fabric::FabricPreset preset = load_fabric_flags(a);
     if (a.has("--areal-density")) {
+        // In g/m^2 on the command line; the table's bounds are kg/m^2.
+        const cloth::ParamSpec& sp = cloth::spec(cloth::Param::AreaDensity);
         cloth::FabricParams p = preset.params;
-        p[cloth::Param::AreaDensity] = a.get_double("--areal-density", 0) * 1e-3;
-        p.validate("--areal-density");
+        p[cloth::Param::AreaDensity] = a.get_double_in("--areal-density", 0, sp.lower * 1e3, sp.upper * 1e3, "g/m^2") * 1e-3;
         preset.set_params(p);
     }
     cloth::DrapeSetup defaults;
@@ -55,6 +62,9 @@ int run(const std::vector<std::string>& argv)
         const double fit_D1 = preset.fit && preset.fit->sample_diameter_m > 0 ? preset.fit->sample_diameter_m : 0.30;
         defaults.grid = static_cast<int>(std::lround(preset.provenance->grid * defaults.sample_diameter / fit_D1));
         if (defaults.grid % 2 == 0) ++defaults.grid;
+        // A default, not the user's --grid: kept inside what --grid takes
+        // rather than failing on a flag that was never given.
+        defaults.grid = std::clamp(defaults.grid, kMinDefaultGrid, kMaxDefaultGrid);
     }
     const cloth::DrapeSetup setup = parse_setup(a, defaults);
     cloth::single_threaded_blas();
@@ -64,8 +74,9 @@ int run(const std::vector<std::string>& argv)
     if (!quiet) ro.progress = progress.solver_callback(ro);
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
     progress.finish(to_string(r.status.outcome), r.status.converged());
+    if (!check_drape_result(r, setup)) return 4;
     if (json) {
-        std::cout << cloth::drape_summary_json(r, setup, ro.integrator).dump(2) << "\n";
+        std::cout << dump_json(cloth::drape_summary_json(r, setup, ro.integrator)) << "\n";
     } else {
         std::printf("set-up             %.0f / %.0f mm (grid %d, seed %llu)\n", setup.sample_diameter * 1e3, setup.disc_diameter * 1e3,
                     setup.grid, static_cast<unsigned long long>(setup.seed));

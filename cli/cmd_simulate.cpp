@@ -1,5 +1,6 @@
 // drape simulate: drape a fabric preset over the drapemeter and measure it.
 #include "cli/command.hpp"
+#include "cli/checks.hpp"
 #include "cli/progress.hpp"
 #include "cli/setup.hpp"
 
@@ -80,6 +81,7 @@ int run(const std::vector<std::string>& argv)
     if (!quiet) ro.progress = progress.solver_callback(ro);
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
     progress.finish(to_string(r.status.outcome), r.status.converged());
+    if (!check_drape_result(r, setup)) return 4;
     const auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
     if (const auto out = a.get("--out")) {
         auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // for the mesh topology
@@ -113,7 +115,7 @@ int run(const std::vector<std::string>& argv)
 #endif
     }
     if (json) {
-        std::cout << summary.dump(2) << "\n";
+        std::cout << dump_json(summary) << "\n";
     } else {
         std::printf("drape coefficient  %.1f %%\n", r.metrics.drape_coefficient_percent);
         std::printf("nodes              %d\n", r.metrics.node_count);

@@ -2,6 +2,8 @@
 // Sub-command registry of the `drape` tool. Each cli/cmd_*.cpp registers one
 // command with a static DRAPE_COMMAND(...) object; cli/CMakeLists.txt compiles
 // every cmd_*.cpp straight into the executable, so the registrations are kept.
+#include <nlohmann/json_fwd.hpp>
+
 #include <functional>
 #include <map>
 #include <optional>
@@ -26,6 +28,8 @@ public:
     /// Integer / double values with a clear error naming the flag and value.
     int get_int(const std::string& flag, int fallback, int min, int max) const;
     double get_double(const std::string& flag, double fallback) const;
+    /// A finite number in [lo, hi] (`unit` for the message), UsageError naming the flag otherwise.
+    double get_double_in(const std::string& flag, double fallback, double lo, double hi, const std::string& unit = "") const;
     /// Length with unit suffix (mm, cm, m; bare = m) in metres.
     double get_length(const std::string& flag, double fallback) const;
     const std::vector<std::string>& positionals() const { return m_pos; }
@@ -35,6 +39,10 @@ private:
     std::set<std::string> m_switches;
     std::vector<std::string> m_pos;
 };
+
+/// JSON text for stdout and output files: bytes that are not UTF-8 (from a
+/// command line or a file name) become U+FFFD instead of an exception.
+std::string dump_json(const nlohmann::json& j, int indent = 2);
 
 /// Thrown for a bad command line; main prints it with the usage and exits 2.
 struct UsageError : std::runtime_error {

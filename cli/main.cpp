@@ -2,12 +2,55 @@
 #include "cli/command.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 #include <exception>
 #include <iostream>
 
+// Defense in depth for the readers Drapekit does not control (assimp, through
+// `drape import` and the garment commands): one allocation of more than
+// kMaxAllocation is refused with std::bad_alloc, which assimp reports as a
+// failed import. A corrupt Collada file made assimp allocate 1.5 GiB, then
+// 3 GiB (12 GB resident) before failing; the cap ends that at the first.
+// Nothing of Drapekit's own allocates that much at once through new (a
+// 20-million-vertex mesh is 480 MB; Eigen, OpenCV and CHOLMOD use malloc).
 namespace {
+constexpr std::size_t kMaxAllocation = std::size_t(1) << 30;
+void* checked_alloc(std::size_t n)
+{
+    if (n > kMaxAllocation) throw std::bad_alloc();
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+} // namespace
+void* operator new(std::size_t n) { return checked_alloc(n); }
+void* operator new[](std::size_t n) { return checked_alloc(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+/// A message for the terminal: messages quote names, cells and paths from
+/// files a user may have received, so control characters (escape sequences)
+/// and bytes that are not UTF-8 are written as \xNN; line breaks are kept.
+std::string safe(const std::string& message)
+{
+    std::string out;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t nl = message.find('\n', start);
+        out += drape::printable(std::string_view(message).substr(start, nl == std::string::npos ? std::string::npos : nl - start), 4000);
+        if (nl == std::string::npos) break;
+        out += '\n';
+        start = nl + 1;
+    }
+    return out;
+}
+
 void print_overview()
 {
     std::cout << "usage: drape COMMAND [ARGS]\n\ncommands:\n";
@@ -52,13 +95,17 @@ int main(int argc, char** argv)
     try {
         return it->second.run(rest);
     } catch (const UsageError& e) {
-        std::cerr << "drape " << args[0] << ": " << e.what() << "\n\n" << it->second.usage << "\n";
+        std::cerr << "drape " << args[0] << ": " << safe(e.what()) << "\n\n" << it->second.usage << "\n";
         return 2;
     } catch (const drape::Error& e) {
-        std::cerr << "drape " << args[0] << ": error: " << e.what() << "\n";
+        std::cerr << "drape " << args[0] << ": error: " << safe(e.what()) << "\n";
         return 1;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "drape " << args[0] << ": out of memory (or one allocation above " << (kMaxAllocation >> 20)
+                  << " MiB was refused)\n";
+        return 3;
     } catch (const std::exception& e) {
-        std::cerr << "drape " << args[0] << ": internal error: " << e.what() << "\n";
+        std::cerr << "drape " << args[0] << ": internal error: " << safe(e.what()) << "\n";
         return 3;
     }
 }

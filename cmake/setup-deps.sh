@@ -14,6 +14,9 @@ PKGS=(
   qml6-module-qtquick-controls qml6-module-qtquick-layouts qml6-module-qtquick-templates
   libqt6sql6-sqlite libqt6opengl6-dev qt6-qpa-plugins designer-qt6
   xvfb xauth libgl1-mesa-dri mesa-utils
+  # scripts/fuzz.sh: clang with libFuzzer and the sanitizer runtimes; jq and
+  # python3 write seeds and the bad inputs of scripts/bad-inputs.sh.
+  clang-14 libclang-rt-14-dev jq python3
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -1,21 +1,43 @@
 #include "importers/mesh_import.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 
 #include <Eigen/LU>
+#include <assimp/BaseImporter.h>
 #include <assimp/Importer.hpp>
+#include <assimp/ai_assert.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cstdint>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
+#include <stdexcept>
 #include <unordered_map>
+#include <vector>
+
+// Debian's assimp is built with its assertions on, and a failed one calls
+// abort(): a corrupt Collada file killed `drape import` (SIGABRT) in
+// ColladaLoader.cpp:1743 (fuzz_mesh). This definition replaces the library's
+// (ELF symbol interposition: the executable's definition wins) and throws
+// instead; assimp's BaseImporter::ReadFile catches std::exception from a
+// reader and reports a failed import, which import_scene turns into a
+// FileError naming the file.
+namespace Assimp {
+void aiAssertViolation(const char* failed_expression, const char* file, int line)
+{
+    throw std::runtime_error(std::string("assimp's check '") + failed_expression + "' failed (" + file + ":" + std::to_string(line) +
+                             ")");
+}
+} // namespace Assimp
 
 namespace drape::importers {
 
@@ -61,11 +83,22 @@ bool meta_number(const aiScene* s, const char* key, double& out)
     }
 }
 
+/// Limits of an imported scene: a scanned body has ~1e5-1e6 vertices; a file
+/// with 20 million is not a mannequin. Coordinates beyond 10 km are a wrong
+/// unit or a corrupt file. Scene graphs nest a few levels.
+constexpr std::size_t kMaxVertices = 20'000'000;
+constexpr std::size_t kMaxTriangles = 40'000'000;
+constexpr double kMaxCoordinateM = 1e4;
+constexpr int kMaxNodeDepth = 1000;
+constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t(1) << 30;
+
 struct Collect {
     const aiScene* scene;
     std::vector<ImportedMesh>* out;
     std::map<std::string, int>* name_uses;
     const std::string* path;
+    std::size_t* vertices;  ///< vertices collected so far (every instance counts)
+    std::size_t* triangles; ///< triangles collected so far
 };
 
 Eigen::Matrix4d to_eigen(const aiMatrix4x4& m)
@@ -78,9 +111,13 @@ Eigen::Matrix4d to_eigen(const aiMatrix4x4& m)
 
 // Transforms are chained in double so that the unit scale and axis swap are
 // exact (assimp keeps matrices in float).
-void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
+void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c, int depth)
 {
+    if (depth > kMaxNodeDepth)
+        throw FileError(*c.path + ": the scene graph is nested deeper than " + std::to_string(kMaxNodeDepth) + " nodes");
     const Eigen::Matrix4d world = parent * to_eigen(node->mTransformation);
+    if (!world.allFinite())
+        throw FileError(*c.path + ": node '" + node->mName.C_Str() + "' has a transform with a non-finite entry");
     for (unsigned k = 0; k < node->mNumMeshes; ++k) {
         const aiMesh* m = c.scene->mMeshes[node->mMeshes[k]];
         std::string name = m->mName.C_Str();
@@ -93,6 +130,13 @@ void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
             name += std::to_string(use + 1);
         }
 
+        // Sizes before allocation: a node graph that instances one big mesh
+        // many times multiplies it.
+        *c.vertices += m->mNumVertices;
+        *c.triangles += m->mNumFaces;
+        if (*c.vertices > kMaxVertices || *c.triangles > kMaxTriangles)
+            throw FileError(*c.path + ": the scene holds more than " + std::to_string(kMaxVertices) + " vertices or " +
+                            std::to_string(kMaxTriangles) + " triangles (every instance counted); larger than a body or garment mesh");
         if (m->mNumVertices == 0 || m->mNumFaces == 0)
             throw FileError(*c.path + ": mesh '" + name + "' has no faces (" + std::to_string(m->mNumVertices) +
                             " vertices, " + std::to_string(m->mNumFaces) + " faces)");
@@ -106,6 +150,10 @@ void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
                                 " has a non-finite coordinate (" + format_double(p0.x) + ", " + format_double(p0.y) +
                                 ", " + format_double(p0.z) + ")");
             const Eigen::Vector4d p = world * Eigen::Vector4d(p0.x, p0.y, p0.z, 1.0);
+            if (!p.head<3>().allFinite() || p.head<3>().cwiseAbs().maxCoeff() > kMaxCoordinateM)
+                throw FileError(*c.path + ": mesh '" + name + "' vertex " + std::to_string(v) + " lies at (" + format_value(p.x()) +
+                                ", " + format_value(p.y()) + ", " + format_value(p.z()) + ") m, more than " +
+                                format_value(kMaxCoordinateM) + " m from the origin (wrong --unit?)");
             im.X.row(v) << p.x(), p.y(), p.z();
         }
         int tris = 0;
@@ -131,7 +179,7 @@ void visit(const aiNode* node, const Eigen::Matrix4d& parent, const Collect& c)
         if (world.topLeftCorner<3, 3>().determinant() < 0) im.F.col(1).swap(im.F.col(2));
         c.out->push_back(std::move(im));
     }
-    for (unsigned ch = 0; ch < node->mNumChildren; ++ch) visit(node->mChildren[ch], world, c);
+    for (unsigned ch = 0; ch < node->mNumChildren; ++ch) visit(node->mChildren[ch], world, c, depth + 1);
 }
 
 AlignedBox box_of(const cloth::Positions& X)
@@ -309,6 +357,138 @@ int weld_vertices(cloth::Positions& X, cloth::Triangles& F)
     return removed;
 }
 
+namespace {
+
+/// The formats a mesh import takes (file extensions), the ones the docs name.
+/// assimp reads forty more, but fuzzing found its ASE reader crashing (SEGV)
+/// and its OFF reader allocating 16 GB for a header claiming 353,535,235,358
+/// vertices (assimp's own test file invalid/OutOfMemory.off) within minutes;
+/// the readers of formats nobody drapes are not offered to received files.
+const char* const kTakenExtensions[] = {"obj", "dae", "zae", "gltf", "glb", "fbx", "ply", "stl"};
+const char* const kTakenFormats = "OBJ, Collada (.dae, .zae), glTF 2 (.gltf, .glb), FBX, PLY and STL";
+
+bool taken(const std::string& ext)
+{
+    return std::any_of(std::begin(kTakenExtensions), std::end(kTakenExtensions), [&](const char* e) { return ext == e; });
+}
+
+/// A PLY header checked before assimp reads the file (fuzz_mesh's findings):
+/// the first line "ply" (NUL bytes after the word made assimp's reader loop
+/// forever), an "end_header" line within the first 64 KiB (a damaged one did
+/// the same), and element counts that fit the file (at least one byte per
+/// element) and the scene limits.
+void check_header(const std::string& path, const std::string& ext, std::uintmax_t size)
+{
+    constexpr std::size_t kHeadBytes = 64 * 1024;
+    std::ifstream in(path, std::ios::binary);
+    std::string head(kHeadBytes, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    auto check = [&](const std::string& what, const std::string& text, double bytes_each, std::size_t limit) {
+        double n = 0;
+        if (!parse_number(text, n) || n < 0 || n != std::floor(n))
+            throw FileError(path + ": the header's " + what + " '" + printable(text, 40) + "' is not a count");
+        if (n * bytes_each > static_cast<double>(size) || n > static_cast<double>(limit))
+            throw FileError(path + ": the header declares " + what + " = " + text + ", more than the file's " + std::to_string(size) +
+                            " bytes can hold (or the " + std::to_string(limit) + " a mesh import takes): a corrupt header");
+    };
+    // Binary glTF: the lengths its header declares must fit the file (a
+    // 3 KB .glb declaring a 4 GiB JSON chunk made assimp allocate 4 GiB).
+    if (ext == "glb" || head.compare(0, 4, "glTF") == 0) {
+        auto le32 = [&](std::size_t i) -> std::uint64_t {
+            if (i + 4 > head.size()) return 0;
+            return static_cast<std::uint64_t>(static_cast<unsigned char>(head[i])) |
+                   static_cast<std::uint64_t>(static_cast<unsigned char>(head[i + 1])) << 8 |
+                   static_cast<std::uint64_t>(static_cast<unsigned char>(head[i + 2])) << 16 |
+                   static_cast<std::uint64_t>(static_cast<unsigned char>(head[i + 3])) << 24;
+        };
+        if (head.size() >= 20 && head.compare(0, 4, "glTF") == 0) {
+            const std::uint64_t total = le32(8), chunk = le32(12);
+            if (total > size || 20 + chunk > size)
+                throw FileError(path + ": the binary glTF header declares " + std::to_string(total) + " bytes and a first chunk of " +
+                                std::to_string(chunk) + " bytes, more than the file's " + std::to_string(size) + ": a corrupt or cut file");
+        }
+    }
+    // A PLY file by its name or by its content (assimp recognises the word
+    // "ply" at the start whatever follows it, NUL bytes included).
+    std::size_t first = 0;
+    while (first < head.size() && std::isspace(static_cast<unsigned char>(head[first]))) ++first;
+    const bool ply = ext == "ply" || lower(head.substr(first, 3)) == "ply";
+    std::istringstream ss(head);
+    if (ply) {
+        std::string line;
+        std::getline(ss, line);
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (line != "ply") throw FileError(path + ": a PLY file must start with the line 'ply', not '" + printable(line, 40) + "'");
+        // Lines are read the way assimp reads them: unknown ones are skipped
+        // (Blender 2.4 wrote its comment without the "comment" keyword).
+        int n = 1;
+        while (std::getline(ss, line)) {
+            ++n;
+            if (!line.empty() && line.back() == '\r') line.pop_back();
+            std::istringstream ls(line);
+            std::string kw;
+            ls >> kw;
+            if (kw == "end_header") return;
+            if (kw != "element") continue;
+            std::vector<std::string> w;
+            for (std::string x; ls >> x;) w.push_back(x);
+            if (w.size() != 2)
+                throw FileError(path + ": PLY header line " + std::to_string(n) + ": '" + printable(line, 60) + "' is not 'element NAME COUNT'");
+            check("element " + printable(w[0], 40), w[1], 1, w[0] == "face" ? kMaxTriangles : kMaxVertices);
+        }
+        throw FileError(path + ": the PLY header has no end_header line in its first " + std::to_string(kHeadBytes) + " bytes");
+    }
+}
+
+/// Text formats are UTF-8 text without control characters besides tab, line
+/// feed and carriage return (XML 1.0 and JSON forbid them; OBJ is lines of
+/// text). Bytes that are neither in a Collada index list made assimp allocate
+/// 12 GB (a 0x1F run, then a lone 0xB3: fuzz_mesh); a UTF-16 file is refused
+/// with the same message (save it as UTF-8).
+void check_text(const std::string& path, const std::string& ext)
+{
+    if (ext != "dae" && ext != "gltf" && ext != "obj") return;
+    std::ifstream in(path, std::ios::binary);
+    std::string buf(1 << 16, '\0');
+    std::string carry; // an incomplete UTF-8 sequence at the end of the previous block
+    std::uintmax_t offset = 0;
+    auto fail = [&](std::uintmax_t at, const std::string& what) {
+        throw FileError(path + ": byte " + std::to_string(at) + " " + what + ", which a ." + ext +
+                        " file (UTF-8 text) cannot hold: a damaged file, or one saved in another encoding");
+    };
+    while (in) {
+        in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+        const auto n = static_cast<std::size_t>(in.gcount());
+        for (std::size_t i = 0; i < n; ++i) {
+            const auto c = static_cast<unsigned char>(buf[i]);
+            if ((c < 0x20 && c != '\t' && c != '\n' && c != '\r') || c == 0x7f)
+                fail(offset + i, "is a control character (" + printable(std::string(1, buf[i])) + ")");
+        }
+        std::string block = carry + buf.substr(0, n);
+        // Keep an incomplete sequence at the end for the next block.
+        std::size_t cut = block.size();
+        for (std::size_t k = 1; k <= 3 && k <= block.size(); ++k) {
+            const auto b = static_cast<unsigned char>(block[block.size() - k]);
+            if ((b & 0xC0) == 0xC0) { // a lead byte: is its sequence complete?
+                const std::size_t len = b >= 0xF0 ? 4 : b >= 0xE0 ? 3 : 2;
+                if (k < len && n == buf.size()) cut = block.size() - k;
+                break;
+            }
+            if ((b & 0x80) == 0) break;
+        }
+        if (const std::size_t bad = first_invalid_utf8(std::string_view(block).substr(0, cut)); bad != std::string_view::npos) {
+            std::string what = printable(block.substr(bad, 1)); // appended, not concatenated: GCC 12's -Wrestrict false positive
+            what += " is not UTF-8 text";
+            fail(offset - carry.size() + bad, what);
+        }
+        carry = block.substr(cut);
+        offset += n;
+    }
+}
+
+} // namespace
+
 ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
 {
     namespace fs = std::filesystem;
@@ -317,12 +497,32 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
     const auto size = fs::file_size(path, ec);
     if (ec) throw FileError(path + ": cannot read the file size (" + ec.message() + ")");
     if (size == 0) throw FileError(path + ": the file is empty");
+    if (size > kMaxFileBytes)
+        throw FileError(path + ": the file is " + std::to_string(size) + " bytes, more than the " + std::to_string(kMaxFileBytes) +
+                        " a mesh import reads");
     {
         std::ifstream probe(path, std::ios::binary);
         if (!probe) throw FileError(path + ": cannot open the file for reading");
     }
+    std::string ext = lower(fs::path(path).extension().string());
+    if (!ext.empty()) ext.erase(0, 1);
+    if (!taken(ext))
+        throw FileError(path + ": '." + printable(ext, 20) + "' is not a mesh format this import takes (" + kTakenFormats + ")");
+    check_header(path, ext, size);
+    check_text(path, ext);
 
     Assimp::Importer importer;
+    // Only the readers of the formats taken: a file is never handed to another
+    // reader by its content either.
+    for (std::size_t i = importer.GetImporterCount(); i-- > 0;) {
+        const aiImporterDesc* d = importer.GetImporterInfo(i);
+        std::istringstream exts(d && d->mFileExtensions ? d->mFileExtensions : "");
+        bool keep = false;
+        for (std::string e; exts >> e;) keep = keep || taken(lower(e));
+        if (keep) continue;
+        Assimp::BaseImporter* reader = importer.GetImporter(i);
+        if (importer.UnregisterLoader(reader) == AI_SUCCESS) delete reader; // unregistering hands it back
+    }
     // An explicit up axis describes the file's own numbers, so assimp must not
     // rotate Collada's Z_UP into Y_UP first.
     if (opt.up != UpAxis::File) importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
@@ -414,14 +614,15 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
     }
 
     std::map<std::string, int> uses;
-    Collect c{scene, &out.meshes, &uses, &path};
+    std::size_t vertices = 0, triangles = 0;
+    Collect c{scene, &out.meshes, &uses, &path, &vertices, &triangles};
     const Eigen::Matrix4d base = to_engine * to_eigen(root);
     // visit() multiplies by the node's own transform; the root's was adjusted above.
     aiNode* rn = scene->mRootNode;
     const aiMatrix4x4 keep = rn->mTransformation;
     rn->mTransformation = aiMatrix4x4();
     try {
-        visit(rn, base, c);
+        visit(rn, base, c, 0);
     } catch (...) {
         rn->mTransformation = keep;
         throw;

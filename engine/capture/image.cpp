@@ -5,6 +5,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <cstdint>
 #include <optional>
 #include <utility>
 
@@ -12,29 +13,65 @@ namespace drape::capture {
 
 namespace {
 
-/// Width and height from a JPEG's SOF marker or a PNG's IHDR; nullopt for
-/// other formats (OpenCV then decodes and the size is checked afterwards).
-std::optional<std::pair<int, int>> header_size(const std::string& b)
+enum class Format { Jpeg, Png, Bmp, Other };
+
+Format format_of(const std::string& b)
 {
-    auto u8 = [&](std::size_t i) { return static_cast<unsigned>(static_cast<unsigned char>(b[i])); };
-    if (b.size() > 24 && b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0)
-        return std::pair{static_cast<int>((u8(16) << 24) | (u8(17) << 16) | (u8(18) << 8) | u8(19)),
-                         static_cast<int>((u8(20) << 24) | (u8(21) << 16) | (u8(22) << 8) | u8(23))};
-    if (b.size() < 4 || u8(0) != 0xFF || u8(1) != 0xD8) return std::nullopt;
-    std::size_t i = 2;
-    while (i + 9 < b.size()) {
-        if (u8(i) != 0xFF) return std::nullopt;
-        const unsigned marker = u8(i + 1);
-        if (marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) {
-            i += 2;
-            continue;
+    if (b.size() >= 3 && static_cast<unsigned char>(b[0]) == 0xFF && static_cast<unsigned char>(b[1]) == 0xD8 &&
+        static_cast<unsigned char>(b[2]) == 0xFF)
+        return Format::Jpeg;
+    if (b.size() >= 8 && b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0) return Format::Png;
+    if (b.size() >= 2 && b[0] == 'B' && b[1] == 'M') return Format::Bmp;
+    return Format::Other;
+}
+
+/// Width and height from a JPEG's frame header (SOF), a PNG's IHDR or a BMP's
+/// info header: read before any pixel is decoded. nullopt when the header is
+/// not there (the file is then refused: decoding it would allocate whatever
+/// size the decoder finds later).
+std::optional<std::pair<long, long>> header_size(const std::string& b, Format f)
+{
+    auto u8 = [&](std::size_t i) { return static_cast<unsigned long>(static_cast<unsigned char>(b[i])); };
+    switch (f) {
+    case Format::Png:
+        if (b.size() < 24 || b.compare(12, 4, "IHDR") != 0) return std::nullopt;
+        return std::pair{static_cast<long>((u8(16) << 24) | (u8(17) << 16) | (u8(18) << 8) | u8(19)),
+                         static_cast<long>((u8(20) << 24) | (u8(21) << 16) | (u8(22) << 8) | u8(23))};
+    case Format::Bmp: {
+        if (b.size() < 26) return std::nullopt;
+        const auto le32 = [&](std::size_t i) {
+            return static_cast<std::int32_t>(static_cast<std::uint32_t>(u8(i) | (u8(i + 1) << 8) | (u8(i + 2) << 16) | (u8(i + 3) << 24)));
+        };
+        const std::int32_t w = le32(18), h = le32(22); // a negative height: rows stored top-down
+        return std::pair{static_cast<long>(w), h < 0 ? -static_cast<long>(h) : static_cast<long>(h)};
+    }
+    case Format::Jpeg: {
+        std::size_t i = 2;
+        while (i + 1 < b.size()) {
+            if (u8(i) != 0xFF) return std::nullopt;
+            const unsigned long marker = u8(i + 1);
+            if (marker == 0xFF) { // fill byte
+                ++i;
+                continue;
+            }
+            if (marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) {
+                i += 2;
+                continue;
+            }
+            if (marker == 0xDA || marker == 0xD9) return std::nullopt; // image data (or the end) before any frame header
+            if (i + 3 >= b.size()) return std::nullopt;
+            const std::size_t len = (u8(i + 2) << 8) | u8(i + 3);
+            // SOF0..SOF15 except DHT (C4), JPG (C8) and DAC (CC).
+            if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+                if (i + 8 >= b.size()) return std::nullopt;
+                return std::pair{static_cast<long>((u8(i + 7) << 8) | u8(i + 8)), static_cast<long>((u8(i + 5) << 8) | u8(i + 6))};
+            }
+            if (len < 2) return std::nullopt;
+            i += 2 + len;
         }
-        const std::size_t len = (u8(i + 2) << 8) | u8(i + 3);
-        // SOF0..SOF15 except DHT (C4), JPG (C8) and DAC (CC).
-        if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC)
-            return std::pair{static_cast<int>((u8(i + 7) << 8) | u8(i + 8)), static_cast<int>((u8(i + 5) << 8) | u8(i + 6))};
-        if (len < 2) return std::nullopt;
-        i += 2 + len;
+        return std::nullopt;
+    }
+    case Format::Other: break;
     }
     return std::nullopt;
 }
@@ -50,17 +87,20 @@ cv::Mat load_image(const record::Record& rec, const std::string& camera)
     const std::string path = rec.file(cam.image).string();
     const std::string bytes = read_file(path, std::size_t(128) << 20);
     if (bytes.empty()) throw FileError(path + ": empty file");
-    auto size_mismatch = [&](int w, int h) {
+    auto size_mismatch = [&](long w, long h) {
         return FileError(path + ": image is " + std::to_string(w) + " x " + std::to_string(h) +
                          " px but meta.json field 'cameras." + camera + ".width/height' declares " + std::to_string(cam.width) +
                          " x " + std::to_string(cam.height));
     };
-    if (const auto wh = header_size(bytes); wh && (wh->first != cam.width || wh->second != cam.height))
-        throw size_mismatch(wh->first, wh->second);
+    const Format format = format_of(bytes);
+    if (format == Format::Other)
+        throw FileError(path + ": not a JPEG, PNG or BMP image (the formats whose size is read before the pixels are decoded)");
+    const auto wh = header_size(bytes, format);
+    if (!wh) throw FileError(path + ": no image size in the file's header (a damaged or truncated image)");
+    if (wh->first != cam.width || wh->second != cam.height) throw size_mismatch(wh->first, wh->second);
     // libjpeg decodes a truncated file with a grey bottom and only a warning;
     // a JPEG must end with the EOI marker FF D9 (trailing padding allowed).
-    const bool is_jpeg = bytes.size() > 3 && static_cast<unsigned char>(bytes[0]) == 0xFF && static_cast<unsigned char>(bytes[1]) == 0xD8;
-    if (is_jpeg) {
+    if (format == Format::Jpeg) {
         std::size_t end = bytes.size();
         while (end > 2 && bytes[end - 1] == '\0') --end;
         if (!(static_cast<unsigned char>(bytes[end - 2]) == 0xFF && static_cast<unsigned char>(bytes[end - 1]) == 0xD9))
@@ -83,14 +123,16 @@ cv::Mat load_photo(const record::Record& rec, const std::string& name)
     const std::string path = rec.file(name).string();
     const std::string bytes = read_file(path, std::size_t(256) << 20);
     if (bytes.empty()) throw FileError(path + ": empty file");
-    if (const auto wh = header_size(bytes)) {
-        if (wh->first < 16 || wh->second < 16 || wh->first > 20000 || wh->second > 20000 ||
-            static_cast<double>(wh->first) * wh->second > 200e6)
-            throw FileError(path + ": image is " + std::to_string(wh->first) + " x " + std::to_string(wh->second) +
-                            " px (accepted: 16 .. 20000 px a side, at most 200 megapixels)");
-    }
-    const bool is_jpeg = bytes.size() > 3 && static_cast<unsigned char>(bytes[0]) == 0xFF && static_cast<unsigned char>(bytes[1]) == 0xD8;
-    if (is_jpeg) {
+    const Format format = format_of(bytes);
+    if (format == Format::Other)
+        throw FileError(path + ": not a JPEG, PNG or BMP image (the formats whose size is read before the pixels are decoded)");
+    const auto wh = header_size(bytes, format);
+    if (!wh) throw FileError(path + ": no image size in the file's header (a damaged or truncated image)");
+    if (wh->first < 16 || wh->second < 16 || wh->first > 20000 || wh->second > 20000 ||
+        static_cast<double>(wh->first) * wh->second > 200e6)
+        throw FileError(path + ": image is " + std::to_string(wh->first) + " x " + std::to_string(wh->second) +
+                        " px (accepted: 16 .. 20000 px a side, at most 200 megapixels)");
+    if (format == Format::Jpeg) {
         std::size_t end = bytes.size();
         while (end > 2 && bytes[end - 1] == '\0') --end;
         if (!(static_cast<unsigned char>(bytes[end - 2]) == 0xFF && static_cast<unsigned char>(bytes[end - 1]) == 0xD9))

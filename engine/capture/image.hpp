@@ -10,11 +10,12 @@
 
 namespace drape::capture {
 
-/// The photograph of station `camera` (BGR, 8 bit). Throws FileError when the
-/// file is missing, not a decodable image, truncated (no JPEG end marker), or
-/// not of the size declared in meta.json - the size is read from the file's
-/// header before the pixels are decoded, so a header claiming 30000 x 30000 px
-/// costs nothing.
+/// The photograph of station `camera` (BGR, 8 bit): JPEG, PNG or BMP. Throws
+/// FileError when the file is missing, of another format, not a decodable
+/// image, truncated (no JPEG end marker), or not of the size declared in
+/// meta.json - the size is read from the file's header before the pixels are
+/// decoded (a file whose header gives none is refused), so a header claiming
+/// 30000 x 30000 px costs nothing.
 cv::Mat load_image(const record::Record& rec, const std::string& camera);
 
 /// A single-camera record's photo `name` (BGR, 8 bit): any size up to 20000 px

@@ -160,9 +160,10 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
             m.springs.back().fc = kEulerPinned * (Bu * c2 + Bv * s2) * (A / std::sqrt(len2)) / len2;
         }
         if (tris.size() != 2 || !quadratic) continue;
-        auto opposite = [&](int t) {
+        // The lambda takes copies: clang before 16 cannot capture structured bindings.
+        auto opposite = [&, ea = a, eb = b](int t) {
             for (int c = 0; c < 3; ++c)
-                if (mesh.F(t, c) != a && mesh.F(t, c) != b) return mesh.F(t, c);
+                if (mesh.F(t, c) != ea && mesh.F(t, c) != eb) return mesh.F(t, c);
             return -1;
         };
         const int c = opposite(tris[0]), d = opposite(tris[1]);

@@ -1,7 +1,9 @@
 #include "engine/core/io.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -73,9 +75,25 @@ json parse_json(const std::string& text, const std::string& where)
     try {
         return json::parse(text, limit);
     } catch (const json::parse_error& e) {
-        throw FileError(where + ": not valid JSON (" + e.what() + ")");
+        // The message quotes what was last read: raw bytes of the file.
+        throw FileError(where + ": not valid JSON (" + printable(e.what(), 300) + ")");
     } catch (const json::out_of_range& e) {
-        throw FileError(where + ": a number in the JSON is out of range (" + e.what() + ")");
+        // nlohmann names the number but not where it is: find it (the first
+        // occurrence of that text) for the line and column.
+        const std::string msg = e.what();
+        std::string at;
+        const auto q1 = msg.find('\''), q2 = msg.rfind('\'');
+        if (q1 != std::string::npos && q2 > q1 + 1) {
+            const std::string number = msg.substr(q1 + 1, q2 - q1 - 1);
+            if (const auto pos = text.find(number); pos != std::string::npos) {
+                const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(pos), '\n');
+                const auto bol = text.rfind('\n', pos);
+                const auto column = 1 + pos - (bol == std::string::npos ? 0 : bol + 1);
+                at = "line " + std::to_string(line) + ", column " + std::to_string(column) + ": ";
+            }
+            throw FileError(where + ": " + at + "the number " + printable(number, 40) + " is outside the range of a double (about 1.8e308)");
+        }
+        throw FileError(where + ": a number in the JSON is out of range (" + printable(msg, 300) + ")");
     }
 }
 

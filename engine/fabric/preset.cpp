@@ -98,11 +98,15 @@ FitSummary read_fit(const JsonReader& r, const json& root)
     else if (f.dof > 0) f.reduced_chi2 = f.chi2 / f.dof;
     if (j.contains("grid_bound")) f.grid_bound = r.boolean(root, "fit.grid_bound");
     if (j.contains("records") && j["records"].is_array() && !j["records"].empty() && j["records"][0].is_object()) {
+        // The set-up of the first record: `drape predict` scales its grid by it.
         const json& first = j["records"][0];
-        if (first.contains("sample_diameter_m") && first["sample_diameter_m"].is_number())
-            f.sample_diameter_m = first["sample_diameter_m"].get<double>();
-        if (first.contains("disc_diameter_m") && first["disc_diameter_m"].is_number())
-            f.disc_diameter_m = first["disc_diameter_m"].get<double>();
+        for (auto [key, out] : {std::pair{"sample_diameter_m", &f.sample_diameter_m}, {"disc_diameter_m", &f.disc_diameter_m}})
+            if (first.contains(key) && first[key].is_number()) {
+                const double d = first[key].get<double>();
+                if (!(d > 0 && d <= 5))
+                    r.fail(std::string("fit.records[0].") + key, "= " + format_value(d) + " m is outside (0, 5] m");
+                *out = d;
+            }
     }
     return f;
 }
@@ -188,10 +192,10 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
         return out;
     }
     if (format != "drapekit-fabric")
-        throw ParameterError(where + ": field 'format' = " + (j.contains("format") ? j["format"].dump() : std::string("(missing)")) +
+        throw ParameterError(where + ": field 'format' = " + (j.contains("format") ? describe_json(j["format"]) : std::string("(missing)")) +
                              " must be \"drapekit-fabric\" or \"seed-19\"");
     if (j.contains("version") && (!j["version"].is_number_integer() || j["version"].get<int>() != 1))
-        throw ParameterError(where + ": field 'version' = " + j["version"].dump() + " is not supported (this build reads version 1)");
+        throw ParameterError(where + ": field 'version' = " + describe_json(j["version"]) + " is not supported (this build reads version 1)");
     read_descriptions(r, j, out);
     if (!j.contains("parameters") || !j["parameters"].is_object())
         throw ParameterError(where + ": missing object field 'parameters'");
@@ -199,7 +203,7 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
     for (const auto& [k, v] : j["parameters"].items()) {
         const cloth::ParamSpec* sp = cloth::find_param(k);
         if (!sp) throw ParameterError(where + ": unknown parameter 'parameters." + k + "'");
-        if (!v.is_number()) throw ParameterError(where + ": field 'parameters." + k + "' = " + v.dump() + " is not a number");
+        if (!v.is_number()) throw ParameterError(where + ": field 'parameters." + k + "' = " + describe_json(v) + " is not a number");
         const double x = v.get<double>();
         if (!(x >= sp->lower && x <= sp->upper)) // named as the file writes it (a key before the unit-suffix rule too)
             throw ParameterError(where + ": field 'parameters." + k + "' = " + format_value(x) + " " + std::string(sp->unit) +
@@ -211,13 +215,13 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
         const auto& m = j["model"];
         if (!m.is_object()) throw ParameterError(where + ": field 'model' must be an object");
         if (m.contains("bending")) {
-            const std::string b = m["bending"].is_string() ? m["bending"].get<std::string>() : m["bending"].dump();
+            const std::string b = m["bending"].is_string() ? m["bending"].get<std::string>() : describe_json(m["bending"]);
             if (b == "quadratic") out.model.bending = cloth::BendingModel::Quadratic;
             else throw ParameterError(where + ": field 'model.bending' = \"" + b + "\" must be \"quadratic\" for continuum presets");
         }
         if (m.contains("edge_contact")) {
             if (!m["edge_contact"].is_boolean())
-                throw ParameterError(where + ": field 'model.edge_contact' = " + m["edge_contact"].dump() + " must be true or false");
+                throw ParameterError(where + ": field 'model.edge_contact' = " + describe_json(m["edge_contact"]) + " must be true or false");
             out.model.edge_contact = m["edge_contact"].get<bool>();
         }
         // Presets written before the buckling model drape as they were fitted: without it.
@@ -230,7 +234,7 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
         if (m.contains("contact_depth_m")) {
             if (!m["contact_depth_m"].is_number() || !(m["contact_depth_m"].get<double>() > 0) ||
                 !(m["contact_depth_m"].get<double>() < 0.01))
-                throw ParameterError(where + ": field 'model.contact_depth_m' = " + m["contact_depth_m"].dump() +
+                throw ParameterError(where + ": field 'model.contact_depth_m' = " + describe_json(m["contact_depth_m"]) +
                                      " must be a length in (0, 0.01) m");
             out.model.contact_depth = m["contact_depth_m"].get<double>();
         }

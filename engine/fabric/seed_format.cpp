@@ -1,6 +1,7 @@
 #include "engine/fabric/seed_format.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/json_reader.hpp"
 #include "engine/core/units.hpp"
 
 #include <cmath>
@@ -15,34 +16,46 @@ double SeedParams::particle_mass_kg() const { return kSeedMassUnitKg / cloth_ove
 
 void SeedParams::validate(const std::string& where) const
 {
-    auto positive = [&](const char* name, double x) {
-        if (!std::isfinite(x) || !(x > 0))
-            throw ParameterError(where + ": field '" + name + "' = " + format_value(x) + " must be a positive number");
+    // Ranges of the seed fields themselves; what they add up to is checked
+    // against the parameter table below.
+    auto in_range = [&](const char* name, double x, double lo, double hi, const char* unit, bool open_low) {
+        if (!std::isfinite(x) || (open_low ? !(x > lo) : x < lo) || x > hi)
+            throw ParameterError(where + ": field '" + name + "' = " + format_value(x) + " " + unit + " is outside " +
+                                 (open_low ? "(" : "[") + format_value(lo) + ", " + format_value(hi) + "] " + unit);
     };
-    auto nonneg = [&](const char* name, double x) {
-        if (!std::isfinite(x) || x < 0)
-            throw ParameterError(where + ": field '" + name + "' = " + format_value(x) + " must be a non-negative number");
-    };
-    positive("w", w);
-    positive("h", h);
-    if (u < 4 || u > 2000) throw ParameterError(where + ": field 'u' = " + std::to_string(u) + " must be in [4, 2000]");
-    if (v < 4 || v > 2000) throw ParameterError(where + ": field 'v' = " + std::to_string(v) + " must be in [4, 2000]");
-    for (auto [n, x] : {std::pair{"x0", x0}, {"y0", y0}, {"z0", z0}})
-        if (!std::isfinite(x)) throw ParameterError(where + ": field '" + n + "' is not a finite number");
-    positive("ClothOverMass", cloth_over_mass);
-    positive("SstKu", sst_ku);
-    positive("SstKv", sst_kv);
-    nonneg("SshK", ssh_k);
-    nonneg("SflKu", sfl_ku);
-    nonneg("SflKv", sfl_kv);
-    nonneg("SstDu", sst_du);
-    nonneg("SstDv", sst_dv);
-    nonneg("SshD", ssh_d);
-    nonneg("SflDu", sfl_du);
-    nonneg("SflDv", sfl_dv);
+    in_range("w", w, 0, kMaxSeedSizeCm, "cm", true);
+    in_range("h", h, 0, kMaxSeedSizeCm, "cm", true);
+    // The engine drapes a seed preset on its own grid: at most what --grid allows.
+    if (u < 4 || u > kMaxSeedCells) throw ParameterError(where + ": field 'u' = " + std::to_string(u) + " must be in [4, " + std::to_string(kMaxSeedCells) + "]");
+    if (v < 4 || v > kMaxSeedCells) throw ParameterError(where + ": field 'v' = " + std::to_string(v) + " must be in [4, " + std::to_string(kMaxSeedCells) + "]");
+    for (auto [n, x] : {std::pair{"x0", x0}, {"y0", y0}, {"z0", z0}}) in_range(n, x, -kMaxSeedSizeCm, kMaxSeedSizeCm, "cm", false);
+    in_range("ClothOverMass", cloth_over_mass, 0, 1e12, "1/(0.01 g)", true);
+    for (auto [n, x] : {std::pair{"SstKu", sst_ku}, {"SstKv", sst_kv}}) in_range(n, x, 0, kMaxSeedSpring, "N/m", true);
+    for (auto [n, x] : {std::pair{"SshK", ssh_k}, {"SflKu", sfl_ku}, {"SflKv", sfl_kv}}) in_range(n, x, 0, kMaxSeedSpring, "N/m", false);
+    for (auto [n, x] : {std::pair{"SstDu", sst_du}, {"SstDv", sst_dv}, {"SshD", ssh_d}, {"SflDu", sfl_du}, {"SflDv", sfl_dv}})
+        in_range(n, x, 0, kMaxSeedDamper, "N*s/m", false);
     // The continuum equivalent must be a fabric the table accepts (a weight of
-    // 1e302 g/m^2 is a typo, not a fabric).
-    continuum_from_seed(*this).validate(where + " (continuum equivalent of the seed constants)");
+    // 1e302 g/m^2 is a typo, not a fabric); the message names the seed fields
+    // that make the value.
+    const cloth::FabricParams p = continuum_from_seed(*this);
+    for (const auto& sp : cloth::param_table()) {
+        const double x = p[sp.id];
+        if (std::isfinite(x) && x >= sp.lower && x <= sp.upper) continue;
+        const char* from = "the seed constants";
+        switch (sp.id) {
+        case cloth::Param::AreaDensity: from = "'ClothOverMass' with w, h, u, v"; break;
+        case cloth::Param::StretchWarp: from = "'SstKu' with 'SshK'"; break;
+        case cloth::Param::StretchWeft: from = "'SstKv' with 'SshK'"; break;
+        case cloth::Param::Shear: from = "'SshK'"; break;
+        case cloth::Param::DampStretch: from = "'SstDu' and 'SstDv'"; break;
+        case cloth::Param::DampShear: from = "'SshD'"; break;
+        default: break;
+        }
+        throw ParameterError(where + ": " + from + " make a continuum " + std::string(sp.key) + " of " + format_value(x) + " " +
+                             std::string(sp.unit) + ", outside the parameter table's [" + format_value(sp.lower) + ", " +
+                             format_value(sp.upper) + "] " + std::string(sp.unit) +
+                             (sp.id == cloth::Param::AreaDensity ? " (ClothOverMass = " + format_value(cloth_over_mass) + ")" : std::string()));
+    }
 }
 
 cloth::GridSprings grid_springs(const SeedParams& s)
@@ -95,7 +108,7 @@ double number_field(const json& j, const std::string& key, const std::string& wh
 {
     const auto it = j.find(key);
     if (it == j.end()) throw ParameterError(where + ": missing field '" + key + "'");
-    if (!it->is_number()) throw ParameterError(where + ": field '" + key + "' = " + it->dump() + " is not a number");
+    if (!it->is_number()) throw ParameterError(where + ": field '" + key + "' = " + describe_json(*it) + " is not a number");
     return it->get<double>();
 }
 

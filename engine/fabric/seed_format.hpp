@@ -27,6 +27,14 @@ namespace drape::fabric {
 
 /// Mass unit of ClothOverMass [kg] (see above).
 inline constexpr double kSeedMassUnitKg = 1e-5;
+/// Ranges of the seed fields (validate()): sheet size and corner [cm], cells
+/// along u and v (the engine drapes a seed preset on its own grid, so at most
+/// what --grid allows), springs [N/m] (the table's stretch bound) and dampers
+/// [N*s/m] (the table's damper bound).
+inline constexpr double kMaxSeedSizeCm = 1000;
+inline constexpr int kMaxSeedCells = 1000;
+inline constexpr double kMaxSeedSpring = 1e6;
+inline constexpr double kMaxSeedDamper = 1e3;
 
 struct SeedParams {
     double w = 30, h = 30;                  ///< size of cloth [cm]

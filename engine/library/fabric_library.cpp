@@ -2,6 +2,8 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
+#include "engine/core/json_reader.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 #include "engine/library/schema.hpp"
 #include "engine/library/sqlite.hpp"
@@ -10,11 +12,14 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <functional>
 #include <regex>
+
+#include <unistd.h>
 
 namespace drape::library {
 
@@ -40,9 +45,8 @@ std::string now_utc()
 
 void validate_date(const std::string& d, const std::string& what)
 {
-    static const std::regex re(R"(^\d{4}(-\d{2}(-\d{2}(T\d{2}(:\d{2}(:\d{2}Z?)?)?)?)?)?$)");
-    if (!std::regex_match(d, re))
-        throw ParameterError(what + ": '" + d + "' is not an ISO 8601 date such as 2026-11-22 or 2026-11-22T10:30");
+    if (!is_iso_date(d))
+        throw ParameterError(what + ": '" + printable(d) + "' is not an ISO 8601 date such as 2026-11-22 or 2026-11-22T10:30");
 }
 
 std::string like_pattern(const std::string& s)
@@ -89,15 +93,35 @@ std::string default_library_path()
     return "drapekit-library.sqlite";
 }
 
-void validate_name(const std::string& name)
+std::string normalize_name(const std::string& name) { return drape::normalize_name(name, "fabric name", kMaxNameChars); }
+
+void validate_name(const std::string& name) { (void)normalize_name(name); }
+
+bool is_iso_date(const std::string& d)
 {
-    if (name.empty()) throw ParameterError("fabric name: must not be empty");
-    if (name.size() > 200) throw ParameterError("fabric name '" + name.substr(0, 40) + "...': longer than 200 characters");
-    if (name.front() == ' ' || name.back() == ' ')
-        throw ParameterError("fabric name '" + name + "': leading or trailing blanks");
-    for (unsigned char c : name)
-        if (c < 0x20 || c == 0x7f) throw ParameterError("fabric name '" + name + "': contains a control character");
+    static const std::regex re(R"(^\d{4}(-\d{2}(-\d{2}(T\d{2}(:\d{2}(:\d{2}Z?)?)?)?)?)?$)");
+    return d.size() <= 32 && std::regex_match(d, re);
 }
+
+namespace {
+/// "file:/abs/path?immutable=1" with the characters a URI path cannot hold percent-encoded.
+std::string immutable_uri(const std::string& path)
+{
+    std::error_code ec;
+    const std::string abs = std::filesystem::absolute(path, ec).string();
+    std::string out = "file:";
+    for (unsigned char c : ec ? path : abs) {
+        if (c == '%' || c == '?' || c == '#' || c < 0x21 || c >= 0x7f) {
+            char buf[4];
+            std::snprintf(buf, sizeof buf, "%%%02X", c);
+            out += buf;
+        } else {
+            out += static_cast<char>(c);
+        }
+    }
+    return out + "?immutable=1";
+}
+} // namespace
 
 // ---------------------------------------------------------------- library
 
@@ -117,18 +141,41 @@ FabricLibrary::FabricLibrary(const std::string& path, Mode mode) : m_path(path),
         if (ec) throw FileError(path + ": cannot create the folder " + parent.string() + " (" + ec.message() + ")");
     }
     if (fs::is_directory(path, ec)) throw FileError(path + ": is a folder, not a fabric library file");
-    const int flags = mode == Mode::ReadOnly ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
-    if (sqlite3_open_v2(path.c_str(), &m_db, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
-        const std::string why = m_db ? sqlite3_errmsg(m_db) : "out of memory";
-        sqlite3_close(m_db);
-        m_db = nullptr;
-        throw FileError(path + ": cannot open the fabric library (" + why + ")");
+    if (mode == Mode::ReadWrite && fs::exists(path, ec)) {
+        if (::access(path.c_str(), W_OK) != 0)
+            throw FileError(path + ": the fabric library is read-only (no permission to write the file); list, show and export "
+                                   "read it, add/update/remove/import need a writable copy");
+        // SQLite keeps its write-ahead log beside the library.
+        const fs::path parent = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+        if (::access(parent.c_str(), W_OK) != 0)
+            throw FileError(path + ": the folder " + parent.string() + " is read-only, and SQLite writes its journal beside the "
+                                   "library; list, show and export read it, add/update/remove/import need a writable folder");
     }
-    try {
+    const int flags = mode == Mode::ReadOnly ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+    auto open = [&](const std::string& name, int extra) {
+        if (sqlite3_open_v2(name.c_str(), &m_db, flags | extra | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
+            const std::string why = m_db ? sqlite3_errmsg(m_db) : "out of memory";
+            sqlite3_close(m_db);
+            m_db = nullptr;
+            throw FileError(path + ": cannot open the fabric library (" + why + ")");
+        }
         sqlite3_busy_timeout(m_db, 10000);
+    };
+    open(path, 0);
+    try {
         // The first read tells a SQLite file from anything else (SQLITE_NOTADB).
-        const auto app = pragma_int(m_db, m_path, "application_id");
-        (void)app;
+        try {
+            pragma_int(m_db, m_path, "application_id");
+        } catch (const sql::DatabaseError& e) {
+            // A library in WAL mode needs its -shm file to be read; in a folder
+            // the user cannot write, SQLite cannot create it. Nobody can write
+            // the library there either, so it is read as an immutable file.
+            if (mode != Mode::ReadOnly || (e.primary_code() != SQLITE_CANTOPEN && e.primary_code() != SQLITE_READONLY)) throw;
+            sqlite3_close(m_db);
+            m_db = nullptr;
+            open(immutable_uri(path), SQLITE_OPEN_URI);
+            pragma_int(m_db, m_path, "application_id");
+        }
         if (mode == Mode::ReadWrite) {
             exec(m_db, m_path, "PRAGMA journal_mode=WAL");
             exec(m_db, m_path, "PRAGMA synchronous=FULL");
@@ -193,9 +240,12 @@ void FabricLibrary::migrate()
         tx.commit();
         return;
     }
+    if (!write && tables == 0)
+        throw FileError(m_path + ": an empty file, not a fabric library yet (drape library add or import with --library " +
+                        m_path + " makes it one)");
     if (!write)
         throw FileError(m_path + ": schema version " + std::to_string(version) + " needs migrating to " +
-                        std::to_string(kSchemaVersion) + "; open it read-write once");
+                        std::to_string(kSchemaVersion) + "; open it read-write once (e.g. drape library add)");
     migrate_schema(m_db, m_path, version, kSchemaVersion);
     exec(m_db, m_path, "PRAGMA application_id=" + std::to_string(kApplicationId));
     exec(m_db, m_path, "PRAGMA user_version=" + std::to_string(kSchemaVersion));
@@ -205,15 +255,18 @@ void FabricLibrary::migrate()
 std::int64_t FabricLibrary::put(const fabric::FabricPreset& in, const std::string& name_in, OnConflict on_conflict,
                                 ImportReport* report)
 {
-    std::string name = name_in.empty() ? in.name : name_in;
-    validate_name(name);
+    const std::string& raw = name_in.empty() ? in.name : name_in;
+    std::string name = normalize_name(raw);
     fabric::FabricPreset preset = in;
 
     std::int64_t existing = -1; // row id of a fabric with this name, -1 when none
-    {
+    for (const std::string* n : {static_cast<const std::string*>(&name), &raw}) { // the raw spelling: a row stored before names were normalised
         Stmt s(m_db, m_path, "SELECT id FROM fabrics WHERE name = ?1");
-        s.bind(1, name);
-        if (s.step()) existing = s.integer(0);
+        s.bind(1, *n);
+        if (s.step()) {
+            existing = s.integer(0);
+            break;
+        }
     }
     if (existing >= 0) {
         switch (on_conflict) {
@@ -251,9 +304,9 @@ std::int64_t FabricLibrary::put(const fabric::FabricPreset& in, const std::strin
     if (existing >= 0) {
         Stmt u(m_db, m_path,
                "UPDATE fabrics SET preset = ?1, format = ?2, composition = ?3, areal_density = ?4, drape_coefficient = ?5,"
-               " fit_quality = ?6, modified = ?7, revision = revision + 1 WHERE id = ?8");
+               " fit_quality = ?6, modified = ?7, revision = revision + 1, name = ?9 WHERE id = ?8");
         u.bind(1, j.dump()).bind(2, d.format).bind(3, d.composition).bind(4, d.weight).bind(5, d.drape_percent).bind(6, d.fit_quality);
-        u.bind(7, now).bind(8, existing);
+        u.bind(7, now).bind(8, existing).bind(9, name);
         u.run();
         id = existing;
         if (report) ++report->replaced;
@@ -279,27 +332,29 @@ std::int64_t FabricLibrary::add(const fabric::FabricPreset& preset, const std::s
     return id;
 }
 
-void FabricLibrary::update(const std::string& name, const fabric::FabricPreset& preset)
+void FabricLibrary::update(const std::string& name_in, const fabric::FabricPreset& preset)
 {
     Transaction tx(m_db, m_path, true);
+    const std::string name = stored_name(name_in);
     {
         Stmt s(m_db, m_path, "SELECT name FROM fabrics WHERE name = ?1");
         s.bind(1, name);
-        if (!s.step()) throw NotFoundError(m_path + ": no fabric named '" + name + "'");
+        if (!s.step()) throw NotFoundError(m_path + ": no fabric named '" + printable(name_in) + "'");
     }
     put(preset, name, OnConflict::Replace, nullptr);
     tx.commit();
 }
 
-void FabricLibrary::rename(const std::string& from, const std::string& to)
+void FabricLibrary::rename(const std::string& from_in, const std::string& to_in)
 {
-    validate_name(to);
+    const std::string to = normalize_name(to_in);
     Transaction tx(m_db, m_path, true);
+    const std::string from = stored_name(from_in);
     FabricRecord r;
     {
         Stmt s(m_db, m_path, std::string("SELECT ") + kColumns + " FROM fabrics WHERE name = ?1");
         s.bind(1, from);
-        if (!s.step()) throw ParameterError(m_path + ": no fabric named '" + from + "'");
+        if (!s.step()) throw NotFoundError(m_path + ": no fabric named '" + printable(from_in) + "'");
         r = read_record(s, m_path);
     }
     {
@@ -321,18 +376,31 @@ void FabricLibrary::remove(const std::vector<std::string>& names)
     Transaction tx(m_db, m_path, true);
     for (const auto& name : names) {
         Stmt s(m_db, m_path, "DELETE FROM fabrics WHERE name = ?1");
-        s.bind(1, name);
+        s.bind(1, stored_name(name));
         s.run();
         if (sqlite3_changes(m_db) == 0)
-            throw NotFoundError(m_path + ": no fabric named '" + name + "'" + (names.size() > 1 ? "; nothing was removed" : ""));
+            throw NotFoundError(m_path + ": no fabric named '" + printable(name) + "'" + (names.size() > 1 ? "; nothing was removed" : ""));
     }
     tx.commit();
+}
+
+std::string FabricLibrary::stored_name(const std::string& name) const
+{
+    // Names are stored normalised; a name stored before that rule (with a
+    // trailing no-break space, say) is still found by its own spelling.
+    const auto n = try_normalize_name(name, kMaxNameChars);
+    if (n && *n != name) {
+        Stmt s(m_db, m_path, "SELECT name FROM fabrics WHERE name = ?1");
+        s.bind(1, *n);
+        if (s.step()) return s.text(0);
+    }
+    return name;
 }
 
 std::optional<FabricRecord> FabricLibrary::find(const std::string& name) const
 {
     Stmt s(m_db, m_path, std::string("SELECT ") + kColumns + " FROM fabrics WHERE name = ?1");
-    s.bind(1, name);
+    s.bind(1, stored_name(name));
     if (!s.step()) return std::nullopt;
     return read_record(s, m_path);
 }
@@ -340,7 +408,7 @@ std::optional<FabricRecord> FabricLibrary::find(const std::string& name) const
 FabricRecord FabricLibrary::get(const std::string& name) const
 {
     auto r = find(name);
-    if (!r) throw NotFoundError(m_path + ": no fabric named '" + name + "'");
+    if (!r) throw NotFoundError(m_path + ": no fabric named '" + printable(name) + "'");
     return std::move(*r);
 }
 
@@ -460,15 +528,16 @@ ImportReport FabricLibrary::import_all(const json& doc, const std::string& where
     const json* list = nullptr;
     if (doc.is_array()) {
         list = &doc;
-    } else if (doc.is_object() && doc.value("format", std::string()) == kLibraryFormat) {
+    } else if (doc.is_object() && doc.contains("format") && doc["format"] == kLibraryFormat) {
         if (doc.contains("version") && doc["version"] != 1)
-            throw ParameterError(where + ": field 'version' = " + doc["version"].dump() + " is not supported (reads 1)");
+            throw ParameterError(where + ": field 'version' = " + describe_json(doc["version"]) + " is not supported (reads 1)");
         if (!doc.contains("fabrics") || !doc["fabrics"].is_array())
             throw ParameterError(where + ": missing array field 'fabrics'");
         list = &doc["fabrics"];
     } else {
-        throw ParameterError(where + ": field 'format' must be \"" + std::string(kLibraryFormat) +
-                             "\" (or the document a JSON array of presets)");
+        throw ParameterError(where + ": field 'format' = " +
+                             (doc.is_object() && doc.contains("format") ? describe_json(doc["format"]) : std::string("(missing)")) +
+                             " must be \"" + std::string(kLibraryFormat) + "\" (or the document a JSON array of presets)");
     }
     // Parse everything before touching the database, so a bad entry names
     // itself and nothing is written.

@@ -128,6 +128,9 @@ public:
 
 private:
     void migrate();
+    /// The name a fabric called `name` is stored under (its normalised form
+    /// when that is in the library, else `name` as given).
+    std::string stored_name(const std::string& name) const;
     std::int64_t put(const fabric::FabricPreset& preset, const std::string& name, OnConflict on_conflict,
                      ImportReport* report);
 
@@ -140,8 +143,20 @@ private:
 /// $XDG_DATA_HOME/drapekit/library.sqlite, else ~/.local/share/drapekit/library.sqlite.
 std::string default_library_path();
 
-/// Throws ParameterError unless the name is 1..200 printable characters without
-/// leading or trailing blanks.
+/// Longest fabric name [characters (Unicode code points), not bytes].
+inline constexpr std::size_t kMaxNameChars = 200;
+
+/// The name as the library stores and looks it up: Unicode NFC, leading and
+/// trailing white space removed (no-break spaces too), 1..kMaxNameChars
+/// characters, no control characters (drape::normalize_name). So "silk" with a
+/// trailing no-break space, or "Café" typed with a combining accent, is the
+/// fabric already called "silk" or "Café". Throws ParameterError naming the
+/// name and what is wrong with it.
+std::string normalize_name(const std::string& name);
+/// Throws the same ParameterError, or returns quietly for a valid name.
 void validate_name(const std::string& name);
+/// True for an ISO 8601 date or date-time prefix ("2026", "2026-11-22", "2026-11-22T10:30"),
+/// the form Filter::modified_from/to take.
+bool is_iso_date(const std::string& text);
 
 } // namespace drape::library

@@ -3,6 +3,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
 #include "engine/core/json_reader.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 
 #include <Eigen/LU>
@@ -51,22 +52,26 @@ bool Camera::has_distortion() const
 
 fs::path Record::file(const std::string& name) const
 {
-    const std::string where = (dir / "meta.json").string() + ": file name '" + name + "'";
+    const std::string where = (dir / "meta.json").string() + ": file name '" + printable(name) + "'";
     if (name.empty()) throw FileError(where + " is empty");
+    for (unsigned char c : name)
+        if (c < 0x20 || c == 0x7f) throw FileError(where + " contains a control character");
     const fs::path p(name);
     if (p.is_absolute()) throw FileError(where + " is an absolute path; a record names files inside its own folder");
     for (const auto& part : p)
         if (part == "..") throw FileError(where + " climbs out of the record folder with '..'");
     const fs::path full = dir / p;
     // A symbolic link may still lead out: compare the resolved locations.
+    // Fails closed: a name that cannot be resolved (a symbolic-link loop, a
+    // folder that cannot be searched) is refused rather than trusted.
     std::error_code ec;
     const fs::path real_dir = fs::weakly_canonical(dir, ec);
+    if (ec) throw FileError(where + ": the record folder cannot be resolved (" + ec.message() + ")");
     const fs::path real_file = fs::weakly_canonical(full, ec);
-    if (!ec) {
-        const auto rel = real_file.lexically_relative(real_dir);
-        if (rel.empty() || *rel.begin() == "..")
-            throw FileError(where + " leads out of the record folder (through a symbolic link) to " + real_file.string());
-    }
+    if (ec) throw FileError(where + " cannot be resolved (" + ec.message() + ")");
+    const auto rel = real_file.lexically_relative(real_dir);
+    if (rel.empty() || *rel.begin() == ".." || rel == ".")
+        throw FileError(where + " leads out of the record folder (through a symbolic link) to " + printable(real_file.string()));
     return full;
 }
 
@@ -209,6 +214,12 @@ constexpr double kMaxThicknessMm = 20;
 constexpr double kMaxSigmaMm = 20;
 constexpr double kMinThetaStepDeg = 0.01; // 36,000 rays at most
 constexpr int kMaxImageSide = 20000;      // px
+constexpr double kMaxImagePixels = 150e6; // a 150-megapixel photo: 450 MB decoded (BGR)
+constexpr double kMaxFocalPx = 1e6;       // a 20000 px image behind a 50x telephoto
+constexpr double kMaxCameraDistanceMm = 1e5; // 100 m
+constexpr double kMaxDistortion = 100;    // |k| of OpenCV's rational model; lenses have |k1| < 1
+constexpr std::size_t kMaxDepths = 1000;  // contour levels (a profiler stack has tens)
+constexpr std::size_t kMaxProfileValues = std::size_t(4) << 20; // depths x rays allocated [values]
 
 Camera read_camera(const JsonReader& m, const json& root, const std::string& name)
 {
@@ -218,12 +229,20 @@ Camera read_camera(const JsonReader& m, const json& root, const std::string& nam
     c.image = JsonReader::find(root, p + "image") ? m.string(root, p + "image") : name + ".jpg";
     c.width = m.integer(root, p + "width", 1, kMaxImageSide);
     c.height = m.integer(root, p + "height", 1, kMaxImageSide);
-    c.fx = m.positive(root, p + "fx");
-    c.fy = m.positive(root, p + "fy");
-    c.cx = m.number(root, p + "cx");
-    c.cy = m.number(root, p + "cy");
+    if (double(c.width) * c.height > kMaxImagePixels)
+        m.fail(p + "width", "x height = " + std::to_string(c.width) + " x " + std::to_string(c.height) + " px is more than " +
+                                format_value(kMaxImagePixels / 1e6) + " megapixels");
+    // The principal point lies near the image; it is allowed one image size out.
+    c.fx = m.number_in(root, p + "fx", 1, kMaxFocalPx, "px");
+    c.fy = m.number_in(root, p + "fy", 1, kMaxFocalPx, "px");
+    c.cx = m.number_in(root, p + "cx", -c.width, 2.0 * c.width, "px");
+    c.cy = m.number_in(root, p + "cy", -c.height, 2.0 * c.height, "px");
     if (JsonReader::find(root, p + "dist_coeffs")) c.dist = m.numbers(root, p + "dist_coeffs", 0);
     if (c.dist.size() > 14) m.fail(p + "dist_coeffs", "has " + std::to_string(c.dist.size()) + " entries (OpenCV takes at most 14)");
+    for (std::size_t i = 0; i < c.dist.size(); ++i)
+        if (std::abs(c.dist[i]) > kMaxDistortion)
+            m.fail(p + "dist_coeffs[" + std::to_string(i) + "]", "= " + format_value(c.dist[i]) + " is outside [" +
+                                                                    format_value(-kMaxDistortion) + ", " + format_value(kMaxDistortion) + "]");
     const json& Rj = m.need(root, p + "R_world_to_cam");
     if (!Rj.is_array() || Rj.size() != 3) m.fail(p + "R_world_to_cam", "must be a 3x3 array, got " + describe_json(Rj));
     for (int i = 0; i < 3; ++i) {
@@ -240,6 +259,11 @@ Camera read_camera(const JsonReader& m, const json& root, const std::string& nam
     if (!std::isfinite(orth) || orth > 1e-3 || c.R.determinant() < 0)
         m.fail(p + "R_world_to_cam", "is not a rotation matrix (|R R^T - I| = " + format_value(orth) + ")");
     const auto t = m.numbers(root, p + "t_world_to_cam_mm", 3);
+    for (std::size_t i = 0; i < 3; ++i)
+        if (std::abs(t[i]) > kMaxCameraDistanceMm)
+            m.fail(p + "t_world_to_cam_mm[" + std::to_string(i) + "]", "= " + format_value(t[i]) + " mm is outside [" +
+                                                                          format_value(-kMaxCameraDistanceMm) + ", " +
+                                                                          format_value(kMaxCameraDistanceMm) + "] mm");
     c.t = Eigen::Vector3d(t[0], t[1], t[2]) * 1e-3;
     return c;
 }
@@ -399,7 +423,8 @@ Record parse_meta_json(const json& root, const fs::path& dir, const std::string&
     Record rec;
     rec.dir = dir;
     rec.raw = root;
-    rec.specimen_id = JsonReader::find(root, "specimen_id") ? m.string(root, "specimen_id") : dir.filename().string();
+    // A folder name need not be UTF-8; the id goes into JSON outputs.
+    rec.specimen_id = JsonReader::find(root, "specimen_id") ? m.string(root, "specimen_id") : printable(dir.filename().string(), 200);
 
     // Lengths in meta.json are mm (README "World frame and units").
     std::optional<double> d1_mm;
@@ -450,13 +475,17 @@ Record parse_meta_json(const json& root, const fs::path& dir, const std::string&
     }
     if (JsonReader::find(root, "contours")) {
         if (JsonReader::find(root, "contours.file")) rec.contours_file = m.string(root, "contours.file");
-        if (JsonReader::find(root, "contours.depths_mm"))
-            for (double d : m.numbers(root, "contours.depths_mm", 0)) {
+        if (JsonReader::find(root, "contours.depths_mm")) {
+            const auto depths = m.numbers(root, "contours.depths_mm", 0);
+            if (depths.size() > kMaxDepths)
+                m.fail("contours.depths_mm", "holds " + std::to_string(depths.size()) + " depths, more than " + std::to_string(kMaxDepths));
+            for (double d : depths) {
                 if (!(d > 0) || d > 1e3 * rec.pedestal_height)
                     m.fail("contours.depths_mm", "holds " + format_value(d) + " mm, outside (0, " +
                                                      format_value(1e3 * rec.pedestal_height) + "] mm (the pedestal height)");
                 rec.contour_depths.push_back(d * 1e-3);
             }
+        }
         if (JsonReader::find(root, "contours.theta_step_deg")) {
             const double step = m.number_in(root, "contours.theta_step_deg", kMinThetaStepDeg, 45, "deg");
             if (std::abs(360.0 / step - std::round(360.0 / step)) > 1e-6)
@@ -518,7 +547,12 @@ struct Row {
 ContourStack read_contours_file(const fs::path& file, double theta_step_deg, double R1, double R2, double pedestal_height)
 {
     const std::string path = file.string();
-    const std::string text = read_file(path, std::size_t(64) << 20);
+    return parse_contours(read_file(path, kMaxContoursBytes), path, theta_step_deg, R1, R2, pedestal_height);
+}
+
+ContourStack parse_contours(const std::string& text, const std::string& path, double theta_step_deg, double R1, double R2,
+                            double pedestal_height)
+{
     std::istringstream in(text);
     std::string line;
     if (!std::getline(in, line)) throw FileError(path + ": empty file (expected a header line depth_mm,theta_deg,x_mm,y_mm)");
@@ -527,7 +561,7 @@ ContourStack read_contours_file(const fs::path& file, double theta_step_deg, dou
     auto column = [&](const std::string& name) {
         for (std::size_t i = 0; i < header.size(); ++i)
             if (header[i] == name) return static_cast<int>(i);
-        throw FileError(path + ": missing column '" + name + "' in header '" + line + "'");
+        throw FileError(path + ": missing column '" + name + "' in header '" + printable(line) + "'");
     };
     const int c_depth = column("depth_mm"), c_theta = column("theta_deg"), c_x = column("x_mm"), c_y = column("y_mm");
 
@@ -545,10 +579,10 @@ ContourStack read_contours_file(const fs::path& file, double theta_step_deg, dou
         const auto cells = split_csv(line);
         auto num = [&](int c, const char* name) {
             const std::string where = path + ":" + std::to_string(line_no) + ": column '" + name + "'";
-            if (c >= static_cast<int>(cells.size())) throw FileError(where + " is missing in '" + line + "'");
+            if (c >= static_cast<int>(cells.size())) throw FileError(where + " is missing in '" + printable(line) + "'");
             double v = 0;
             if (!parse_number(cells[static_cast<std::size_t>(c)], v))
-                throw FileError(where + ": '" + cells[static_cast<std::size_t>(c)] + "' is not a number");
+                throw FileError(where + ": '" + printable(cells[static_cast<std::size_t>(c)]) + "' is not a number");
             return v;
         };
         Row r{num(c_depth, "depth_mm"), num(c_theta, "theta_deg"), num(c_x, "x_mm"), num(c_y, "y_mm"), line_no};
@@ -564,7 +598,8 @@ ContourStack read_contours_file(const fs::path& file, double theta_step_deg, dou
                             " mm from the axis, outside [" + format_value(r_min_mm) + ", " + format_value(r_max_mm) +
                             "] mm (half the disc radius .. 1.5 specimen radii)");
         rows.push_back(r);
-        if (rows.size() > 10'000'000) throw FileError(path + ": more than 10 million rows");
+        if (rows.size() > kMaxProfileValues)
+            throw FileError(path + ": more than " + std::to_string(kMaxProfileValues) + " rows (more rays than this reader allocates)");
     }
     if (rows.empty()) throw FileError(path + ": no data rows");
 
@@ -588,6 +623,14 @@ ContourStack read_contours_file(const fs::path& file, double theta_step_deg, dou
     ContourStack st;
     std::map<double, std::size_t> index; // depth [mm] -> slot
     for (const auto& r : rows) index.emplace(r.depth, 0);
+    // Sizes before allocation: one profile of n rays per depth.
+    if (index.size() > kMaxDepths)
+        throw FileError(path + ": " + std::to_string(index.size()) + " different depths, more than the " + std::to_string(kMaxDepths) +
+                        " contour levels this reader takes");
+    if (index.size() * static_cast<std::size_t>(n) > kMaxProfileValues)
+        throw FileError(path + ": " + std::to_string(index.size()) + " depths x " + std::to_string(n) + " rays (step " +
+                        format_value(step) + " deg) = " + std::to_string(index.size() * static_cast<std::size_t>(n)) +
+                        " profile values, more than the " + std::to_string(kMaxProfileValues) + " this reader allocates");
     for (auto& [d, slot] : index) {
         slot = st.depths.size();
         st.depths.push_back(d * 1e-3);

@@ -185,5 +185,10 @@ ContourStack read_contours(const Record& rec);
 /// `theta_step_deg` (0 = infer from the data) is the ray spacing.
 ContourStack read_contours_file(const std::filesystem::path& file, double theta_step_deg, double R1, double R2,
                                 double pedestal_height);
+/// The same from the file's text (tests and the fuzzer); `where` names it in messages.
+ContourStack parse_contours(const std::string& text, const std::string& where, double theta_step_deg, double R1, double R2,
+                            double pedestal_height);
+/// Largest contours.csv read [bytes].
+inline constexpr std::size_t kMaxContoursBytes = std::size_t(64) << 20;
 
 } // namespace drape::record

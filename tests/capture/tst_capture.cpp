@@ -185,6 +185,55 @@ private slots:
         QVERIFY2(any_contains(m.not_measured, "640 x 480"), join(m.not_measured).c_str());
     }
 
+    /// The size is read from the header before any pixel is decoded, for every
+    /// format the loader takes; a file whose header gives none is refused.
+    void image_size_is_read_before_decoding()
+    {
+        synth::Spec s;
+        const auto dir = temp_dir("formats");
+        synth::write_record(dir, s);
+        const cv::Mat img = cv::imread((dir / "top.jpg").string());
+        auto rec_with = [&](const std::string& file) {
+            auto j = synth::meta_json(s);
+            j["cameras"]["top"]["image"] = file;
+            std::ofstream(dir / "meta.json") << j.dump(1);
+            return record::read_record(dir);
+        };
+        auto error_of = [&](const std::string& file) {
+            try {
+                capture::load_image(rec_with(file), "top");
+            } catch (const FileError& e) {
+                return std::string(e.what());
+            }
+            return std::string();
+        };
+        QVERIFY(cv::imwrite((dir / "top.png").string(), img));
+        QCOMPARE(capture::load_image(rec_with("top.png"), "top").cols, img.cols);
+        QVERIFY(cv::imwrite((dir / "top.bmp").string(), img));
+        QCOMPARE(capture::load_image(rec_with("top.bmp"), "top").cols, img.cols);
+        // A BMP header claiming 30000 x 30000 px: refused from its header (the old loader decoded BMPs first).
+        {
+            std::string b;
+            std::ifstream in((dir / "top.bmp").string(), std::ios::binary);
+            b.assign(std::istreambuf_iterator<char>(in), {});
+            for (int k : {18, 22}) {
+                b[k] = static_cast<char>(30000 & 0xff);
+                b[k + 1] = static_cast<char>(30000 >> 8);
+            }
+            std::ofstream(dir / "huge.bmp", std::ios::binary) << b;
+            const std::string e = error_of("huge.bmp");
+            QVERIFY2(e.find("30000 x 30000") != std::string::npos, e.c_str());
+        }
+        // Formats whose size the loader cannot read first are refused by name.
+        QVERIFY(cv::imwrite((dir / "top.tiff").string(), img));
+        std::string e = error_of("top.tiff");
+        QVERIFY2(e.find("not a JPEG, PNG or BMP") != std::string::npos && e.find("top.tiff") != std::string::npos, e.c_str());
+        // A JPEG whose image data comes before any frame header gives no size.
+        std::ofstream(dir / "nosof.jpg", std::ios::binary) << std::string("\xff\xd8\xff\xda\x00\x02\x00\x00\xff\xd9", 10);
+        e = error_of("nosof.jpg");
+        QVERIFY2(e.find("no image size") != std::string::npos, e.c_str());
+    }
+
     void string_where_a_number_belongs_is_an_error()
     {
         auto j = synth::meta_json(synth::Spec{});

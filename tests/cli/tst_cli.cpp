@@ -5,8 +5,13 @@
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QProcess>
+#include <QStandardPaths>
 #include <QTemporaryDir>
 #include <QtTest>
+
+#include <cmath>
+
+#include <unistd.h>
 
 class TestCli : public QObject {
     Q_OBJECT
@@ -190,6 +195,173 @@ private slots:
         QVERIFY2(o.err.contains("no such fabric") && o.err.contains("nothing was removed"), qPrintable(o.err));
         o = run({"library", "show", "Silk (class preset)", "--library", lib});
         QCOMPARE(o.code, 0);
+    }
+
+    /// kes-dc: each KES value in its physical range (exit 2 naming the flag),
+    /// and a D outside [0, 100] % refused, not printed (exit 1).
+    void kesDcRefusesWhatCannotBeRight()
+    {
+        const QStringList ok = {"kes-dc", "--2hb", "0.1", "--miu", "0.2", "--g", "1", "--rt", "50", "--wc", "0.2",
+                                "--rc", "50", "--t0", "0.5", "--emc", "40", "--w", "20"};
+        Out o = run(ok);
+        QCOMPARE(o.code, 0);
+        QVERIFY(o.out.trimmed().toDouble() > 0 && o.out.trimmed().toDouble() < 100);
+        auto with = [&](const QString& flag, const QString& value) {
+            QStringList a = ok;
+            a[a.indexOf(flag) + 1] = value;
+            return run(a);
+        };
+        o = with("--2hb", "1e300"); // printed 3.5e302 % before
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("--2hb") && o.err.contains("outside [0, 10]"), qPrintable(o.err));
+        o = with("--w", "-20");
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("--w"), qPrintable(o.err));
+        o = with("--g", "40"); // inside every range, but the regression leaves [0, 100] %
+        QCOMPARE(o.code, 1);
+        QVERIFY2(o.err.contains("outside [0, 100] %") && o.out.isEmpty(), qPrintable(o.err));
+    }
+
+    /// A value typed on the command line is a usage error (exit 2) naming the flag.
+    void commandLineValuesAreUsageErrors()
+    {
+        QTemporaryDir tmp;
+        const QString lib = tmp.path() + "/lib.sqlite";
+        QCOMPARE(run({"library", "import", DRAPE_SOURCE_DIR "/data/library", "--library", lib}).code, 0);
+        struct Case {
+            QStringList args;
+            QString flag;
+        };
+        const QList<Case> cases = {
+            {{"simulate", "--fabric", "silk", "--tolerance", "0x1p-3", "--quiet"}, "--tolerance"}, // hex floats were read
+            {{"library", "list", "--library", lib, "--since", "yesterday"}, "--since"},            // was exit 1
+            {{"library", "list", "--library", lib, "--weight-min", "-5"}, "--weight-min"},
+            {{"predict", "--fabric", "silk", "--areal-density", "-5", "--quiet"}, "--areal-density"}, // was exit 1
+            {{"library", "add", "silk", "--name", "bad\tname", "--library", lib}, "--name"},
+            {{"library", "rename", "Silk (class preset)", " ", "--library", lib}, "NEW"},
+        };
+        for (const auto& c : cases) {
+            const Out o = run(c.args);
+            QVERIFY2(o.code == 2 && o.err.contains(c.flag), qPrintable(c.args.join(' ') + " -> " + QString::number(o.code) + ": " + o.err));
+        }
+    }
+
+    /// Library documents with fields of the wrong type, names that are not
+    /// UTF-8, and a trailing no-break space: named errors, never exit 3, never a second "silk".
+    void libraryInputsAreChecked()
+    {
+        QTemporaryDir tmp;
+        const QString lib = tmp.path() + "/lib.sqlite";
+        QCOMPARE(run({"library", "import", DRAPE_SOURCE_DIR "/data/library", "--library", lib}).code, 0);
+        const QString doc = tmp.path() + "/doc.json";
+        QFile f(doc);
+        QVERIFY(f.open(QIODevice::WriteOnly));
+        f.write(R"({"format": 7, "fabrics": []})");
+        f.close();
+        Out o = run({"library", "import", doc, "--library", lib});
+        QVERIFY2(o.code == 1 && o.err.contains("format"), qPrintable(o.err)); // was: internal error, exit 3
+        o = run({"library", "add", "silk", "--name", QString::fromUtf8("Silk (class preset)\u00a0"), "--library", lib});
+        QVERIFY2(o.code == 1 && o.err.contains("already exists"), qPrintable(o.err));
+        o = run({"library", "list", "--library", lib, "--json"});
+        QCOMPARE(QJsonDocument::fromJson(o.out.toUtf8()).object()["count"].toInt(), 4);
+    }
+
+    /// A library the user cannot write (file and folder read-only) is listed and
+    /// shown; writing to it says why it cannot.
+    void readOnlyLibraryIsRead()
+    {
+        QTemporaryDir tmp;
+        const QString dir = tmp.path() + "/ro";
+        QDir().mkpath(dir);
+        const QString lib = dir + "/lib.sqlite";
+        QCOMPARE(run({"library", "import", DRAPE_SOURCE_DIR "/data/library", "--library", lib}).code, 0);
+        QFile::setPermissions(lib, QFile::ReadOwner | QFile::ReadGroup | QFile::ReadOther);
+        QFile::setPermissions(dir, QFile::ReadOwner | QFile::ExeOwner | QFile::ReadGroup | QFile::ExeGroup | QFile::ReadOther | QFile::ExeOther);
+        QFile::setPermissions(tmp.path(), QFile::ReadOwner | QFile::WriteOwner | QFile::ExeOwner | QFile::ExeGroup | QFile::ExeOther);
+        // Permissions do not bind root: run as nobody then.
+        QStringList prefix;
+        if (::geteuid() == 0) {
+            if (QStandardPaths::findExecutable("setpriv").isEmpty()) QSKIP("running as root without setpriv");
+            prefix = {"--reuid=65534", "--regid=65534", "--clear-groups", QCoreApplication::applicationDirPath() + "/../bin/drape"};
+        }
+        auto as_user = [&](const QStringList& args) {
+            QProcess p;
+            if (prefix.isEmpty()) p.start(QCoreApplication::applicationDirPath() + "/../bin/drape", args);
+            else p.start("setpriv", prefix + args);
+            p.waitForFinished(60000);
+            return Out{p.exitCode(), QString::fromUtf8(p.readAllStandardOutput()), QString::fromUtf8(p.readAllStandardError())};
+        };
+        Out o = as_user({"library", "list", "--library", lib}); // failed: "attempt to write a readonly database"
+        QVERIFY2(o.code == 0 && o.out.contains("4 fabric(s)"), qPrintable(o.err));
+        o = as_user({"library", "show", "Silk (class preset)", "--library", lib});
+        QVERIFY2(o.code == 0 && o.out.contains("Silk"), qPrintable(o.err));
+        o = as_user({"library", "remove", "Silk (class preset)", "--library", lib});
+        QVERIFY2(o.code == 1 && o.err.contains("read-only"), qPrintable(o.err));
+        QFile::setPermissions(dir, QFile::ReadOwner | QFile::WriteOwner | QFile::ExeOwner);
+        QFile::setPermissions(lib, QFile::ReadOwner | QFile::WriteOwner);
+    }
+
+    /// compare: a simulated slice that does not close gets no radius error (it
+    /// printed +1440 mm for DL-A04 with the DL-A08 preset at grid 9).
+    void compareReportsUnclosedContours()
+    {
+        const Out o = run({"compare", DRAPE_SOURCE_DIR "/examples/DL-A04", "--fabric", DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json",
+                           "--grid", "9", "--seeds", "1", "--json"});
+        QVERIFY2(o.code == 0 || o.code == 4, qPrintable(o.err));
+        const QJsonObject rec = QJsonDocument::fromJson(o.out.toUtf8()).array().at(0).toObject();
+        int unclosed = 0;
+        for (const auto& dv : rec["depths"].toArray()) {
+            const QJsonObject d = dv.toObject();
+            if (!d["closed"].toBool()) {
+                ++unclosed;
+                QVERIFY(d["mean_radius_error_m"].isNull());
+            } else {
+                QVERIFY2(std::abs(d["mean_radius_error_m"].toDouble()) < 0.1, qPrintable(QString::number(d["mean_radius_error_m"].toDouble())));
+            }
+        }
+        QCOMPARE(rec["unclosed_depths"].toInt(), unclosed);
+        QVERIFY(std::isfinite(rec["chi2"].toDouble()));
+    }
+
+    /// A fit with nothing to fit in a record is refused before fitting, and
+    /// nothing is written (it wrote a preset "fitted" to nothing).
+    void fitWithoutUsableRecordIsRefused()
+    {
+        QTemporaryDir tmp;
+        const QString rec = tmp.path() + "/rec";
+        QDir().mkpath(rec);
+        QFile::copy(DRAPE_SOURCE_DIR "/examples/DL-A04/contours.csv", rec + "/contours.csv");
+        QFile in(DRAPE_SOURCE_DIR "/examples/DL-A04/meta.json");
+        QVERIFY(in.open(QIODevice::ReadOnly));
+        QJsonObject meta = QJsonDocument::fromJson(in.readAll()).object();
+        meta.remove("lab_drape_coefficient_percent"); // no photos, no lab D: nothing for --channels dc
+        QFile out(rec + "/meta.json");
+        QVERIFY(out.open(QIODevice::WriteOnly));
+        out.write(QJsonDocument(meta).toJson());
+        out.close();
+        const QString preset = tmp.path() + "/fit.json";
+        const Out o = run({"fit", rec, "--out", preset, "--channels", "dc", "--grid", "9", "--quiet"});
+        QVERIFY2(o.code == 1 && o.err.contains("no measured value in the fitted channels (dc)"), qPrintable(o.err));
+        QVERIFY(!QFile::exists(preset));
+    }
+
+    /// What a file says is echoed escaped: an escape sequence in a cell does not reach the terminal.
+    void messagesAreEscaped()
+    {
+        QTemporaryDir tmp;
+        const QString rec = tmp.path() + "/rec";
+        QDir().mkpath(rec);
+        QFile::copy(DRAPE_SOURCE_DIR "/examples/DL-A04/meta.json", rec + "/meta.json");
+        QFile c(rec + "/contours.csv");
+        QVERIFY(c.open(QIODevice::WriteOnly));
+        c.write("depth_mm,theta_deg,x_mm,y_mm\n5,0,\x1b[2J\xff,0\n");
+        c.close();
+        QProcess p;
+        p.start(QCoreApplication::applicationDirPath() + "/../bin/drape", {"fit", rec, "--out", tmp.path() + "/f.json", "--quiet"});
+        QVERIFY(p.waitForFinished(60000));
+        const QByteArray err = p.readAllStandardError();
+        QCOMPARE(p.exitCode(), 1);
+        QVERIFY2(err.contains("\\x1B[2J\\xFF") && !err.contains('\x1b') && !err.contains('\xff'), err.constData());
     }
 };
 

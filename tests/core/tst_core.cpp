@@ -1,9 +1,11 @@
 // The shared vocabulary: strict numbers and lengths, JSON with limits, field
-// readers that name the field, atomic writes, the work-sharing loop.
+// readers that name the field, atomic writes, the work-sharing loop, text
+// from users (UTF-8, NFC, names, echoing untrusted text).
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
 #include "engine/core/json_reader.hpp"
 #include "engine/core/parallel.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 
 #include <QTemporaryDir>
@@ -66,8 +68,8 @@ private slots:
         const std::string deep = std::string(100000, '[') + std::string(100000, ']');
         QString e = error_of<FileError>([&] { parse_json(deep, "deep.json"); });
         QVERIFY2(e.contains("deep.json") && e.contains("nested deeper"), qPrintable(e));
-        e = error_of<FileError>([] { parse_json(R"({"x": 1e400})", "big.json"); });
-        QVERIFY2(e.contains("big.json"), qPrintable(e));
+        e = error_of<FileError>([] { parse_json("{\n  \"x\": 1e400}", "big.json"); });
+        QVERIFY2(e.contains("big.json: line 2, column 8: the number 1e400 is outside the range of a double"), qPrintable(e));
         e = error_of<FileError>([] { parse_json("{\"x\": \"\xff\xfe\"}", "utf.json"); });
         QVERIFY2(e.contains("utf.json") && e.contains("not valid JSON"), qPrintable(e));
         e = error_of<FileError>([] { parse_json("{ \"x\": ", "cut.json"); });
@@ -124,6 +126,74 @@ private slots:
         std::atomic<int> ran{0};
         parallel_for(100, 2, [&](std::size_t) { ++ran; }, [&] { return ran.load() >= 10; });
         QVERIFY(ran.load() >= 10 && ran.load() < 100);
+    }
+
+    /// Unicode NFC from the generated tables (checked against Python's
+    /// unicodedata over every code point when the tables were generated).
+    void text_is_normalised_to_nfc()
+    {
+        QCOMPARE(to_nfc("Cafe\u0301"), std::string("Caf\u00e9"));           // e + combining acute -> é
+        QCOMPARE(to_nfc("Caf\u00e9"), std::string("Caf\u00e9"));            // already NFC
+        QCOMPARE(to_nfc("\u212b"), std::string("\u00c5"));                   // ANGSTROM SIGN -> Å (singleton)
+        QCOMPARE(to_nfc("a\u0323\u0302"), std::string("\u1ead"));            // marks in either order ...
+        QCOMPARE(to_nfc("a\u0302\u0323"), std::string("\u1ead"));            // ... compose to the same ậ
+        QCOMPARE(to_nfc("\u1100\u1161\u11a8"), std::string("\uac01"));      // Hangul jamo -> 각
+        QCOMPARE(to_nfc("\u0344"), std::string("\u0308\u0301"));             // an excluded composite stays decomposed
+        QCOMPARE(to_nfc("\u0301a"), std::string("\u0301a"));                  // a mark before any starter is left alone
+        QCOMPARE(to_nfc(""), std::string());
+        QVERIFY_THROWS_EXCEPTION(ParameterError, to_nfc("bad\xff"));
+        QVERIFY(!is_valid_utf8("\xc0\xaf"));         // overlong '/'
+        QVERIFY(!is_valid_utf8("\xed\xa0\x80"));     // a surrogate
+        QVERIFY(!is_valid_utf8("\xf4\x90\x80\x80")); // above U+10FFFF
+        QVERIFY(!is_valid_utf8("\xe2\x82"));          // cut short
+        QVERIFY(is_valid_utf8("\xf0\x9f\xa7\xb5"));   // 🧵
+        QCOMPARE(utf8_length("\u00e9\u00e9x"), std::size_t(3));
+        QVERIFY(std::string(unicode_version()).size() >= 4);
+    }
+
+    /// Names a person can tell apart: trimmed (no-break space too), NFC,
+    /// limited in characters (not bytes), no control characters.
+    void names_are_normalised_and_checked()
+    {
+        QCOMPARE(normalize_name("  silk\u00a0", "name"), std::string("silk"));
+        QCOMPARE(normalize_name("\ufeffsilk\u200b", "name"), std::string("silk"));
+        QCOMPARE(normalize_name("Cafe\u0301 silk", "name"), std::string("Caf\u00e9 silk"));
+        std::string e150;
+        for (int i = 0; i < 150; ++i) e150 += "\u00e9"; // 300 bytes, 150 characters
+        QCOMPARE(normalize_name(e150, "name", 200), e150);
+        std::string e201;
+        for (int i = 0; i < 201; ++i) e201 += "\u00e9";
+        QVERIFY(error_of<ParameterError>([&] { normalize_name(e201, "name", 200); }).contains("201 characters long"));
+        QVERIFY(error_of<ParameterError>([] { normalize_name("a\tb", "name"); }).contains("control character"));
+        QVERIFY(error_of<ParameterError>([] { normalize_name("a\u0085b", "name"); }).contains("control character"));
+        QVERIFY(error_of<ParameterError>([] { normalize_name("evil\u202egnp.exe", "name"); }).contains("bidirectional"));
+        QVERIFY(error_of<ParameterError>([] { normalize_name(" \u00a0 ", "name"); }).contains("empty"));
+        QVERIFY(error_of<ParameterError>([] { normalize_name("bad\xff", "fabric name"); }).contains("fabric name 'bad\\xFF' is not valid UTF-8"));
+        QVERIFY(!try_normalize_name(""));
+        QCOMPARE(*try_normalize_name(" x "), std::string("x"));
+    }
+
+    /// Text from files is echoed in messages without raw control characters or
+    /// broken UTF-8 (a cell "\x1b[2J" must not clear the user's terminal).
+    void untrusted_text_is_echoed_printably()
+    {
+        QCOMPARE(printable("\x1b[2J"), std::string("\\x1B[2J"));
+        QCOMPARE(printable("a\nb\tc"), std::string("a\\nb\\tc"));
+        QCOMPARE(printable("caf\xe9"), std::string("caf\\xE9"));
+        QCOMPARE(printable("caf\u00e9"), std::string("caf\u00e9"));
+        QCOMPARE(printable("abcdef", 3), std::string("abc..."));
+    }
+
+    /// The malformed-JSON message does not carry the file's raw bytes.
+    void json_errors_are_printable()
+    {
+        std::string e;
+        try {
+            parse_json("{\"name\": \"x\xff\xfe\"}", "p.json");
+        } catch (const FileError& ex) {
+            e = ex.what();
+        }
+        QVERIFY2(e.rfind("p.json: not valid JSON", 0) == 0 && is_valid_utf8(e) && e.find("\\xFF") != std::string::npos, e.c_str());
     }
 };
 

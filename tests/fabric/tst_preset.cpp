@@ -201,6 +201,55 @@ private slots:
         QVERIFY2(e.contains("drape_coefficient.percent") && e.contains("150"), qPrintable(e));
     }
 
+    /// Every seed-19 field has a range, and a continuum value out of the table
+    /// names the seed fields that make it (library add stored SflKu = 1e300,
+    /// and named only the continuum key for ClothOverMass = 1e-300).
+    void seed_fields_are_bounded()
+    {
+        const json ok = seed_to_json(SeedParams::table1());
+        QCOMPARE(seed_from_json(ok, "ok").sst_ku, 150.0);
+        struct Case {
+            const char* key;
+            double value;
+        };
+        for (const auto& c : std::vector<Case>{{"SflKu", 1e300}, {"SflDv", 1e6}, {"SshK", -1}, {"w", 1e9}, {"x0", 1e300}, {"u", 2000}}) {
+            json j = ok;
+            j[c.key] = c.value;
+            QString e;
+            try {
+                seed_from_json(j, "s.json");
+            } catch (const drape::ParameterError& ex) {
+                e = ex.what();
+            }
+            QVERIFY2(e.contains(QString("s.json: field '") + c.key + "'"), qPrintable(QString(c.key) + ": " + e));
+        }
+        json heavy = ok;
+        heavy["ClothOverMass"] = 1e-300;
+        QString e;
+        try {
+            seed_from_json(heavy, "s.json");
+        } catch (const drape::ParameterError& ex) {
+            e = ex.what();
+        }
+        QVERIFY2(e.contains("'ClothOverMass'") && e.contains("areal_density_kg_m2") && e.contains("1e-300"), qPrintable(e));
+    }
+
+    /// The fitted set-up a preset carries is range-checked (predict scales its grid by it).
+    void fit_setup_is_bounded()
+    {
+        json j = json::parse(R"({"format":"drapekit-fabric","version":1,"parameters":{},
+                                 "fit":{"chi2":1,"dof":1,"records":[{"sample_diameter_m":1e300}]}})");
+        QString e;
+        try {
+            fabric_from_json(j, "p.json");
+        } catch (const drape::Error& ex) {
+            e = ex.what();
+        }
+        QVERIFY2(e.contains("fit.records[0].sample_diameter_m") && e.contains("outside"), qPrintable(e));
+        j["fit"]["records"][0]["sample_diameter_m"] = 0.3;
+        QCOMPARE(fabric_from_json(j, "p.json").fit->sample_diameter_m, 0.3);
+    }
+
     void failed_save_keeps_the_old_file()
     {
         QTemporaryDir d;

@@ -106,7 +106,9 @@ private slots:
         lib.add(make_preset("Cotton A", 0.15, "100 % cotton", 65, 0.002));
         QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset("cotton a", 0.2, "x"))); // names are case-insensitive
         QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset("", 0.2, "x")));
-        QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset(" padded", 0.2, "x")));
+        QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset(" \t", 0.2, "x")));
+        // Names are stored trimmed (a no-break space too): " Cotton A\u00a0" is "Cotton A".
+        QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset(" Cotton A\u00a0", 0.2, "x")));
         // Out-of-range parameters are refused before anything is written.
         fabric::FabricPreset bad = make_preset("bad", 0.2, "x");
         bad.params[cloth::Param::AreaDensity] = 50.0;
@@ -388,6 +390,87 @@ private slots:
                      l.count();
                  }),
                  QString());
+    }
+
+    /// Names are normalised once, where they enter the library, and looked up
+    /// the same way: a trailing no-break space or a decomposed accent no longer
+    /// makes a second "silk"; the limit counts characters, not bytes.
+    void namesAreNormalised()
+    {
+        FabricLibrary lib(tmp("names.sqlite"));
+        lib.add(make_preset("silk", 0.06, "silk"));
+        QString e;
+        try {
+            lib.add(make_preset("silk\u00a0", 0.06, "silk"));
+        } catch (const ParameterError& ex) {
+            e = ex.what();
+        }
+        QVERIFY2(e.contains("already exists"), qPrintable(e));
+        lib.add(make_preset("Cafe\u0301", 0.1, "x"));                          // decomposed é ...
+        QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset("Caf\u00e9", 0.1, "x"))); // ... is the composed one
+        QCOMPARE(lib.get("Caf\u00e9").name, std::string("Caf\u00e9"));        // stored in NFC
+        QVERIFY(lib.find("  silk\u00a0"));                                     // looked up normalised
+        std::string e150;
+        for (int i = 0; i < 150; ++i) e150 += "\u00e9"; // 300 bytes: refused before as "longer than 200 characters"
+        lib.add(make_preset(e150, 0.1, "x"));
+        QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset(e150 + std::string(51, 'x'), 0.1, "x")));
+        QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset("bad\xff", 0.1, "x"))); // was a JSON type_error
+        QVERIFY_THROWS_EXCEPTION(ParameterError, lib.add(make_preset("two\nlines", 0.1, "x")));
+        QVERIFY_THROWS_EXCEPTION(ParameterError, lib.rename("silk", "bad\xff"));
+        lib.rename("silk\u00a0", "Silk");
+        QVERIFY(lib.find("Silk"));
+        lib.remove(std::vector<std::string>{" Silk ", "Cafe\u0301"});
+        QCOMPARE(lib.count(), 1);
+        // A name stored before the rule is still found, updated and renamed by its own spelling.
+        const std::string path = tmp("names.sqlite");
+        raw_exec(path, "UPDATE fabrics SET name = 'old\u00a0' WHERE name = '" + e150 + "'");
+        QVERIFY(lib.find("old\u00a0"));
+        lib.update("old\u00a0", make_preset("x", 0.2, "y"));
+        QCOMPARE(lib.count(), 1);
+        QCOMPARE(lib.get("old").areal_density_kg_m2, 0.2);
+    }
+
+    /// A library document whose fields have the wrong type is a named error,
+    /// not an internal one (format = 7 was a nlohmann type_error, exit 3).
+    void badLibraryDocumentsAreNamed()
+    {
+        FabricLibrary lib(tmp("docs.sqlite"));
+        for (const char* doc : {R"({"format": 7, "fabrics": []})", R"({"format": null})", R"("just text")",
+                                R"({"format": "drapekit-fabric-library", "fabrics": {"a": 1}})",
+                                R"({"format": "drapekit-fabric-library", "version": "1", "fabrics": []})",
+                                R"([{"preset": {"format": "drapekit-fabric", "parameters": {}}, "name": 5}])"}) {
+            QString e;
+            try {
+                lib.import_all(json::parse(doc), "doc.json");
+            } catch (const ParameterError& ex) {
+                e = ex.what();
+            }
+            QVERIFY2(e.startsWith("doc.json"), qPrintable(QString(doc) + ": " + e));
+        }
+        QCOMPARE(lib.count(), 0);
+    }
+
+    /// Reading commands open read-only and explain what they find.
+    void readOnlyOpensExplain()
+    {
+        const std::string empty = tmp("empty.sqlite");
+        std::ofstream(empty).close();
+        QString e;
+        try {
+            FabricLibrary l(empty, FabricLibrary::Mode::ReadOnly);
+        } catch (const FileError& ex) {
+            e = ex.what();
+        }
+        QVERIFY2(e.contains("empty file, not a fabric library yet") && !e.contains("migrating"), qPrintable(e));
+        QCOMPARE(std::filesystem::file_size(empty), std::uintmax_t(0)); // a read did not write
+        const std::string lib = tmp("ro.sqlite");
+        {
+            FabricLibrary l(lib);
+            l.add(make_preset("silk", 0.06, "silk"));
+        }
+        FabricLibrary ro(lib, FabricLibrary::Mode::ReadOnly);
+        QCOMPARE(ro.count(), 1);
+        QVERIFY_THROWS_EXCEPTION(FileError, ro.add(make_preset("x", 0.1, "x")));
     }
 
     void fullDiskLeavesTheLibraryIntact()

@@ -154,6 +154,69 @@ private slots:
         }
     }
 
+    /// Camera values and sizes are bounded before anything is allocated or
+    /// drawn from them (fx = 1e300 crashed OpenCV's drawing with exit 3).
+    void cameras_and_sizes_are_bounded()
+    {
+        const json camera = json::parse(R"({"image":"top.jpg","width":1152,"height":872,"fx":1280,"fy":1280,"cx":575.5,"cy":435.5,
+            "dist_coeffs":[0,0,0,0,0],"R_world_to_cam":[[1,0,0],[0,-1,0],[0,0,-1]],"t_world_to_cam_mm":[0,0,880]})");
+        json ok = minimal_meta();
+        ok["cameras"]["top"] = camera;
+        QCOMPARE(record::parse_meta(ok.dump(), "/tmp/x", "m.json").cameras.at("top").fx, 1280.0);
+        struct Case {
+            const char* key;
+            json value;
+            const char* field;
+        };
+        for (const auto& c : std::vector<Case>{{"fx", 1e300, "cameras.top.fx"},
+                                               {"fy", 0.5, "cameras.top.fy"},
+                                               {"cx", -1e300, "cameras.top.cx"},
+                                               {"cy", 1e9, "cameras.top.cy"},
+                                               {"t_world_to_cam_mm", json::array({0, 0, 1e300}), "cameras.top.t_world_to_cam_mm[2]"},
+                                               {"dist_coeffs", json::array({1e300, 0, 0, 0, 0}), "cameras.top.dist_coeffs[0]"},
+                                               {"width", 20000, "cameras.top.width"}}) {
+            json meta = ok;
+            meta["cameras"]["top"][c.key] = c.value;
+            if (std::string(c.key) == "width") meta["cameras"]["top"]["height"] = 20000; // 400 megapixels
+            const QString e = file_error([&] { record::parse_meta(meta.dump(), "/tmp/x", "m.json"); });
+            QVERIFY2(e.contains(QString("'") + c.field + "'") && (e.contains("outside") || e.contains("megapixels")),
+                     qPrintable(QString(c.key) + ": " + e));
+        }
+        // Contour levels: at most 1000 declared, and depths x rays before the profiles are allocated.
+        json many = minimal_meta();
+        many["contours"]["depths_mm"] = std::vector<double>(1001, 5.0);
+        QVERIFY(file_error([&] { record::parse_meta(many.dump(), "/tmp/x", "m.json"); }).contains("more than 1000"));
+        std::string csv = "depth_mm,theta_deg,x_mm,y_mm\n";
+        for (int i = 0; i < 200; ++i) csv += std::to_string(1 + i * 0.1) + ",0,100,0\n";
+        const QString e = file_error([&] { record::parse_contours(csv, "c.csv", 0.01, 0.15, 0.075, 0.12); });
+        QVERIFY2(e.contains("200 depths x 36000 rays") && e.contains("this reader allocates"), qPrintable(e));
+        // A cell echoed in a message is printable: no raw escape sequence reaches the terminal.
+        std::string msg;
+        try {
+            record::parse_contours("depth_mm,theta_deg,x_mm,y_mm\n5,0,\x1b[2J\xff,0\n", "c.csv", 10, 0.15, 0.075, 0.12);
+        } catch (const FileError& ex) {
+            msg = ex.what();
+        }
+        QVERIFY2(msg.find("'\\x1B[2J\\xFF' is not a number") != std::string::npos && msg.find('\x1b') == std::string::npos, msg.c_str());
+    }
+
+    /// Names that cannot be resolved are refused (fail closed), not trusted.
+    void unresolvable_names_are_refused()
+    {
+        json meta = minimal_meta();
+        meta["contours"]["file"] = "loop.csv";
+        const fs::path d = make_record("loop", meta, ring(5, 110));
+        fs::create_symlink(d / "loop2.csv", d / "loop.csv");
+        fs::create_symlink(d / "loop.csv", d / "loop2.csv");
+        QVERIFY(!file_error([&] { record::read_contours(record::read_record(d)); }).isEmpty());
+        meta["contours"]["file"] = "contours.csv\ncontours.csv";
+        const fs::path d2 = make_record("ctrl", meta, ring(5, 110));
+        QVERIFY(file_error([&] { record::read_contours(record::read_record(d2)); }).contains("control character"));
+        meta["contours"]["file"] = ".";
+        const fs::path d3 = make_record("dot", meta, ring(5, 110));
+        QVERIFY(!file_error([&] { record::read_contours(record::read_record(d3)); }).isEmpty());
+    }
+
     void missing_pieces_are_named()
     {
         QVERIFY(file_error([] { record::read_record("/nonexistent/record"); }).contains("not a record folder"));

@@ -4,6 +4,7 @@
 #include "cli/progress.hpp"
 #include "cli/setup.hpp"
 
+#include "engine/cloth/blas_threads.hpp"
 #include "engine/cloth/drape_io.hpp"
 #include "engine/core/error.hpp"
 #include "engine/fabric/preset.hpp"
@@ -79,6 +80,7 @@ int run(const std::vector<std::string>& argv)
     preset.model.edge_contact = !a.has("--vertex-contact-only");
     Progress progress("simulate", quiet);
     if (!quiet) ro.progress = progress.solver_callback(ro);
+    cloth::single_threaded_blas(); // the same rounding as the widget, predict and garment: the same rest state
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
     progress.finish(to_string(r.status.outcome), r.status.converged());
     if (!check_drape_result(r, setup)) return 4;

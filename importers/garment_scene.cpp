@@ -304,35 +304,49 @@ Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& tab
     return s;
 }
 
-cloth::SolverStatus drape_to_rest(Scene& scene, const cloth::RestOptions& opt)
+cloth::SolverStatus drape_to_rest(Scene& scene, const cloth::RestOptions& opt, const Settling& settling)
 {
-    cloth::ClothSystem& s = *scene.system;
-    if (scene.garment != Garment::Skirt || std::getenv("DRAPE_NO_DROP")) return cloth::run_to_rest(s, opt);
-    // The drop: implicit Euler from the flat pattern, as the skirt would fall in
-    // a fitting room; the folds are the fabric's.
+    if (scene.garment != Garment::Skirt) return cloth::run_to_rest(*scene.system, opt);
+    return settle_to_rest(*scene.system, opt, settling);
+}
+
+cloth::SolverStatus settle_to_rest(cloth::ClothSystem& s, const cloth::RestOptions& opt, const Settling& settling)
+{
+    if (settling.duration <= 0) return cloth::run_to_rest(s, opt);
+    if (!(settling.dt > 0) || !(settling.damping_rate >= 0) || settling.iterations < 1)
+        throw ParameterError("drape_to_rest: settling needs dt > 0, damping rate >= 0 and at least one iteration");
     const auto t0 = std::chrono::steady_clock::now();
     cloth::Stepper stepper(s, cloth::Integrator::ImplicitEuler);
-    stepper.set_implicit_iterations(3);
-    const double dt = std::getenv("DRAPE_DROP_DT") ? std::atof(std::getenv("DRAPE_DROP_DT")) : 1.0 / 60.0;
-    const double T = std::getenv("DRAPE_DROP_T") ? std::atof(std::getenv("DRAPE_DROP_T")) : 1.5;
-    if (const char* a = std::getenv("DRAPE_DROP_AIR")) s.model().air_damping = std::atof(a);
+    stepper.set_implicit_iterations(settling.iterations);
+    const double air = s.model().air_damping;
+    s.model().air_damping = std::max(air, settling.damping_rate);
     cloth::SolverStatus drop;
     s.v.setZero();
-    while (s.time < T) {
-        if (!stepper.step(dt)) break;
+    const double t_end = s.time + settling.duration;
+    bool stopped = false;
+    while (s.time < t_end - 1e-9 && !stopped) {
+        if (!stepper.step(settling.dt)) break;
         ++drop.steps;
-        if (opt.cancel && opt.cancel->load()) break;
+        if (opt.cancel && opt.cancel->load()) stopped = true;
         if (opt.progress) {
             drop.newton_iterations = stepper.linear_solves();
             drop.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             drop.sim_time = s.time;
-            if (!opt.progress(drop)) break;
+            if (!opt.progress(drop)) stopped = true;
         }
+    }
+    s.model().air_damping = air;
+    s.v.setZero();
+    if (stopped) {
+        drop.outcome = cloth::SolverStatus::Outcome::Cancelled;
+        drop.newton_iterations = stepper.linear_solves();
+        drop.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return drop;
     }
     cloth::SolverStatus st = cloth::run_to_rest(s, opt);
     st.newton_iterations += stepper.linear_solves();
     st.steps += drop.steps;
-    st.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - st.wall_seconds;
+    st.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return st;
 }
 

@@ -108,10 +108,31 @@ Scene make_garment_scene(std::shared_ptr<const Mannequin> m, const std::string& 
 Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& table = {}, int grid = 45,
                             std::uint64_t seed = 1);
 
-/// Brings a garment scene to rest by the path a fitting room would see (see
-/// garment_scene.cpp) and returns the solver status. Never throws on numerical
-/// trouble; cancellation and progress through `opt`.
-cloth::SolverStatus drape_to_rest(Scene& scene, const cloth::RestOptions& opt);
+/// How a skirt settles from its flat pattern before the static solve: implicit
+/// Euler under gravity with a strong air damping, i.e. an overdamped
+/// (quasi-static) fall. The cloth then follows the fall of its own energy, as a
+/// skirt put on slowly does, and the folds are the ones its bending and shear
+/// choose; inertia (a fast drop that swings and overshoots) would add folds of
+/// its own and make the skirts of different fabrics alike. The rest state found
+/// afterwards does not depend on the damping, only the fold branch it lands on.
+struct Settling {
+    double dt = 1.0 / 60.0;     ///< implicit Euler time step [s]
+    double duration = 1.5;      ///< simulated time of the fall [s]; <= 0 skips it
+    double damping_rate = 20.0; ///< air damping rate during the fall [1/s] (velocity time constant 50 ms)
+    int iterations = 3;         ///< Newton iterations per implicit step
+};
+
+/// Brings a garment scene to rest by the path a fitting room would see: a skirt
+/// settles from its flat pattern (`settling`), then the static solver finds the
+/// rest state from there; other garments and tablecloths go straight to the
+/// static solve. Returns the solver status (iterations and wall time include the
+/// fall). Never throws on numerical trouble; cancellation and progress through
+/// `opt`. The model's own air damping is restored after the fall.
+cloth::SolverStatus drape_to_rest(Scene& scene, const cloth::RestOptions& opt, const Settling& settling = {});
+
+/// The skirt's path to rest on its system alone (what drape_to_rest runs for a
+/// skirt): the settling fall from the current state, then the static solve.
+cloth::SolverStatus settle_to_rest(cloth::ClothSystem& system, const cloth::RestOptions& opt, const Settling& settling = {});
 
 /// Rest options of a garment drape: the static solver (each Newton iteration one
 /// sparse Cholesky) with a residual the eye cannot tell from exact rest.

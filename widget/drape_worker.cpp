@@ -3,8 +3,10 @@
 #include "widget/drape_results.hpp"
 #include "widget/rest_job.hpp"
 
+#include "engine/cloth/blas_threads.hpp"
 #include "engine/cloth/colliders.hpp"
 #include "engine/core/error.hpp"
+#include "importers/garment_scene.hpp"
 
 #include <QTimer>
 
@@ -264,6 +266,9 @@ void DrapeWorker::runStatic(long maxNewton)
     // view's rest criteria: the same input gives the same rest state.
     cloth::RestOptions opt;
     opt.integrator = cloth::Integrator::Static;
+    // One BLAS thread, as the command line runs: the factorisation's rounding,
+    // and with it the fold branch a buckling drape takes, is then the same.
+    cloth::single_threaded_blas();
     opt.residual = m_restResidual;
     opt.max_speed = m_restSpeed;
     if (maxNewton > 0) opt.max_newton = maxNewton;
@@ -291,6 +296,10 @@ void DrapeWorker::runStatic(long maxNewton)
             const cloth::DrapeResult r = cloth::simulate_drape(m_spec->preset.material(), m_spec->setup, opt, m_spec->preset.model);
             st = r.status;
             if (st.outcome != cloth::SolverStatus::Outcome::Cancelled) m_sys->x = r.x;
+        } else if (fresh && m_spec->shape == Drape::Skirt) {
+            // A skirt from its flat pattern: the settling fall, then the static
+            // solve, exactly what `drape garment` runs.
+            st = importers::settle_to_rest(*m_sys, opt);
         } else {
             st = cloth::run_to_rest(*m_sys, opt);
         }

@@ -255,7 +255,6 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
     }
     DrapeResult r;
     RestOptions fine = ropt;
-    if (continuation && std::getenv("DRAPE_POLISH")) fine.shift_exact = true;
     r.status = run_to_rest(*sys, fine);
     if (continuation) {
         r.status.steps += pre.steps;

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <optional>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -15,27 +16,37 @@ namespace drape::cloth {
 enum class SpringKind : unsigned char { StretchU, StretchV, Shear, FlexionU, FlexionV, Edge };
 
 /// Spring with a dashpot along it (Provot 1995). Energy 1/2 k x^2 in the extension
-/// x = |xi - xj| - rest, except in compression beyond the strip's buckling load:
-/// with fc >= 0 the compressive force never exceeds fc (the energy continues
-/// linearly, C1), the post-buckling response of Choi and Ko 2002 ("Stable but
-/// responsive cloth") in its simplest form: a strip shorter than its rest length
-/// by more than fc / k has buckled at a scale below the mesh.
+/// x = |xi - xj| - rest, except in compression towards the strip's buckling load:
+/// with fc > 0 the compressive force approaches fc and never exceeds it, the
+/// post-buckling response of Choi and Ko 2002 ("Stable but responsive cloth"): a
+/// strip shorter than its rest length by more than about fc / k has buckled at a
+/// scale below the mesh. The force is linear up to half the buckling load and
+/// then saturates exponentially,
+///   f(x) = -fc + fc/2 exp(2 k (x - x1) / fc)   for x < x1 = -fc / (2 k),
+/// so force and stiffness are continuous (the energy is C2: Newton's method keeps
+/// its quadratic rate where springs sit at the transition, which a hard cap, C1
+/// only, loses) and the stiffness stays positive. fc = 0: no compressive force.
 struct Spring {
     int i, j;
     double rest; ///< [m]
     double k;    ///< [N/m]
     double d;    ///< [N*s/m]
     SpringKind kind;
-    double fc = -1; ///< [N] largest compressive force; < 0: linear in compression too
+    double fc = -1; ///< [N] compressive force limit; < 0: linear in compression too
     /// Energy [J], its first and second derivative in the length [N], [N/m].
     void law(double length, double& e, double& de, double& d2e) const
     {
         const double x = length - rest;
-        if (fc >= 0 && k * x < -fc) {
-            const double xc = -fc / k;
-            e = 0.5 * k * xc * xc - fc * (x - xc);
-            de = -fc;
-            d2e = 0;
+        if (fc == 0 && x < 0) {
+            e = de = d2e = 0;
+            return;
+        }
+        const double x1 = -0.5 * fc / k;
+        if (fc > 0 && x < x1) {
+            const double h = 0.5 * fc, q = std::exp((x - x1) * k / h);
+            e = 0.5 * k * x1 * x1 - fc * (x - x1) + h * h / k * (q - 1);
+            de = -fc + h * q;
+            d2e = k * q;
             return;
         }
         e = 0.5 * k * x * x;

@@ -26,7 +26,6 @@ struct SolveProfile {
     Part line_search;     ///< line search: trial energies and residual checks (includes their forces/energy)
     long failed_factorizations = 0;
     long line_search_trials = 0;
-    long cg_iterations = 0; ///< conjugate-gradient refinements of the Newton step
     double total = 0;     ///< wall time of the solve [s]
 
     /// A markdown table of the parts, per iteration where `iterations` > 0.
@@ -49,7 +48,7 @@ struct SolveProfile {
         row("CHOLMOD factorise", factorize);
         row("CHOLMOD solve", solve);
         row("line search (energies, checks)", line_search);
-        std::fprintf(out, "failed factorisations %ld, line-search trials %ld, CG iterations %ld\n", failed_factorizations, line_search_trials, cg_iterations);
+        std::fprintf(out, "failed factorisations %ld, line-search trials %ld\n", failed_factorizations, line_search_trials);
     }
 };
 

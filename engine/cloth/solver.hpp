@@ -39,12 +39,6 @@ struct RestOptions {
     double max_sim_time = 60;     ///< give up after this much simulated time [s]
     long max_steps = 5'000'000;
     long max_newton = 1000;        ///< static solver
-    /// Static solver: when the exact Hessian is not positive definite, strengthen
-    /// the proximal shift and retry the exact Hessian (Levenberg-Marquardt in the
-    /// mass metric) instead of falling back to the projected Hessian for a few
-    /// iterations. Pays near a rest state (a polish after a coarser level);
-    /// from a flat start the projected fallback is faster.
-    bool shift_exact = false;
     bool trace = false;           ///< print each static iteration to stderr (residual, step, worst vertex)
     /// Called now and then with the status so far; return false to cancel.
     std::function<bool(const SolverStatus&)> progress;

@@ -561,7 +561,7 @@ HessianAssembler::Block HessianAssembler::block(int i, int j) const
 
 void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, Projection projection)
 {
-    const bool project_springs = projection != Projection::None, project_contacts = projection == Projection::All;
+    const bool project_springs = projection == Projection::All, project_contacts = project_springs;
     ProfileScope timer(m_s.profile ? &m_s.profile->assemble : nullptr);
     const auto& m = m_s.model();
     double* val = m_H.valuePtr();

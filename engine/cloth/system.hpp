@@ -117,7 +117,6 @@ public:
     /// Which terms of the Hessian are projected to positive semidefinite.
     enum class Projection {
         None,     ///< the exact Hessian
-        Springs,  ///< compressed springs lose their negative transverse stiffness; contact exact
         All,      ///< springs and contact (the Gauss-Newton n n^T term only)
     };
     /// H = d2E/dx2 (with `projection`) + diag(extra_diag_i I) + damping_scale * D(X),

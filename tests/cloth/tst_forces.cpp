@@ -14,7 +14,8 @@ namespace {
 
 /// A small draped-looking state: the sheet bent over the pedestal edge so that
 /// springs are stretched and compressed, stencils bent and contacts active.
-std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed, double stiffening_radius = 0.0, double softening_radius = 0.0)
+std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed, double stiffening_radius = 0.0, double softening_radius = 0.0,
+                                       bool buckling = false)
 {
     FabricParams p;
     p[Param::BendStiffeningRadius] = stiffening_radius;
@@ -24,7 +25,9 @@ std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed, double
     p[Param::BendWeft] = 0.7e-5;
     ClothMesh mesh = make_disc(0.3, 11, 0.0);
     if (triangle_mesh) mesh = make_triangle_mesh(mesh.X, mesh.F, Eigen::Vector3d(1, 0.3, 0));
-    auto s = std::make_unique<ClothSystem>(mesh, make_model(mesh, p));
+    ModelOptions mo;
+    if (buckling) mo.buckling = ModelOptions::Buckling::Euler;
+    auto s = std::make_unique<ClothSystem>(mesh, make_model(mesh, p, mo));
     // The rim's rounding (10 mm) is larger than the deepest penetration of
     // these states (~5 mm): deeper inside, the pedestal's signed distance has
     // seams (where the nearest face changes) at which it has no gradient.
@@ -57,20 +60,25 @@ private slots:
         QTest::addColumn<bool>("triangles");
         QTest::addColumn<double>("stiffening");
         QTest::addColumn<double>("softening");
-        QTest::newRow("grid") << false << 0.0 << 0.0;
-        QTest::newRow("triangle mesh") << true << 0.0 << 0.0;
+        QTest::addColumn<bool>("buckling");
+        QTest::newRow("grid") << false << 0.0 << 0.0 << false;
+        QTest::newRow("triangle mesh") << true << 0.0 << 0.0 << false;
         // 20 mm: the nonlinear terms dominate in the sharp bends of this state.
-        QTest::newRow("grid, stiffening bending") << false << 0.02 << 0.0;
-        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02 << 0.0;
-        QTest::newRow("grid, softening bending") << false << 0.0 << 0.02;
-        QTest::newRow("triangle mesh, both") << true << 0.01 << 0.02;
+        QTest::newRow("grid, stiffening bending") << false << 0.02 << 0.0 << false;
+        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02 << 0.0 << false;
+        QTest::newRow("grid, softening bending") << false << 0.0 << 0.02 << false;
+        QTest::newRow("triangle mesh, both") << true << 0.01 << 0.02 << false;
+        // The hoops of the folded overhang are compressed past the buckling load.
+        QTest::newRow("grid, sub-mesh buckling") << false << 0.0 << 0.0 << true;
+        QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << true;
     }
     void forces_are_minus_energy_gradient()
     {
         QFETCH(bool, triangles);
         QFETCH(double, stiffening);
         QFETCH(double, softening);
-        auto s = bent_disc(triangles, 3, stiffening, softening);
+        QFETCH(bool, buckling);
+        auto s = bent_disc(triangles, 3, stiffening, softening, buckling);
         Positions f;
         s->conservative_forces(s->x, f);
         const double h = 1e-7;
@@ -94,7 +102,8 @@ private slots:
         QFETCH(bool, triangles);
         QFETCH(double, stiffening);
         QFETCH(double, softening);
-        auto s = bent_disc(triangles, 5, stiffening, softening);
+        QFETCH(bool, buckling);
+        auto s = bent_disc(triangles, 5, stiffening, softening, buckling);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/false);
         const Eigen::MatrixXd Hu = Eigen::MatrixXd(H.matrix());
@@ -113,6 +122,56 @@ private slots:
                 max_err = std::max(max_err, (colv - Hd.col(3 * i + c)).cwiseAbs().maxCoeff());
             }
         QVERIFY2(max_err < 1e-4 * max_h, qPrintable(QString("max error %1 of max entry %2").arg(max_err).arg(max_h)));
+    }
+
+    /// The sub-mesh buckling law: linear to half the buckling load, then
+    /// saturating; energy, force and stiffness continuous (C2), the compressive
+    /// force never above fc, the stiffness positive; derivatives by differences.
+    void buckling_spring_law_is_smooth_and_bounded()
+    {
+        Spring sp{0, 1, 0.01, 200.0, 0.0, SpringKind::StretchU, 0.05};
+        const double x1 = -0.5 * sp.fc / sp.k; // the transition [m]
+        auto at = [&](double x) {
+            double e, de, d2e;
+            sp.law(sp.rest + x, e, de, d2e);
+            return Eigen::Vector3d(e, de, d2e);
+        };
+        const double eps = 1e-9 * sp.rest;
+        const Eigen::Vector3d lo = at(x1 - eps), hi = at(x1 + eps);
+        // Across 2 eps the values move by their slope times 2 eps only.
+        // (the old hard cap jumped by k in the stiffness).
+        QVERIFY2(std::abs(lo(0) - hi(0)) < 4 * eps * sp.fc && std::abs(lo(1) - hi(1)) < 4 * eps * sp.k &&
+                     std::abs(lo(2) - hi(2)) < 4 * eps * 2 * sp.k * sp.k / sp.fc,
+                 qPrintable(QString("jump at the transition: %1 %2 %3").arg(lo(0) - hi(0)).arg(lo(1) - hi(1)).arg(lo(2) - hi(2))));
+        for (double x : {-0.5 * sp.rest, -0.1 * sp.rest, 4 * x1, 1.5 * x1, x1, 0.5 * x1, 0.0, 0.1 * sp.rest}) {
+            const Eigen::Vector3d v = at(x);
+            const double h = 1e-7 * sp.rest;
+            const Eigen::Vector3d p = at(x + h), m = at(x - h);
+            QVERIFY2(std::abs((p(0) - m(0)) / (2 * h) - v(1)) < 1e-6 * sp.fc, qPrintable(QString("de at x = %1").arg(x)));
+            QVERIFY2(std::abs((p(1) - m(1)) / (2 * h) - v(2)) < 1e-5 * sp.k, qPrintable(QString("d2e at x = %1").arg(x)));
+            QVERIFY(v(1) >= -sp.fc);
+            QVERIFY(v(2) > 0);
+        }
+        QVERIFY(std::abs(at(-0.5 * sp.rest)(1) + sp.fc) < 1e-6 * sp.fc); // deep compression: the buckling load
+        QCOMPARE(at(0.002)(1), sp.k * 0.002);                             // tension: linear
+        Spring slack = sp;
+        slack.fc = 0; // no bending stiffness: no compressive force
+        double e, de, d2e;
+        slack.law(sp.rest * 0.9, e, de, d2e);
+        QCOMPARE(de, 0.0);
+    }
+
+    /// The buckling rows above check something: in those states springs are
+    /// compressed past the transition.
+    void bent_states_buckle_springs()
+    {
+        auto s = bent_disc(false, 3, 0.0, 0.0, true);
+        int buckled = 0;
+        for (const Spring& sp : s->model().springs) {
+            const double l = (s->x.row(sp.i) - s->x.row(sp.j)).norm();
+            if (sp.fc > 0 && sp.k * (l - sp.rest) < -0.5 * sp.fc) ++buckled;
+        }
+        QVERIFY2(buckled > 20, qPrintable(QString("%1 springs past the transition").arg(buckled)));
     }
 
     /// The states above have mesh edges cutting the pedestal rim and the sphere

@@ -1,0 +1,89 @@
+// bench_garment: the circle skirt on the default mannequin (Debian's MakeHuman
+// body) for several fabrics, the way `drape garment` drapes it: time to rest,
+// Newton iterations (the settling fall's linear solves included), and what a
+// person compares (hem radius, folds, self-intersections, vertices inside the
+// body). Prints the ratio of the widest to the narrowest hem, the load average,
+// and accepts the settling parameters so their effect can be measured.
+//
+//   build/bin/bench_garment [--fabrics silk,denim] [--dt S] [--duration S] [--damping 1/S]
+//                           [--iterations N] [--body FILE]
+#include "engine/cloth/blas_threads.hpp"
+#include "engine/library/starter.hpp"
+#include "importers/garment_metrics.hpp"
+#include "importers/garment_scene.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <stdexcept>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace drape;
+
+namespace {
+
+double load_average()
+{
+    double l[3] = {0, 0, 0};
+    return getloadavg(l, 3) > 0 ? l[0] : -1;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    try {
+        std::vector<std::string> fabrics = {"silk", "denim"};
+        importers::Settling settle;
+        std::string body = importers::default_mannequin_path();
+        for (int i = 1; i < argc; ++i) {
+            const std::string k = argv[i];
+            auto next = [&]() -> std::string {
+                if (i + 1 >= argc) throw std::runtime_error(k + " needs a value");
+                return argv[++i];
+            };
+            if (k == "--fabrics") {
+                fabrics.clear();
+                std::stringstream ss(next());
+                for (std::string f; std::getline(ss, f, ',');) fabrics.push_back(f);
+            } else if (k == "--dt") settle.dt = std::stod(next());
+            else if (k == "--duration") settle.duration = std::stod(next());
+            else if (k == "--damping") settle.damping_rate = std::stod(next());
+            else if (k == "--iterations") settle.iterations = std::stoi(next());
+            else if (k == "--body") body = next();
+            else throw std::runtime_error("unknown flag " + k);
+        }
+        std::printf("circle skirt on %s; settling dt %.4g s, %.3g s, damping %.3g 1/s, %d iterations per step\n", body.c_str(),
+                    settle.dt, settle.duration, settle.damping_rate, settle.iterations);
+        cloth::single_threaded_blas(); // as the drape command runs
+        auto m = std::make_shared<importers::Mannequin>(importers::load_mannequin(body));
+        std::printf("%-28s %8s %8s %10s %8s %6s %9s %7s %6s\n", "fabric", "wall_s", "newton", "status", "hem_mm", "folds",
+                    "self_int", "inside", "load");
+        double rmin = 1e9, rmax = 0;
+        for (const auto& name : fabrics) {
+            const auto starter = library::find_starter(name);
+            const fabric::FabricPreset preset = starter ? *starter : fabric::load_fabric(name);
+            importers::Scene scene = importers::make_skirt_scene(m, preset);
+            const cloth::SolverStatus st = importers::drape_to_rest(scene, importers::garment_rest_options(), settle);
+            const auto& sys = *scene.system;
+            std::vector<char> pinned(static_cast<std::size_t>(sys.vertex_count()), 0);
+            for (int i = 0; i < sys.vertex_count(); ++i) pinned[static_cast<std::size_t>(i)] = sys.pinned(i) ? 1 : 0;
+            const auto gm = importers::garment_metrics(sys.x, sys.mesh().F, pinned, m.get(), scene.waist.centre);
+            std::printf("%-28s %8.1f %8ld %10s %8.1f %6d %9ld %7d %6.2f\n", preset.name.c_str(), st.wall_seconds, st.newton_iterations,
+                        cloth::to_string(st.outcome).c_str(), gm.hem_mean_radius_m * 1e3, gm.hem_fold_count, gm.self_intersections,
+                        gm.vertices_inside_body, load_average());
+            if (!st.converged()) std::printf("    %s\n", st.message.c_str());
+            std::fflush(stdout);
+            rmin = std::min(rmin, gm.hem_mean_radius_m);
+            rmax = std::max(rmax, gm.hem_mean_radius_m);
+        }
+        if (fabrics.size() > 1) std::printf("widest / narrowest hem: %.3f\n", rmax / rmin);
+        return 0;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "bench_garment: %s\n", e.what());
+        return 1;
+    }
+}

@@ -6,7 +6,7 @@
 // and accepts the settling parameters so their effect can be measured.
 //
 //   build/bin/bench_garment [--fabrics silk,denim] [--dt S] [--duration S] [--damping 1/S]
-//                           [--iterations N] [--body FILE]
+//                           [--iterations N] [--body FILE] [--segments N] [--trace]
 #include "engine/cloth/blas_threads.hpp"
 #include "engine/library/starter.hpp"
 #include "importers/garment_metrics.hpp"
@@ -39,6 +39,8 @@ int main(int argc, char** argv)
         std::vector<std::string> fabrics = {"silk", "denim"};
         importers::Settling settle;
         std::string body = importers::default_mannequin_path();
+        importers::SkirtOptions so;
+        bool trace = false;
         for (int i = 1; i < argc; ++i) {
             const std::string k = argv[i];
             auto next = [&]() -> std::string {
@@ -54,6 +56,8 @@ int main(int argc, char** argv)
             else if (k == "--damping") settle.damping_rate = std::stod(next());
             else if (k == "--iterations") settle.iterations = std::stoi(next());
             else if (k == "--body") body = next();
+            else if (k == "--segments") so.segments = std::stoi(next());
+            else if (k == "--trace") trace = true;
             else throw std::runtime_error("unknown flag " + k);
         }
         std::printf("circle skirt on %s; settling dt %.4g s, %.3g s, damping %.3g 1/s, %d iterations per step\n", body.c_str(),
@@ -66,8 +70,10 @@ int main(int argc, char** argv)
         for (const auto& name : fabrics) {
             const auto starter = library::find_starter(name);
             const fabric::FabricPreset preset = starter ? *starter : fabric::load_fabric(name);
-            importers::Scene scene = importers::make_skirt_scene(m, preset);
-            const cloth::SolverStatus st = importers::drape_to_rest(scene, importers::garment_rest_options(), settle);
+            importers::Scene scene = importers::make_skirt_scene(m, preset, so);
+            cloth::RestOptions ro = importers::garment_rest_options();
+            ro.trace = trace;
+            const cloth::SolverStatus st = importers::drape_to_rest(scene, ro, settle);
             const auto& sys = *scene.system;
             std::vector<char> pinned(static_cast<std::size_t>(sys.vertex_count()), 0);
             for (int i = 0; i < sys.vertex_count(); ++i) pinned[static_cast<std::size_t>(i)] = sys.pinned(i) ? 1 : 0;

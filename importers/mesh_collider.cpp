@@ -260,7 +260,13 @@ bool MeshCollider::query(const Vec3& p, double band, cloth::ContactSample& out) 
 {
     const double reach = band + m_offset;
     // Far outside the bounding box: certainly outside and out of reach.
-    if (std::isfinite(reach) && box_distance2(p, m_nodes[0].lo, m_nodes[0].hi) > reach * reach) return false;
+    if (std::isfinite(reach)) {
+        const double d2 = box_distance2(p, m_nodes[0].lo, m_nodes[0].hi);
+        if (d2 > reach * reach) {
+            out.clearance = std::sqrt(d2) - reach;
+            return false;
+        }
+    }
     // Otherwise search without a bound: a point deep inside the body must
     // still be answered (with its true negative distance), or a vertex that a
     // large step pushed through would feel no contact force at all.
@@ -269,7 +275,10 @@ bool MeshCollider::query(const Vec3& p, double band, cloth::ContactSample& out) 
     const Vec3 pn = pseudo_normal(cp.triangle, cp.barycentric);
     const Vec3 d = p - cp.point;
     const bool outside = d.dot(pn) >= 0;
-    if (outside && cp.distance > reach) return false;
+    if (outside && cp.distance > reach) {
+        out.clearance = cp.distance - reach;
+        return false;
+    }
     // The direction from the closest point is the exact gradient of the
     // distance; on the surface itself fall back to the pseudo-normal.
     if (cp.distance > 1e-12) {

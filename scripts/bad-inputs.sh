@@ -276,6 +276,19 @@ printf 'not a mesh at all\n' >"$tmp/junk.obj"
 case_ "mesh that is text" 1 "junk.obj" -- "$drape" import "$tmp/junk.obj"
 case_ "mesh that does not exist" 1 "none.obj" -- "$drape" import "$tmp/none.obj"
 
+# ---- garments ----------------------------------------------------------------
+body=/usr/share/assimp/models/Collada/human.zae
+case_ "garment: body that does not exist" 1 "nobody.obj" -- "$drape" garment --body "$tmp/nobody.obj" --quiet
+case_ "garment: body with a NaN vertex" 1 "nan.obj" -- "$drape" garment --body "$tmp/nan.obj" --quiet
+case_ "garment: no --body" 2 "--body" -- "$drape" garment --quiet
+if [ -f "$body" ]; then
+  case_ "garment: unknown fabric" 1 "velvet-nowhere" -- "$drape" garment --body "$body" --fabric velvet-nowhere --quiet
+  printf 'v 0 1 0\nv 0.1 1 0\nv 0 1 0.1\nf 1 2 3\n' >"$tmp/nowaist.obj"
+  case_ "garment mesh without a waist group" 1 "nowaist.obj" -- "$drape" garment --body "$body" --garment "$tmp/nowaist.obj" --quiet
+  case_ "garment: skirt length 5 m" 2 "--length" -- "$drape" garment --body "$body" --length 5m --quiet
+  case_ "garment: parameter out of the table" 2 "bend_warp_Nm" -- "$drape" garment --body "$body" --set bend_warp_Nm=1e9 --quiet
+fi
+
 echo
 if [ $check = 1 ]; then
   echo "$n cases, $fails not as expected"

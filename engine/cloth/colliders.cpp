@@ -2,10 +2,18 @@
 
 #include "engine/core/error.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
 namespace drape::cloth {
+
+Collider::Collider()
+{
+    static std::atomic<std::uint64_t> next{1};
+    m_id = next.fetch_add(1, std::memory_order_relaxed);
+}
 
 PlaneCollider::PlaneCollider(const Eigen::Vector3d& p, const Eigen::Vector3d& n) : point(p), normal(n)
 {
@@ -138,13 +146,17 @@ bool ColliderGroup::query(const Eigen::Vector3d& p, double band, ContactSample& 
 {
     bool any = false;
     out.distance = std::numeric_limits<double>::infinity();
+    double clearance = std::numeric_limits<double>::infinity();
     for (const auto& c : members) {
         ContactSample s;
-        if (c->query(p, band, s) && s.distance < out.distance) {
-            out = s;
+        if (c->query(p, band, s)) {
+            if (s.distance < out.distance) out = s;
             any = true;
+        } else {
+            clearance = std::min(clearance, s.clearance);
         }
     }
+    out.clearance = any || !std::isfinite(clearance) ? 0.0 : clearance;
     return any;
 }
 

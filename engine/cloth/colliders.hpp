@@ -6,6 +6,7 @@
 // evaluation).
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,11 +16,24 @@ namespace drape::cloth {
 struct ContactSample {
     double distance = 0.0;            ///< signed distance [m], positive outside
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); ///< outward unit normal at the closest point
+    /// When query() returns false: how far [m] the point may move and still be
+    /// out of the band (the distance is 1-Lipschitz, so a point that moves less
+    /// than its distance beyond the band cannot reach it, nor cross the surface).
+    /// 0 = not known. The engine skips the query of a vertex that has moved less
+    /// than this since (an expensive collider, e.g. a body mesh, sets it).
+    double clearance = 0.0;
 };
 
 class Collider {
 public:
+    Collider();
     virtual ~Collider() = default;
+    Collider(const Collider&) = delete;
+    Collider& operator=(const Collider&) = delete;
+    /// Unique for the process's lifetime (never reused, unlike an address): what
+    /// remembers answers of this collider keys them on it. A collider does not
+    /// change after construction.
+    std::uint64_t id() const { return m_id; }
     /// Signed distance and normal at p [m]. May return false when p is farther
     /// than `band` [m] outside the surface (the answer is then not needed); a point
     /// inside must always be answered, however deep, or a vertex pushed through
@@ -29,6 +43,9 @@ public:
     /// normal); zero for planes. Used for an exact contact Hessian near rest.
     virtual Eigen::Matrix3d distance_hessian(const Eigen::Vector3d& /*p*/) const { return Eigen::Matrix3d::Zero(); }
     virtual std::string kind() const = 0;
+
+private:
+    std::uint64_t m_id;
 };
 
 /// Infinite plane through `point` with outward `normal` (e.g. the floor).

@@ -248,6 +248,32 @@ struct ContactCache {
     std::vector<VertexContact> vertex;
     std::vector<EdgeContact> edge;
 
+    /// Per collider and vertex: where the vertex was last queried and how far it
+    /// may move from there and still be out of contact (ContactSample::clearance).
+    /// Kept across positions (a line search's trial points, the next iterations);
+    /// reset when the colliders, the offset or the vertex count change.
+    struct Clearance {
+        std::vector<std::uint64_t> ids;
+        double offset = std::numeric_limits<double>::quiet_NaN();
+        Eigen::Index rows = -1;
+        std::vector<Positions> from;
+        std::vector<std::vector<double>> radius;
+    } clearance;
+
+    void use_clearance(const ClothSystem& s, Eigen::Index rows)
+    {
+        const auto& cs = s.colliders();
+        bool same = clearance.rows == rows && clearance.offset == s.model().contact_offset && clearance.ids.size() == cs.size();
+        for (std::size_t k = 0; same && k < cs.size(); ++k) same = clearance.ids[k] == cs[k]->id();
+        if (same) return;
+        clearance.ids.clear();
+        for (const auto& c : cs) clearance.ids.push_back(c->id());
+        clearance.offset = s.model().contact_offset;
+        clearance.rows = rows;
+        clearance.from.assign(cs.size(), Positions::Zero(rows, 3));
+        clearance.radius.assign(cs.size(), std::vector<double>(static_cast<std::size_t>(rows), 0.0));
+    }
+
     void use(const ClothSystem& s, const Positions& X)
     {
         const auto& m = s.model();
@@ -290,14 +316,27 @@ void for_each_contact(const ClothSystem& s, const Positions& X, F&& f)
         const auto& m = s.model();
         const double off = m.contact_offset;
         cc.vertex.clear();
-        for (const auto& c : s.colliders())
+        cc.use_clearance(s, X.rows());
+        const auto& colliders = s.colliders();
+        for (std::size_t k = 0; k < colliders.size(); ++k) {
+            const Collider& c = *colliders[k];
+            Positions& from = cc.clearance.from[k];
+            std::vector<double>& radius = cc.clearance.radius[k];
             for (int i = 0; i < X.rows(); ++i) {
                 if (m.pinned[static_cast<std::size_t>(i)]) continue;
+                double& r = radius[static_cast<std::size_t>(i)];
+                if (r > 0 && (X.row(i) - from.row(i)).squaredNorm() < r * r) continue; // still out of reach
                 ContactSample cs;
-                if (!c->query(X.row(i).transpose(), off, cs)) continue;
+                if (!c.query(X.row(i).transpose(), off, cs)) {
+                    r = cs.clearance;
+                    if (r > 0) from.row(i) = X.row(i);
+                    continue;
+                }
+                r = 0;
                 const double phi = cs.distance - off;
-                if (phi < 0) cc.vertex.push_back({i, phi, cs.normal, c.get()});
+                if (phi < 0) cc.vertex.push_back({i, phi, cs.normal, &c});
             }
+        }
         cc.vertex_valid = true;
     }
     for (const auto& c : cc.vertex) f(c.i, c.phi, c.n, *c.collider);

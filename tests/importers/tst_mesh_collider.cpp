@@ -2,6 +2,8 @@
 // generalized winding number, exact signed distance of a thin box, normals as
 // the gradient of the distance, offset and band.
 #include "engine/cloth/colliders.hpp"
+#include "engine/cloth/model.hpp"
+#include "engine/cloth/system.hpp"
 #include "engine/core/error.hpp"
 #include "importers/mesh_collider.hpp"
 #include "importers/mesh_import.hpp"
@@ -242,6 +244,64 @@ private slots:
         QVERIFY(group.query(Vec3(0.01, 0.02, 0.103), 0.01, s));
         QVERIFY(std::abs(s.distance - (0.003 - offset)) < 1e-12);
         QCOMPARE(mc.kind(), std::string("mesh"));
+    }
+
+    /// A point outside reports how far it may move and stay out of reach, and
+    /// that is true: within the clearance the query keeps returning false.
+    void clearanceIsSafe()
+    {
+        cloth::Positions X;
+        cloth::Triangles F;
+        make_box(Vec3(0.1, 0.1, 0.1), X, F);
+        const MeshCollider mc(X, F, 0.005);
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<double> U(-1, 1);
+        int checked = 0;
+        for (int n = 0; n < 2000; ++n) {
+            const Vec3 p(0.4 * U(rng), 0.4 * U(rng), 0.4 * U(rng));
+            cloth::ContactSample s;
+            if (mc.query(p, 0.01, s)) continue;
+            QVERIFY(s.clearance > 0);
+            for (int k = 0; k < 5; ++k) {
+                const Vec3 q = p + 0.999 * s.clearance * Vec3(U(rng), U(rng), U(rng)).normalized();
+                cloth::ContactSample t;
+                QVERIFY2(!mc.query(q, 0.01, t), qPrintable(QString("moved %1 of clearance %2").arg((q - p).norm()).arg(s.clearance)));
+                ++checked;
+            }
+        }
+        QVERIFY(checked > 1000);
+    }
+
+    /// The engine skips queries within the clearance: a cloth walking in and out
+    /// of contact gets bit for bit the energy and forces of a fresh system (one
+    /// that has never seen the earlier positions).
+    void skippedQueriesChangeNothing()
+    {
+        cloth::Positions X;
+        cloth::Triangles F;
+        make_box(Vec3(0.1, 0.1, 0.1), X, F);
+        cloth::ClothMesh mesh = cloth::make_rectangle(0.3, 0.3, 12, 12, Eigen::Vector3d(-0.15, -0.15, 0));
+        cloth::FabricParams p;
+        cloth::ClothSystem sys(mesh, cloth::make_model(mesh, p));
+        sys.add_collider(std::make_shared<MeshCollider>(X, F, 0.002));
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<double> U(-1, 1);
+        cloth::Positions x = sys.x;
+        x.col(2).array() += 0.13;
+        int in_contact = 0;
+        for (int step = 0; step < 60; ++step) {
+            // Steps from 0.1 mm to 3 cm, drifting down through the box's top.
+            const double h = std::pow(10.0, -4 + 2.5 * (U(rng) + 1) / 2);
+            for (int i = 0; i < x.rows(); ++i) x.row(i) += h * Eigen::RowVector3d(U(rng), U(rng), U(rng) - 0.3);
+            cloth::ClothSystem fresh = sys;
+            cloth::Positions f1, f2;
+            sys.conservative_forces(x, f1);
+            fresh.conservative_forces(x, f2);
+            QCOMPARE(sys.potential_energy(x), fresh.potential_energy(x));
+            QVERIFY((f1 - f2).cwiseAbs().maxCoeff() == 0.0);
+            in_contact += sys.vertex_contact_count(x) > 0;
+        }
+        QVERIFY2(in_contact > 5 && in_contact < 60, qPrintable(QString("%1 of 60 states in contact").arg(in_contact)));
     }
 
     void openMeshIsOneSided()

@@ -6,7 +6,7 @@
 // and accepts the settling parameters so their effect can be measured.
 //
 //   build/bin/bench_garment [--fabrics silk,denim] [--dt S] [--duration S] [--damping 1/S]
-//                           [--iterations N] [--body FILE] [--segments N] [--trace]
+//                           [--iterations N] [--body FILE] [--segments N] [--max-newton N] [--trace]
 #include "engine/cloth/blas_threads.hpp"
 #include "engine/library/starter.hpp"
 #include "importers/garment_metrics.hpp"
@@ -41,6 +41,7 @@ int main(int argc, char** argv)
         std::string body = importers::default_mannequin_path();
         importers::SkirtOptions so;
         bool trace = false;
+        long max_newton = 0;
         for (int i = 1; i < argc; ++i) {
             const std::string k = argv[i];
             auto next = [&]() -> std::string {
@@ -58,6 +59,7 @@ int main(int argc, char** argv)
             else if (k == "--body") body = next();
             else if (k == "--segments") so.segments = std::stoi(next());
             else if (k == "--trace") trace = true;
+            else if (k == "--max-newton") max_newton = std::stol(next());
             else throw std::runtime_error("unknown flag " + k);
         }
         std::printf("circle skirt on %s; settling dt %.4g s, %.3g s, damping %.3g 1/s, %d iterations per step\n", body.c_str(),
@@ -73,6 +75,7 @@ int main(int argc, char** argv)
             importers::Scene scene = importers::make_skirt_scene(m, preset, so);
             cloth::RestOptions ro = importers::garment_rest_options();
             ro.trace = trace;
+            if (max_newton > 0) ro.max_newton = max_newton;
             const cloth::SolverStatus st = importers::drape_to_rest(scene, ro, settle);
             const auto& sys = *scene.system;
             std::vector<char> pinned(static_cast<std::size_t>(sys.vertex_count()), 0);
@@ -81,7 +84,25 @@ int main(int argc, char** argv)
             std::printf("%-28s %8.1f %8ld %10s %8.1f %6d %9ld %7d %6.2f\n", preset.name.c_str(), st.wall_seconds, st.newton_iterations,
                         cloth::to_string(st.outcome).c_str(), gm.hem_mean_radius_m * 1e3, gm.hem_fold_count, gm.self_intersections,
                         gm.vertices_inside_body, load_average());
-            if (!st.converged()) std::printf("    %s\n", st.message.c_str());
+            if (!st.converged()) {
+                std::printf("    %s\n", st.message.c_str());
+                if (trace) { // where the unbalanced force sits
+                    cloth::Positions f;
+                    sys.conservative_forces(sys.x, f);
+                    std::vector<std::pair<double, int>> worst;
+                    for (int i = 0; i < sys.vertex_count(); ++i)
+                        if (!sys.pinned(i)) worst.push_back({f.row(i).norm() / (sys.model().mass(i) * 9.81), i});
+                    std::sort(worst.rbegin(), worst.rend());
+                    for (int k = 0; k < 12 && k < int(worst.size()); ++k) {
+                        const int i = worst[static_cast<std::size_t>(k)].second;
+                        importers::ClosestPoint cp;
+                        const bool near = m->collider->closest_point(sys.x.row(i).transpose(), cp, 1.0);
+                        std::printf("    v%d |f|/mg %.1f z %.3f body distance %.5f m triangle %d\n", i, worst[static_cast<std::size_t>(k)].first,
+                                    sys.x(i, 2), near ? m->collider->signed_distance(sys.x.row(i).transpose()) : -1.0,
+                                    near ? cp.triangle : -1);
+                    }
+                }
+            }
             std::fflush(stdout);
             rmin = std::min(rmin, gm.hem_mean_radius_m);
             rmax = std::max(rmax, gm.hem_mean_radius_m);

@@ -2,7 +2,11 @@
 # One Qt Test executable per test file. GUI tests run under xvfb-run when there is
 # no display, with Mesa's software OpenGL.
 function(drape_add_test)
-  cmake_parse_arguments(T "GUI" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(T "GUI" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS;SANITIZE_FUNCTIONS" ${ARGN})
+  # The sanitizer build runs the unit tests only: slow tests are not built there.
+  if(DRAPE_SANITIZE AND T_LABELS AND NOT "unit" IN_LIST T_LABELS)
+    return()
+  endif()
   find_package(Qt6 REQUIRED COMPONENTS Core Test)
   add_executable(${T_NAME} ${T_SOURCES})
   set_target_properties(${T_NAME} PROPERTIES AUTOMOC ON)
@@ -14,7 +18,14 @@ function(drape_add_test)
   if(T_GUI)
     add_test(NAME ${T_NAME} COMMAND ${PROJECT_SOURCE_DIR}/cmake/run-gui-test.sh $<TARGET_FILE:${T_NAME}>)
   else()
-    add_test(NAME ${T_NAME} COMMAND ${T_NAME})
+    # SANITIZE_FUNCTIONS: under the sanitizers (5-10x slower) a test that drives
+    # hundreds of simulations runs only these Qt Test functions; the code they
+    # reach is the same, the full test runs in the release build.
+    if(DRAPE_SANITIZE AND T_SANITIZE_FUNCTIONS)
+      add_test(NAME ${T_NAME} COMMAND ${T_NAME} ${T_SANITIZE_FUNCTIONS})
+    else()
+      add_test(NAME ${T_NAME} COMMAND ${T_NAME})
+    endif()
   endif()
   if(NOT T_LABELS)
     set(T_LABELS unit)

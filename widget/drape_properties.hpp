@@ -33,10 +33,10 @@
     X(QString, const QString&, bodyFile, setBodyFile, QString())                                       \
     /* a garment mesh file for clothShape = GarmentMesh (its top boundary is pinned) */                \
     X(QString, const QString&, garmentFile, setGarmentFile, QString())                                 \
-    /* semi-implicit Euler: cheap steps, so a small cloth drapes live; Implicit and Static for */      \
-    /* large or stiff cloths */                                                                        \
-    X(drape::widget::Drape::Integrator, drape::widget::Drape::Integrator, integrator, setIntegrator,    \
-      drape::widget::Drape::Symplectic)                                                                \
+    /* Static: the cloth comes to rest (the command line's path, frames shown as it goes); */          \
+    /* Symplectic/Implicit/RK4 animate the fall (an explicit one may never settle a stiff cloth) */    \
+    X(drape::widget::Drape::Integrator, drape::widget::Drape::Integrator, integrator, setIntegrator,   \
+      drape::widget::Drape::Static)                                                                    \
     X(QString, const QString&, texture, setTexture, QString()) /* BMP/PNG/JPEG, empty = plain */       \
     X(bool, bool, running, setRunning, false)                                                          \
     X(double, double, timeStep, setTimeStep, 0.0)                                                      \

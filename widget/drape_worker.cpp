@@ -298,7 +298,8 @@ void DrapeWorker::runStatic(long maxNewton)
             if (st.outcome != cloth::SolverStatus::Outcome::Cancelled) m_sys->x = r.x;
         } else if (fresh && m_spec->shape == Drape::Skirt) {
             // A skirt from its flat pattern: the settling fall, then the static
-            // solve, exactly what `drape garment` runs.
+            // solve, exactly what `drape garment` runs (with its iteration budget).
+            opt.max_newton = importers::garment_rest_options().max_newton;
             st = importers::settle_to_rest(*m_sys, opt);
         } else {
             st = cloth::run_to_rest(*m_sys, opt);

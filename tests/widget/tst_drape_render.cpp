@@ -64,7 +64,7 @@ private slots:
         m_view->setClothColor(kCloth);
         m_view->setShowColliders(false); // background everywhere the cloth is not
         m_view->setViewPreset(Drape::Top);
-        // A dynamic drape to rest (the widget's default integrator): what a user watches.
+        // A dynamic drape to rest (the symplectic integrator): what a user watches as it falls.
         m_view->setGridSize(20);
         m_view->setIntegrator(Drape::Symplectic);
         m_view->show();

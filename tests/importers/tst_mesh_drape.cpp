@@ -61,10 +61,15 @@ private slots:
         setup.disc_diameter = 0.18;
         setup.edge_radius = 0.0; // the mesh cylinder has a sharp edge too
         setup.grid = 40;         // no continuation: both solves start alike
-        const cloth::DrapeResult analytic = cloth::simulate_drape(fabric, setup);
+        // Vertex contact on both: edge contact is checked against curved analytic
+        // colliders only, and on the sharp rim it moves D by ~2 points (45.8 % with
+        // it, 43.7 % without, this set-up).
+        cloth::ModelOptions mo;
+        mo.edge_contact = false;
+        const cloth::DrapeResult analytic = cloth::simulate_drape(fabric, setup, {}, mo);
         QCOMPARE(analytic.status.outcome, cloth::SolverStatus::Outcome::Converged);
 
-        auto sys = cloth::make_drape_system(fabric, setup);
+        auto sys = cloth::make_drape_system(fabric, setup, mo);
         sys->clear_colliders();
         cloth::Positions X;
         cloth::Triangles F;

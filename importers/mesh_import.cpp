@@ -21,6 +21,7 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -487,6 +488,82 @@ void check_text(const std::string& path, const std::string& ext)
     }
 }
 
+/// Collada index lists (<p>) hold whole numbers separated by white space.
+/// assimp's reader loops over a <p> until its end, reading a number and then
+/// skipping spaces; a character that is neither (a run of '^' in a polylist:
+/// fuzz_mesh) moves it nowhere, and it appends index 0 until memory runs out
+/// (a 5 KB file, 2 GiB in one allocation). Checked in one pass over the file:
+/// comments, CDATA sections, processing instructions and declarations are
+/// skipped; inside <p> only digits, signs, spaces, tabs and line ends are
+/// taken, up to its end tag.
+void check_collada_indices(const std::string& path, const std::string& ext)
+{
+    if (ext != "dae") return;
+    std::ifstream in(path, std::ios::binary);
+    std::streambuf* sb = in.rdbuf();
+    constexpr int kEnd = std::char_traits<char>::eof();
+    std::uintmax_t line = 1;
+    auto next = [&]() {
+        const int c = sb->sbumpc();
+        if (c == '\n') ++line;
+        return c;
+    };
+    // Consumes up to and including `end`; false at the end of the file.
+    auto skip_past = [&](std::string_view end) {
+        std::string last;
+        for (int c; (c = next()) != kEnd;) {
+            last.push_back(static_cast<char>(c));
+            if (last.size() > end.size()) last.erase(0, 1);
+            if (last == end) return true;
+        }
+        return false;
+    };
+    auto is_space = [](int c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
+    for (int c = next(); c != kEnd; c = next()) {
+        if (c != '<') continue;
+        c = next();
+        if (c == '!') {
+            c = next();
+            if (c == '-' && next() == '-') {
+                if (!skip_past("-->")) return;
+            } else if (c == '[') {
+                if (!skip_past("]]>")) return;
+            } else if (c != '>' && !skip_past(">")) {
+                return;
+            }
+            continue;
+        }
+        if (c == '?') {
+            if (!skip_past("?>")) return;
+            continue;
+        }
+        if (c != 'p') continue;
+        c = next();
+        if (!is_space(c) && c != '>' && c != '/') continue; // another element (<param>, <polylist>, ...)
+        // The rest of the start tag: attributes (quoted values may hold '>').
+        int quote = 0, before = 'p';
+        while (c != kEnd && (quote || c != '>')) {
+            if (quote && c == quote) quote = 0;
+            else if (!quote && (c == '"' || c == '\'')) quote = c;
+            before = c;
+            c = next();
+        }
+        if (c == kEnd) return;
+        if (before == '/') continue; // <p/>
+        const std::uintmax_t start = line;
+        for (c = next(); c != kEnd; c = next()) {
+            if ((c >= '0' && c <= '9') || c == '+' || c == '-' || is_space(c)) continue;
+            if (c == '<' && sb->sgetc() == '/') break;
+            std::string word(1, static_cast<char>(c));
+            for (int d = sb->sgetc(); d != kEnd && !is_space(d) && d != '<' && word.size() < 20; d = sb->sgetc())
+                word.push_back(static_cast<char>(sb->sbumpc()));
+            throw FileError(path + ": line " + std::to_string(line) + ": the index list <p> (opened on line " + std::to_string(start) +
+                            ") holds '" + printable(word, 20) +
+                            "', not a whole number: Collada indices are whole numbers separated by spaces (a damaged file)");
+        }
+    }
+}
+
 } // namespace
 
 ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
@@ -510,6 +587,7 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
         throw FileError(path + ": '." + printable(ext, 20) + "' is not a mesh format this import takes (" + kTakenFormats + ")");
     check_header(path, ext, size);
     check_text(path, ext);
+    check_collada_indices(path, ext);
 
     Assimp::Importer importer;
     // Only the readers of the formats taken: a file is never handed to another

@@ -312,6 +312,20 @@ private slots:
         // Face indices out of range.
         const std::string bad_idx = model("invalid/malformed.obj");
         QCOMPARE(expect_file_error(bad_idx, [&] { import_scene(bad_idx); }), QString());
+        // A Collada index list holding characters that are not numbers (fuzz_mesh: a run of '^' in a <polylist>'s
+        // <p> made assimp append index 0 until it asked for 2 GiB) is refused by line before assimp reads it.
+        const std::string caret = tmp("caret.dae");
+        std::string duck = read_bytes(model("Collada/duck.dae"));
+        const auto p = duck.find("<p>");
+        QVERIFY(p != std::string::npos);
+        duck.insert(p + 3, "0 ^^^^ ");
+        write_bytes(caret, duck);
+        QCOMPARE(expect_file_error(caret, [&] { import_scene(caret); }), QString());
+        try {
+            import_scene(caret);
+        } catch (const FileError& e) {
+            QVERIFY2(QString(e.what()).contains("the index list <p>") && QString(e.what()).contains("'^^^^'"), e.what());
+        }
     }
 };
 

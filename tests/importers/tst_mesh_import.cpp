@@ -14,6 +14,7 @@
 #include <QtTest>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -305,6 +306,33 @@ private slots:
         write_bytes(ply, "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\n"
                          "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
         QCOMPARE(expect_file_error(ply, [&] { import_scene(ply); }), QString());
+        // An end_header word assimp does not recognise (followed by a vertical tab: fuzz_mesh) made its reader
+        // look for the end of the header past the end of the file, forever.
+        const std::string vt = tmp("vt.ply");
+        write_bytes(vt, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                        "element face 1\nproperty list uchar int vertex_indices\nend_header\v\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+        QCOMPARE(expect_file_error(vt, [&] { import_scene(vt); }), QString());
+        // A list longer than its row: assimp sized it by the number before the entries (fuzz_mesh: an ASCII face
+        // row '4444444444 7 6 5 4' made it ask for 3.8 GB). ASCII: the line holds 4 more values; binary: the rest
+        // of the file holds 3 int entries, the face claims 0xFFFFFFFF.
+        const std::string header = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                   "element face 1\nproperty list uint int vertex_indices\nend_header\n";
+        const std::string long_ascii = tmp("long.ply");
+        write_bytes(long_ascii, "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n4444444444 7 6 5 4\n");
+        QCOMPARE(expect_file_error(long_ascii, [&] { import_scene(long_ascii); }), QString());
+        const std::string ok_ascii = tmp("ok.ply");
+        write_bytes(ok_ascii, "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+        QCOMPARE(import_scene(ok_ascii).vertex_count(), 3);
+        std::string bin = "ply\nformat binary_little_endian 1.0\n" + header;
+        const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        bin.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+        const std::uint32_t face[4] = {3, 0, 1, 2};
+        const std::string ok_bin = tmp("ok_bin.ply"), long_bin = tmp("long_bin.ply");
+        write_bytes(ok_bin, bin + std::string(reinterpret_cast<const char*>(face), sizeof face));
+        QCOMPARE(import_scene(ok_bin).vertex_count(), 3);
+        const std::uint32_t bad_face[4] = {0xFFFFFFFFu, 0, 1, 2};
+        write_bytes(long_bin, bin + std::string(reinterpret_cast<const char*>(bad_face), sizeof bad_face));
+        QCOMPARE(expect_file_error(long_bin, [&] { import_scene(long_bin); }), QString());
         // Meshes without faces: points only, a point cloud.
         const std::string pts = model("OBJ/testpoints.obj"), cloud = model("OBJ/point_cloud.obj");
         QCOMPARE(expect_file_error(pts, [&] { import_scene(pts); }), QString());

@@ -506,6 +506,11 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
                 throw FileError(at_line() + "is not 'element NAME COUNT'");
             Element e;
             e.name = std::string(w[1]);
+            // assimp 5.2 sizes its vertex array by the first vertex element and
+            // writes the rows of a second one past its end (a heap overflow
+            // ASan caught at a later free: fuzz_mesh).
+            if (std::any_of(elements.begin(), elements.end(), [&](const Element& o) { return o.name == e.name; }))
+                throw FileError(at_line() + "declares element '" + printable(e.name, 40) + "' a second time");
             const std::string what = "element " + printable(e.name, 40);
             check_count(what, std::string(w[2]), 1, e.name == "face" ? kMaxTriangles : kMaxVertices);
             e.count = static_cast<std::uintmax_t>(std::stod(std::string(w[2])));

@@ -333,6 +333,14 @@ private slots:
         const std::uint32_t bad_face[4] = {0xFFFFFFFFu, 0, 1, 2};
         write_bytes(long_bin, bin + std::string(reinterpret_cast<const char*>(bad_face), sizeof bad_face));
         QCOMPARE(expect_file_error(long_bin, [&] { import_scene(long_bin); }), QString());
+        // An element declared twice: assimp sized its vertex array by the first and wrote the second's rows past
+        // its end (fuzz_mesh, a heap overflow found by ASan at a later free; valgrind names the write).
+        const std::string twice = tmp("twice.ply");
+        write_bytes(twice, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                           "0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n");
+        QCOMPARE(expect_file_error(twice, [&] { import_scene(twice); }), QString());
         // Meshes without faces: points only, a point cloud.
         const std::string pts = model("OBJ/testpoints.obj"), cloud = model("OBJ/point_cloud.obj");
         QCOMPARE(expect_file_error(pts, [&] { import_scene(pts); }), QString());

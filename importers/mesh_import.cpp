@@ -764,6 +764,8 @@ void check_collada_indices(const std::string& path, const std::string& ext)
         return false;
     };
     auto is_space = [](int c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
+    std::uintmax_t polylist = 0; // the line of the <polylist> we are in (0: none)
+    bool vcount = false;         // that polylist had its <vcount>
     for (int c = next(); c != kEnd; c = next()) {
         if (c != '<') continue;
         c = next();
@@ -782,9 +784,30 @@ void check_collada_indices(const std::string& path, const std::string& ext)
             if (!skip_past("?>")) return;
             continue;
         }
-        if (c != 'p') continue;
-        c = next();
-        if (!is_space(c) && c != '>' && c != '/') continue; // another element (<param>, <polylist>, ...)
+        // The element's name: <p>, and <polylist> with its <vcount> (a polylist
+        // without one before its <p>: assimp read the count of each polygon
+        // from an empty list, a null pointer, and `drape import` died of SIGSEGV).
+        const bool closing = c == '/';
+        if (closing) c = next();
+        std::string name;
+        while (c != kEnd && !is_space(c) && c != '>' && c != '/' && name.size() < 16) {
+            name.push_back(static_cast<char>(c));
+            c = next();
+        }
+        if (closing) {
+            if (name == "polylist") polylist = 0;
+            continue;
+        }
+        if (name == "polylist") {
+            polylist = line;
+            vcount = false;
+            continue;
+        }
+        if (name == "vcount") vcount = true;
+        if (name != "p") continue;
+        if (polylist && !vcount)
+            throw FileError(path + ": line " + std::to_string(line) + ": the <polylist> opened on line " + std::to_string(polylist) +
+                            " has an index list <p> but no <vcount> before it (the number of corners of each polygon)");
         // The rest of the start tag: attributes (quoted values may hold '>').
         int quote = 0, before = 'p';
         while (c != kEnd && (quote || c != '>')) {

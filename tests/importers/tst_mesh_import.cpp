@@ -362,6 +362,14 @@ private slots:
         } catch (const FileError& e) {
             QVERIFY2(QString(e.what()).contains("the index list <p>") && QString(e.what()).contains("'^^^^'"), e.what());
         }
+        // A <polylist> without its <vcount>: assimp read the polygon sizes from an empty list (SIGSEGV, fuzz_mesh).
+        const std::string novcount = tmp("novcount.dae");
+        std::string duck2 = read_bytes(model("Collada/duck.dae"));
+        const auto v0 = duck2.find("<vcount>"), v1 = duck2.find("</vcount>");
+        QVERIFY(v0 != std::string::npos && v1 != std::string::npos);
+        duck2.erase(v0, v1 + 9 - v0);
+        write_bytes(novcount, duck2);
+        QCOMPARE(expect_file_error(novcount, [&] { import_scene(novcount); }), QString());
     }
 };
 

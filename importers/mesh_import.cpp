@@ -12,6 +12,7 @@
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <optional>
 #include <array>
 #include <cctype>
 #include <cstdint>
@@ -733,6 +734,34 @@ void check_text(const std::string& path, const std::string& ext)
     }
 }
 
+/// The value of attribute `key` in a start tag's text ("" when absent).
+std::string text_attribute(const std::string& tag, const std::string& key)
+{
+    for (std::size_t pos = tag.find(key); pos != std::string::npos; pos = tag.find(key, pos + 1)) {
+        if (pos > 0 && !std::isspace(static_cast<unsigned char>(tag[pos - 1]))) continue;
+        std::size_t i = pos + key.size();
+        while (i < tag.size() && std::isspace(static_cast<unsigned char>(tag[i]))) ++i;
+        if (i >= tag.size() || tag[i] != '=') continue;
+        ++i;
+        while (i < tag.size() && std::isspace(static_cast<unsigned char>(tag[i]))) ++i;
+        if (i >= tag.size() || (tag[i] != '"' && tag[i] != '\'')) continue;
+        const char q = tag[i];
+        const std::size_t end = tag.find(q, i + 1);
+        if (end == std::string::npos) return {};
+        return tag.substr(i + 1, end - i - 1);
+    }
+    return {};
+}
+
+/// A whole-number attribute (at most 12 digits); nullopt when absent or not one.
+std::optional<std::uintmax_t> whole_attribute(const std::string& tag, const std::string& key)
+{
+    const std::string v = text_attribute(tag, key);
+    if (v.empty() || v.size() > 12 || !std::all_of(v.begin(), v.end(), [](char ch) { return ch >= '0' && ch <= '9'; }))
+        return std::nullopt;
+    return std::stoull(v);
+}
+
 /// Collada index lists (<p>) hold whole numbers separated by white space.
 /// assimp's reader loops over a <p> until its end, reading a number and then
 /// skipping spaces; a character that is neither (a run of '^' in a polylist:
@@ -764,6 +793,14 @@ void check_collada_indices(const std::string& path, const std::string& ext)
         return false;
     };
     auto is_space = [](int c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
+    // Value arrays: <float_array count="N"> etc. must hold N values (a count
+    // of 0 before 24 values: assimp 5.2 kept an empty array, an accessor read
+    // it through a null pointer and `drape import` died of SIGSEGV), and every
+    // <accessor> must read inside the array it names.
+    std::map<std::string, std::uintmax_t> arrays;
+    auto is_array = [](const std::string& n) {
+        return n == "float_array" || n == "int_array" || n == "Name_array" || n == "bool_array" || n == "IDREF_array";
+    };
     std::uintmax_t polylist = 0; // the line of the <polylist> we are in (0: none)
     bool vcount = false;         // that polylist had its <vcount>
     for (int c = next(); c != kEnd; c = next()) {
@@ -804,6 +841,50 @@ void check_collada_indices(const std::string& path, const std::string& ext)
             continue;
         }
         if (name == "vcount") vcount = true;
+        if (is_array(name) || name == "accessor") {
+            // The start tag's attributes (quoted values may hold '>').
+            std::string tag;
+            int q = 0;
+            while (c != kEnd && (q || c != '>') && tag.size() < 4096) {
+                if (q && c == q) q = 0;
+                else if (!q && (c == '"' || c == '\'')) q = c;
+                tag.push_back(static_cast<char>(c));
+                c = next();
+            }
+            if (c == kEnd) return;
+            const std::uintmax_t at = line;
+            const auto count = whole_attribute(tag, "count");
+            if (name == "accessor") {
+                // An accessor reads `count` groups of `stride` values from its
+                // array, starting at `offset`: they must be in the array.
+                std::string src = text_attribute(tag, "source");
+                if (!src.empty() && src[0] == '#') src.erase(0, 1);
+                const auto it = arrays.find(src);
+                const auto stride = whole_attribute(tag, "stride").value_or(1), offset = whole_attribute(tag, "offset").value_or(0);
+                if (count && it != arrays.end() && offset + *count * std::max<std::uintmax_t>(stride, 1) > it->second)
+                    throw FileError(path + ": line " + std::to_string(at) + ": an <accessor> reads " + std::to_string(*count) + " x " +
+                                    std::to_string(stride) + " values from offset " + std::to_string(offset) + " of '" +
+                                    printable(src, 60) + "', which holds " + std::to_string(it->second) + " (a damaged file)");
+                continue;
+            }
+            if (tag.empty() || tag.back() == '/') continue; // <float_array/>
+            // The values up to the end tag: as many as the count says.
+            std::uintmax_t values = 0;
+            bool in_value = false;
+            for (c = next(); c != kEnd && c != '<'; c = next()) {
+                if (is_space(c)) in_value = false;
+                else if (!in_value) {
+                    in_value = true;
+                    ++values;
+                }
+            }
+            if (!count || *count != values)
+                throw FileError(path + ": line " + std::to_string(at) + ": <" + name + "> declares count " +
+                                (count ? std::to_string(*count) : std::string("(none)")) + " but holds " + std::to_string(values) +
+                                " values (a damaged file)");
+            if (const std::string id = text_attribute(tag, "id"); !id.empty()) arrays[id] = values;
+            continue;
+        }
         if (name != "p") continue;
         if (polylist && !vcount)
             throw FileError(path + ": line " + std::to_string(line) + ": the <polylist> opened on line " + std::to_string(polylist) +

@@ -370,6 +370,33 @@ private slots:
         duck2.erase(v0, v1 + 9 - v0);
         write_bytes(novcount, duck2);
         QCOMPARE(expect_file_error(novcount, [&] { import_scene(novcount); }), QString());
+        // A <float_array> whose count is not its number of values: with count 0, assimp kept
+        // an empty array and an accessor read it through a null pointer (SIGSEGV, fuzz_mesh).
+        std::string cube = read_bytes(model("Collada/cube_triangulate.dae"));
+        const auto c0 = cube.find("<float_array");
+        QVERIFY(c0 != std::string::npos);
+        const auto c1 = cube.find("count=\"", c0);
+        const auto c2 = cube.find('"', c1 + 7);
+        const std::string zero = tmp("count0.dae");
+        write_bytes(zero, cube.substr(0, c1) + "count=\"0\"" + cube.substr(c2 + 1));
+        QCOMPARE(expect_file_error(zero, [&] { import_scene(zero); }), QString());
+        try {
+            import_scene(zero);
+        } catch (const FileError& e) {
+            QVERIFY2(QString(e.what()).contains("declares count 0 but holds"), e.what());
+        }
+        // An accessor reading past its array (the array's count and values agree).
+        const auto a0 = cube.find("<accessor");
+        const auto a1 = cube.find("count=\"", a0);
+        const auto a2 = cube.find('"', a1 + 7);
+        const std::string far = tmp("accessor.dae");
+        write_bytes(far, cube.substr(0, a1) + "count=\"1000\"" + cube.substr(a2 + 1));
+        try {
+            import_scene(far);
+            QFAIL("an accessor past its array was imported");
+        } catch (const FileError& e) {
+            QVERIFY2(QString(e.what()).contains("<accessor> reads 1000"), e.what());
+        }
     }
 };
 

@@ -32,6 +32,13 @@ void operator delete(void* p) noexcept { std::free(p); }
 void operator delete[](void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+// The nothrow forms too (std::stable_sort's temporary buffer uses them): every
+// new that the deletes above free must come from malloc, or a sanitizer build
+// reports an alloc-dealloc mismatch against its own nothrow new.
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return n > kMaxAllocation ? nullptr : std::malloc(n ? n : 1); }
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return n > kMaxAllocation ? nullptr : std::malloc(n ? n : 1); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
 
 namespace {
 /// A message for the terminal: messages quote names, cells and paths from

@@ -12,15 +12,19 @@
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <optional>
 #include <array>
 #include <cctype>
 #include <cstdint>
+#include <cstring>
+#include <functional>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -372,6 +376,273 @@ bool taken(const std::string& ext)
     return std::any_of(std::begin(kTakenExtensions), std::end(kTakenExtensions), [&](const char* e) { return ext == e; });
 }
 
+/// assimp's line reader (IOStreamBuffer::getNextLine in 5.2): a line ends at
+/// '\n', '\r', '\f' or NUL; one terminator is skipped after a line, and a line
+/// that starts with a terminator first skips up to and including the next
+/// '\n'. The PLY checks read the file the same way so that the header and the
+/// rows they look at are the ones assimp parses.
+class AssimpLines {
+public:
+    explicit AssimpLines(std::streambuf* sb) : sb_(sb) {}
+    /// The next line (false at the end of the file); throws past max_bytes.
+    bool next(std::string& out, std::size_t max_bytes, const std::function<void()>& too_long)
+    {
+        out.clear();
+        int c = sb_->sgetc();
+        if (c == kEnd) return false;
+        if (is_end(c)) {
+            do {
+                c = sb_->sbumpc();
+                if (c == kEnd) return false;
+                ++offset_;
+            } while (c != '\n');
+            if (sb_->sgetc() == kEnd) return false;
+        }
+        ++line_;
+        while ((c = sb_->sgetc()) != kEnd && !is_end(c)) {
+            if (out.size() == max_bytes) too_long();
+            out.push_back(static_cast<char>(c));
+            sb_->sbumpc();
+            ++offset_;
+        }
+        if (c != kEnd) {
+            sb_->sbumpc();
+            ++offset_;
+        }
+        return true;
+    }
+    std::uintmax_t offset() const { return offset_; } ///< of the next byte
+    std::uintmax_t line() const { return line_; }     ///< of the last line read (counted as assimp splits)
+
+private:
+    static constexpr int kEnd = std::char_traits<char>::eof();
+    static bool is_end(int c) { return c == '\n' || c == '\r' || c == '\f' || c == 0; }
+    std::streambuf* sb_;
+    std::uintmax_t offset_ = 0, line_ = 0;
+};
+
+/// Words separated by spaces and tabs (assimp's SkipSpaces).
+std::vector<std::string_view> ply_words(std::string_view line)
+{
+    std::vector<std::string_view> w;
+    std::size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+        const std::size_t b = i;
+        while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+        if (i > b) w.push_back(line.substr(b, i - b));
+    }
+    return w;
+}
+
+/// Bytes of a PLY data type (0: not a type assimp reads).
+int ply_type_size(std::string_view t)
+{
+    if (t == "char" || t == "int8" || t == "uchar" || t == "uint8") return 1;
+    if (t == "short" || t == "int16" || t == "ushort" || t == "uint16") return 2;
+    if (t == "int" || t == "int32" || t == "uint" || t == "uint32" || t == "float" || t == "float32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    return 0;
+}
+
+/// A PLY file checked the way assimp reads it (fuzz_mesh's findings): the
+/// first line "ply" (NUL bytes after the word made assimp's reader loop
+/// forever); an end_header line within the first 64 KiB as assimp recognises
+/// it (a damaged one, or the word followed by a vertical tab, and assimp reads
+/// past the end of the file looking for it, forever); element counts that fit
+/// the file and the scene limits; property lines assimp can read, directly
+/// after their element; and in the rows, every list's length: assimp sizes
+/// the list by the number it reads before looking at the entries (an ASCII row
+/// "4444444444...4 7 6 5 4" made it ask for 3.8 GB), so a list must not claim
+/// more entries than its row (ASCII) or the rest of the file (binary) holds.
+template <class Check>
+void check_ply(const std::string& path, std::uintmax_t size, const Check& check_count)
+{
+    constexpr std::size_t kHeadBytes = 64 * 1024;
+    constexpr std::size_t kRowBytes = 1 << 20;
+    std::ifstream in(path, std::ios::binary);
+    AssimpLines lines(in.rdbuf());
+    std::string line;
+    auto header_too_long = [&] {
+        throw FileError(path + ": the PLY header has no end_header line in its first " + std::to_string(kHeadBytes) + " bytes");
+    };
+    auto at_line = [&] { return path + ": PLY line " + std::to_string(lines.line()) + ": '" + printable(line, 60) + "' "; };
+    if (!lines.next(line, kHeadBytes, header_too_long) || line != "ply")
+        throw FileError(path + ": a PLY file must start with the line 'ply', not '" + printable(line, 40) + "'");
+    if (!lines.next(line, kHeadBytes, header_too_long)) header_too_long();
+    const auto format = ply_words(line);
+    if (format.size() < 2 || format[0] != "format") return; // assimp refuses it ("Missing format specification")
+    const bool ascii = format[1] == "ascii";
+    if (!ascii && format[1].substr(0, 7) != "binary_") return; // assimp refuses it ("Unknown file format")
+    const bool big_endian = !ascii && format[1].size() > 7 && (format[1][7] == 'b' || format[1][7] == 'B');
+
+    struct Property {
+        std::string name;
+        int size = 0;       // of a value, or of each list entry
+        int count_size = 0; // of a list's length (0: not a list)
+        bool count_signed = false, count_float = false;
+    };
+    struct Element {
+        std::string name;
+        std::uintmax_t count = 0;
+        std::vector<Property> props;
+    };
+    std::vector<Element> elements;
+    bool in_element = false; // the previous line was an element or one of its properties
+    for (;;) {
+        if (lines.offset() > kHeadBytes || !lines.next(line, kHeadBytes, header_too_long)) header_too_long();
+        const auto w = ply_words(line);
+        if (w.empty()) {
+            in_element = false;
+            continue;
+        }
+        const bool keyword = w[0] == "element" || w[0] == "property" || w[0].substr(0, 10) == "end_header";
+        if (keyword && (line[0] == ' ' || line[0] == '\t')) throw FileError(at_line() + "starts with spaces: a PLY header keyword starts its line");
+        // assimp's TokenMatch: the word, then a space, a tab or the line's end.
+        if (w[0] == "end_header") break;
+        if (w[0].substr(0, 10) == "end_header")
+            throw FileError(at_line() + "is not an end_header line (the word must end the line or be followed by a space)");
+        if (w[0] == "element") {
+            if (w.size() != 3 || !std::all_of(w[2].begin(), w[2].end(), [](char c) { return c >= '0' && c <= '9'; }))
+                throw FileError(at_line() + "is not 'element NAME COUNT'");
+            Element e;
+            e.name = std::string(w[1]);
+            // assimp 5.2 sizes its vertex array by the first vertex element and
+            // writes the rows of a second one past its end (a heap overflow
+            // ASan caught at a later free: fuzz_mesh).
+            if (std::any_of(elements.begin(), elements.end(), [&](const Element& o) { return o.name == e.name; }))
+                throw FileError(at_line() + "declares element '" + printable(e.name, 40) + "' a second time");
+            const std::string what = "element " + printable(e.name, 40);
+            check_count(what, std::string(w[2]), 1, e.name == "face" ? kMaxTriangles : kMaxVertices);
+            e.count = static_cast<std::uintmax_t>(std::stod(std::string(w[2])));
+            elements.push_back(std::move(e));
+            in_element = true;
+            continue;
+        }
+        if (w[0] == "property") {
+            if (!in_element) throw FileError(at_line() + "is a property line not directly after its element line (or its other properties)");
+            Property p;
+            if (w.size() == 5 && w[1] == "list") {
+                p.count_size = ply_type_size(w[2]);
+                p.size = ply_type_size(w[3]);
+                p.count_signed = w[2] == "char" || w[2] == "int8" || w[2] == "short" || w[2] == "int16" || w[2] == "int" || w[2] == "int32";
+                p.count_float = w[2] == "float" || w[2] == "float32" || w[2] == "double" || w[2] == "float64";
+                p.name = std::string(w[4]);
+            } else if (w.size() == 3) {
+                p.size = ply_type_size(w[1]);
+                p.name = std::string(w[2]);
+            }
+            if (p.size == 0 || (w.size() == 5 && p.count_size == 0))
+                throw FileError(at_line() + "is not 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' with TYPE one of char, uchar, "
+                                            "short, ushort, int, uint, float, double (or int8 ... float64)");
+            elements.back().props.push_back(std::move(p));
+            continue;
+        }
+        in_element = false; // comment, obj_info and unknown lines: assimp skips them
+    }
+
+    if (ascii) {
+        // One row a line; the length of a list is a whole number, at most the
+        // words left on its line.
+        auto row_too_long = [&] { throw FileError(path + ": PLY line " + std::to_string(lines.line() + 1) + " is longer than " +
+                                                  std::to_string(kRowBytes) + " bytes: not a row of an ASCII PLY file"); };
+        for (const Element& e : elements) {
+            for (std::uintmax_t r = 0; r < e.count; ++r) {
+                if (!lines.next(line, kRowBytes, row_too_long))
+                    throw FileError(path + ": the file ends at row " + std::to_string(r) + " of the " + std::to_string(e.count) + " of element '" +
+                                    printable(e.name, 40) + "' its header declares: a cut file");
+                const auto w = ply_words(line);
+                std::size_t i = 0;
+                for (const Property& p : e.props) {
+                    if (i >= w.size()) break;
+                    if (p.count_size == 0) {
+                        ++i;
+                        continue;
+                    }
+                    const std::string_view n = w[i++];
+                    const std::size_t left = w.size() - i;
+                    const bool digits = !n.empty() && n.size() <= 9 && std::all_of(n.begin(), n.end(), [](char c) { return c >= '0' && c <= '9'; });
+                    if (!digits || std::stoul(std::string(n)) > left)
+                        throw FileError(at_line() + "(element '" + printable(e.name, 40) + "' row " + std::to_string(r) + "): the list '" +
+                                        printable(p.name, 40) + "' declares '" + printable(n, 20) + "' entries, and the line holds " +
+                                        std::to_string(left) + " more values");
+                    i += std::stoul(std::string(n));
+                }
+            }
+        }
+        return;
+    }
+    // Binary: the rows follow the end_header line's terminator byte.
+    std::uintmax_t at = lines.offset();
+    std::streambuf* sb = in.rdbuf();
+    std::array<char, 4096> scratch{};
+    auto skip = [&](std::uintmax_t n) {
+        while (n > 0) {
+            const auto k = static_cast<std::streamsize>(std::min<std::uintmax_t>(n, scratch.size()));
+            if (sb->sgetn(scratch.data(), k) != k) return false;
+            n -= static_cast<std::uintmax_t>(k);
+            at += static_cast<std::uintmax_t>(k);
+        }
+        return true;
+    };
+    for (const Element& e : elements) {
+        std::uintmax_t row_bytes = 0;
+        bool lists = false;
+        for (const Property& p : e.props) {
+            row_bytes += static_cast<std::uintmax_t>(p.count_size ? p.count_size : p.size);
+            lists = lists || p.count_size;
+        }
+        auto cut = [&](std::uintmax_t r) {
+            throw FileError(path + ": the file ends inside row " + std::to_string(r) + " of the " + std::to_string(e.count) + " of element '" +
+                            printable(e.name, 40) + "' its header declares (byte " + std::to_string(at) + " of " + std::to_string(size) +
+                            "): a cut or corrupt file");
+        };
+        if (!lists) {
+            if (row_bytes * e.count > size - at)
+                throw FileError(path + ": element '" + printable(e.name, 40) + "' declares " + std::to_string(e.count) + " rows of " +
+                                std::to_string(row_bytes) + " bytes from byte " + std::to_string(at) + ", more than the file's " +
+                                std::to_string(size) + " bytes: a cut or corrupt file");
+            if (!skip(row_bytes * e.count)) cut(0);
+            continue;
+        }
+        for (std::uintmax_t r = 0; r < e.count; ++r) {
+            for (const Property& p : e.props) {
+                if (p.count_size == 0) {
+                    if (!skip(static_cast<std::uintmax_t>(p.size))) cut(r);
+                    continue;
+                }
+                unsigned char b[8] = {};
+                if (sb->sgetn(reinterpret_cast<char*>(b), p.count_size) != p.count_size) cut(r);
+                at += static_cast<std::uintmax_t>(p.count_size);
+                if (big_endian) std::reverse(b, b + p.count_size);
+                std::uint64_t raw = 0;
+                for (int k = p.count_size; k-- > 0;) raw = raw << 8 | b[k];
+                double n = 0;
+                if (p.count_float) {
+                    if (p.count_size == 4) {
+                        float f = 0;
+                        const auto u = static_cast<std::uint32_t>(raw);
+                        std::memcpy(&f, &u, 4);
+                        n = f;
+                    } else {
+                        std::memcpy(&n, &raw, 8);
+                    }
+                } else if (p.count_signed && (raw >> (8 * p.count_size - 1)) & 1) {
+                    n = -1;
+                } else {
+                    n = static_cast<double>(raw);
+                }
+                const double fits = static_cast<double>(size - at) / p.size;
+                if (!(n >= 0 && n == std::floor(n) && n <= fits))
+                    throw FileError(path + ": element '" + printable(e.name, 40) + "' row " + std::to_string(r) + " (byte " +
+                                    std::to_string(at - static_cast<std::uintmax_t>(p.count_size)) + "): the list '" + printable(p.name, 40) +
+                                    "' declares " + format_value(n) + " entries, more than the rest of the file holds: a corrupt file");
+                if (!skip(static_cast<std::uintmax_t>(n) * static_cast<std::uintmax_t>(p.size))) cut(r);
+            }
+        }
+    }
+}
+
 /// A PLY header checked before assimp reads the file (fuzz_mesh's findings):
 /// the first line "ply" (NUL bytes after the word made assimp's reader loop
 /// forever), an "end_header" line within the first 64 KiB (a damaged one did
@@ -414,31 +685,7 @@ void check_header(const std::string& path, const std::string& ext, std::uintmax_
     std::size_t first = 0;
     while (first < head.size() && std::isspace(static_cast<unsigned char>(head[first]))) ++first;
     const bool ply = ext == "ply" || lower(head.substr(first, 3)) == "ply";
-    std::istringstream ss(head);
-    if (ply) {
-        std::string line;
-        std::getline(ss, line);
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        if (line != "ply") throw FileError(path + ": a PLY file must start with the line 'ply', not '" + printable(line, 40) + "'");
-        // Lines are read the way assimp reads them: unknown ones are skipped
-        // (Blender 2.4 wrote its comment without the "comment" keyword).
-        int n = 1;
-        while (std::getline(ss, line)) {
-            ++n;
-            if (!line.empty() && line.back() == '\r') line.pop_back();
-            std::istringstream ls(line);
-            std::string kw;
-            ls >> kw;
-            if (kw == "end_header") return;
-            if (kw != "element") continue;
-            std::vector<std::string> w;
-            for (std::string x; ls >> x;) w.push_back(x);
-            if (w.size() != 2)
-                throw FileError(path + ": PLY header line " + std::to_string(n) + ": '" + printable(line, 60) + "' is not 'element NAME COUNT'");
-            check("element " + printable(w[0], 40), w[1], 1, w[0] == "face" ? kMaxTriangles : kMaxVertices);
-        }
-        throw FileError(path + ": the PLY header has no end_header line in its first " + std::to_string(kHeadBytes) + " bytes");
-    }
+    if (ply) check_ply(path, size, check);
 }
 
 /// Text formats are UTF-8 text without control characters besides tab, line
@@ -487,6 +734,185 @@ void check_text(const std::string& path, const std::string& ext)
     }
 }
 
+/// The value of attribute `key` in a start tag's text ("" when absent).
+std::string text_attribute(const std::string& tag, const std::string& key)
+{
+    for (std::size_t pos = tag.find(key); pos != std::string::npos; pos = tag.find(key, pos + 1)) {
+        if (pos > 0 && !std::isspace(static_cast<unsigned char>(tag[pos - 1]))) continue;
+        std::size_t i = pos + key.size();
+        while (i < tag.size() && std::isspace(static_cast<unsigned char>(tag[i]))) ++i;
+        if (i >= tag.size() || tag[i] != '=') continue;
+        ++i;
+        while (i < tag.size() && std::isspace(static_cast<unsigned char>(tag[i]))) ++i;
+        if (i >= tag.size() || (tag[i] != '"' && tag[i] != '\'')) continue;
+        const char q = tag[i];
+        const std::size_t end = tag.find(q, i + 1);
+        if (end == std::string::npos) return {};
+        return tag.substr(i + 1, end - i - 1);
+    }
+    return {};
+}
+
+/// A whole-number attribute (at most 12 digits); nullopt when absent or not one.
+std::optional<std::uintmax_t> whole_attribute(const std::string& tag, const std::string& key)
+{
+    const std::string v = text_attribute(tag, key);
+    if (v.empty() || v.size() > 12 || !std::all_of(v.begin(), v.end(), [](char ch) { return ch >= '0' && ch <= '9'; }))
+        return std::nullopt;
+    return std::stoull(v);
+}
+
+/// Collada index lists (<p>) hold whole numbers separated by white space.
+/// assimp's reader loops over a <p> until its end, reading a number and then
+/// skipping spaces; a character that is neither (a run of '^' in a polylist:
+/// fuzz_mesh) moves it nowhere, and it appends index 0 until memory runs out
+/// (a 5 KB file, 2 GiB in one allocation). Checked in one pass over the file:
+/// comments, CDATA sections, processing instructions and declarations are
+/// skipped; inside <p> only digits, signs, spaces, tabs and line ends are
+/// taken, up to its end tag.
+void check_collada_indices(const std::string& path, const std::string& ext)
+{
+    if (ext != "dae") return;
+    std::ifstream in(path, std::ios::binary);
+    std::streambuf* sb = in.rdbuf();
+    constexpr int kEnd = std::char_traits<char>::eof();
+    std::uintmax_t line = 1;
+    auto next = [&]() {
+        const int c = sb->sbumpc();
+        if (c == '\n') ++line;
+        return c;
+    };
+    // Consumes up to and including `end`; false at the end of the file.
+    auto skip_past = [&](std::string_view end) {
+        std::string last;
+        for (int c; (c = next()) != kEnd;) {
+            last.push_back(static_cast<char>(c));
+            if (last.size() > end.size()) last.erase(0, 1);
+            if (last == end) return true;
+        }
+        return false;
+    };
+    auto is_space = [](int c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
+    // Value arrays: <float_array count="N"> etc. must hold N values (a count
+    // of 0 before 24 values: assimp 5.2 kept an empty array, an accessor read
+    // it through a null pointer and `drape import` died of SIGSEGV), and every
+    // <accessor> must read inside the array it names.
+    std::map<std::string, std::uintmax_t> arrays;
+    auto is_array = [](const std::string& n) {
+        return n == "float_array" || n == "int_array" || n == "Name_array" || n == "bool_array" || n == "IDREF_array";
+    };
+    std::uintmax_t polylist = 0; // the line of the <polylist> we are in (0: none)
+    bool vcount = false;         // that polylist had its <vcount>
+    for (int c = next(); c != kEnd; c = next()) {
+        if (c != '<') continue;
+        c = next();
+        if (c == '!') {
+            c = next();
+            if (c == '-' && next() == '-') {
+                if (!skip_past("-->")) return;
+            } else if (c == '[') {
+                if (!skip_past("]]>")) return;
+            } else if (c != '>' && !skip_past(">")) {
+                return;
+            }
+            continue;
+        }
+        if (c == '?') {
+            if (!skip_past("?>")) return;
+            continue;
+        }
+        // The element's name: <p>, and <polylist> with its <vcount> (a polylist
+        // without one before its <p>: assimp read the count of each polygon
+        // from an empty list, a null pointer, and `drape import` died of SIGSEGV).
+        const bool closing = c == '/';
+        if (closing) c = next();
+        std::string name;
+        while (c != kEnd && !is_space(c) && c != '>' && c != '/' && name.size() < 16) {
+            name.push_back(static_cast<char>(c));
+            c = next();
+        }
+        if (closing) {
+            if (name == "polylist") polylist = 0;
+            continue;
+        }
+        if (name == "polylist") {
+            polylist = line;
+            vcount = false;
+            continue;
+        }
+        if (name == "vcount") vcount = true;
+        if (is_array(name) || name == "accessor") {
+            // The start tag's attributes (quoted values may hold '>').
+            std::string tag;
+            int q = 0;
+            while (c != kEnd && (q || c != '>') && tag.size() < 4096) {
+                if (q && c == q) q = 0;
+                else if (!q && (c == '"' || c == '\'')) q = c;
+                tag.push_back(static_cast<char>(c));
+                c = next();
+            }
+            if (c == kEnd) return;
+            const std::uintmax_t at = line;
+            const auto count = whole_attribute(tag, "count");
+            if (name == "accessor") {
+                // An accessor reads `count` groups of `stride` values from its
+                // array, starting at `offset`: they must be in the array.
+                std::string src = text_attribute(tag, "source");
+                if (!src.empty() && src[0] == '#') src.erase(0, 1);
+                const auto it = arrays.find(src);
+                const auto stride = whole_attribute(tag, "stride").value_or(1), offset = whole_attribute(tag, "offset").value_or(0);
+                if (count && it != arrays.end() && offset + *count * std::max<std::uintmax_t>(stride, 1) > it->second)
+                    throw FileError(path + ": line " + std::to_string(at) + ": an <accessor> reads " + std::to_string(*count) + " x " +
+                                    std::to_string(stride) + " values from offset " + std::to_string(offset) + " of '" +
+                                    printable(src, 60) + "', which holds " + std::to_string(it->second) + " (a damaged file)");
+                continue;
+            }
+            if (tag.empty() || tag.back() == '/') continue; // <float_array/>
+            // The values up to the end tag: as many as the count says.
+            std::uintmax_t values = 0;
+            bool in_value = false;
+            for (c = next(); c != kEnd && c != '<'; c = next()) {
+                if (is_space(c)) in_value = false;
+                else if (!in_value) {
+                    in_value = true;
+                    ++values;
+                }
+            }
+            if (!count || *count != values)
+                throw FileError(path + ": line " + std::to_string(at) + ": <" + name + "> declares count " +
+                                (count ? std::to_string(*count) : std::string("(none)")) + " but holds " + std::to_string(values) +
+                                " values (a damaged file)");
+            if (const std::string id = text_attribute(tag, "id"); !id.empty()) arrays[id] = values;
+            continue;
+        }
+        if (name != "p") continue;
+        if (polylist && !vcount)
+            throw FileError(path + ": line " + std::to_string(line) + ": the <polylist> opened on line " + std::to_string(polylist) +
+                            " has an index list <p> but no <vcount> before it (the number of corners of each polygon)");
+        // The rest of the start tag: attributes (quoted values may hold '>').
+        int quote = 0, before = 'p';
+        while (c != kEnd && (quote || c != '>')) {
+            if (quote && c == quote) quote = 0;
+            else if (!quote && (c == '"' || c == '\'')) quote = c;
+            before = c;
+            c = next();
+        }
+        if (c == kEnd) return;
+        if (before == '/') continue; // <p/>
+        const std::uintmax_t start = line;
+        for (c = next(); c != kEnd; c = next()) {
+            if ((c >= '0' && c <= '9') || c == '+' || c == '-' || is_space(c)) continue;
+            if (c == '<' && sb->sgetc() == '/') break;
+            std::string word(1, static_cast<char>(c));
+            for (int d = sb->sgetc(); d != kEnd && !is_space(d) && d != '<' && word.size() < 20; d = sb->sgetc())
+                word.push_back(static_cast<char>(sb->sbumpc()));
+            throw FileError(path + ": line " + std::to_string(line) + ": the index list <p> (opened on line " + std::to_string(start) +
+                            ") holds '" + printable(word, 20) +
+                            "', not a whole number: Collada indices are whole numbers separated by spaces (a damaged file)");
+        }
+    }
+}
+
 } // namespace
 
 ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
@@ -510,6 +936,7 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
         throw FileError(path + ": '." + printable(ext, 20) + "' is not a mesh format this import takes (" + kTakenFormats + ")");
     check_header(path, ext, size);
     check_text(path, ext);
+    check_collada_indices(path, ext);
 
     Assimp::Importer importer;
     // Only the readers of the formats taken: a file is never handed to another

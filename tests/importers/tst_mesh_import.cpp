@@ -14,6 +14,7 @@
 #include <QtTest>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -305,6 +306,41 @@ private slots:
         write_bytes(ply, "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\n"
                          "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
         QCOMPARE(expect_file_error(ply, [&] { import_scene(ply); }), QString());
+        // An end_header word assimp does not recognise (followed by a vertical tab: fuzz_mesh) made its reader
+        // look for the end of the header past the end of the file, forever.
+        const std::string vt = tmp("vt.ply");
+        write_bytes(vt, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                        "element face 1\nproperty list uchar int vertex_indices\nend_header\v\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+        QCOMPARE(expect_file_error(vt, [&] { import_scene(vt); }), QString());
+        // A list longer than its row: assimp sized it by the number before the entries (fuzz_mesh: an ASCII face
+        // row '4444444444 7 6 5 4' made it ask for 3.8 GB). ASCII: the line holds 4 more values; binary: the rest
+        // of the file holds 3 int entries, the face claims 0xFFFFFFFF.
+        const std::string header = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                   "element face 1\nproperty list uint int vertex_indices\nend_header\n";
+        const std::string long_ascii = tmp("long.ply");
+        write_bytes(long_ascii, "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n4444444444 7 6 5 4\n");
+        QCOMPARE(expect_file_error(long_ascii, [&] { import_scene(long_ascii); }), QString());
+        const std::string ok_ascii = tmp("ok.ply");
+        write_bytes(ok_ascii, "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+        QCOMPARE(import_scene(ok_ascii).vertex_count(), 3);
+        std::string bin = "ply\nformat binary_little_endian 1.0\n" + header;
+        const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        bin.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+        const std::uint32_t face[4] = {3, 0, 1, 2};
+        const std::string ok_bin = tmp("ok_bin.ply"), long_bin = tmp("long_bin.ply");
+        write_bytes(ok_bin, bin + std::string(reinterpret_cast<const char*>(face), sizeof face));
+        QCOMPARE(import_scene(ok_bin).vertex_count(), 3);
+        const std::uint32_t bad_face[4] = {0xFFFFFFFFu, 0, 1, 2};
+        write_bytes(long_bin, bin + std::string(reinterpret_cast<const char*>(bad_face), sizeof bad_face));
+        QCOMPARE(expect_file_error(long_bin, [&] { import_scene(long_bin); }), QString());
+        // An element declared twice: assimp sized its vertex array by the first and wrote the second's rows past
+        // its end (fuzz_mesh, a heap overflow found by ASan at a later free; valgrind names the write).
+        const std::string twice = tmp("twice.ply");
+        write_bytes(twice, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                           "0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n");
+        QCOMPARE(expect_file_error(twice, [&] { import_scene(twice); }), QString());
         // Meshes without faces: points only, a point cloud.
         const std::string pts = model("OBJ/testpoints.obj"), cloud = model("OBJ/point_cloud.obj");
         QCOMPARE(expect_file_error(pts, [&] { import_scene(pts); }), QString());
@@ -312,6 +348,55 @@ private slots:
         // Face indices out of range.
         const std::string bad_idx = model("invalid/malformed.obj");
         QCOMPARE(expect_file_error(bad_idx, [&] { import_scene(bad_idx); }), QString());
+        // A Collada index list holding characters that are not numbers (fuzz_mesh: a run of '^' in a <polylist>'s
+        // <p> made assimp append index 0 until it asked for 2 GiB) is refused by line before assimp reads it.
+        const std::string caret = tmp("caret.dae");
+        std::string duck = read_bytes(model("Collada/duck.dae"));
+        const auto p = duck.find("<p>");
+        QVERIFY(p != std::string::npos);
+        duck.insert(p + 3, "0 ^^^^ ");
+        write_bytes(caret, duck);
+        QCOMPARE(expect_file_error(caret, [&] { import_scene(caret); }), QString());
+        try {
+            import_scene(caret);
+        } catch (const FileError& e) {
+            QVERIFY2(QString(e.what()).contains("the index list <p>") && QString(e.what()).contains("'^^^^'"), e.what());
+        }
+        // A <polylist> without its <vcount>: assimp read the polygon sizes from an empty list (SIGSEGV, fuzz_mesh).
+        const std::string novcount = tmp("novcount.dae");
+        std::string duck2 = read_bytes(model("Collada/duck.dae"));
+        const auto v0 = duck2.find("<vcount>"), v1 = duck2.find("</vcount>");
+        QVERIFY(v0 != std::string::npos && v1 != std::string::npos);
+        duck2.erase(v0, v1 + 9 - v0);
+        write_bytes(novcount, duck2);
+        QCOMPARE(expect_file_error(novcount, [&] { import_scene(novcount); }), QString());
+        // A <float_array> whose count is not its number of values: with count 0, assimp kept
+        // an empty array and an accessor read it through a null pointer (SIGSEGV, fuzz_mesh).
+        std::string cube = read_bytes(model("Collada/cube_triangulate.dae"));
+        const auto c0 = cube.find("<float_array");
+        QVERIFY(c0 != std::string::npos);
+        const auto c1 = cube.find("count=\"", c0);
+        const auto c2 = cube.find('"', c1 + 7);
+        const std::string zero = tmp("count0.dae");
+        write_bytes(zero, cube.substr(0, c1) + "count=\"0\"" + cube.substr(c2 + 1));
+        QCOMPARE(expect_file_error(zero, [&] { import_scene(zero); }), QString());
+        try {
+            import_scene(zero);
+        } catch (const FileError& e) {
+            QVERIFY2(QString(e.what()).contains("declares count 0 but holds"), e.what());
+        }
+        // An accessor reading past its array (the array's count and values agree).
+        const auto a0 = cube.find("<accessor");
+        const auto a1 = cube.find("count=\"", a0);
+        const auto a2 = cube.find('"', a1 + 7);
+        const std::string far = tmp("accessor.dae");
+        write_bytes(far, cube.substr(0, a1) + "count=\"1000\"" + cube.substr(a2 + 1));
+        try {
+            import_scene(far);
+            QFAIL("an accessor past its array was imported");
+        } catch (const FileError& e) {
+            QVERIFY2(QString(e.what()).contains("<accessor> reads 1000"), e.what());
+        }
     }
 };
 

@@ -801,6 +801,9 @@ void check_collada_indices(const std::string& path, const std::string& ext)
     auto is_array = [](const std::string& n) {
         return n == "float_array" || n == "int_array" || n == "Name_array" || n == "bool_array" || n == "IDREF_array";
     };
+    struct Weights {
+        std::uintmax_t line = 0, count = 0, inputs = 0, vcount_values = 0, vcount_sum = 0, v_values = 0;
+    } weights; // the <vertex_weights> we are in (line 0: none)
     std::uintmax_t polylist = 0; // the line of the <polylist> we are in (0: none)
     bool vcount = false;         // that polylist had its <vcount>
     for (int c = next(); c != kEnd; c = next()) {
@@ -833,11 +836,68 @@ void check_collada_indices(const std::string& path, const std::string& ext)
         }
         if (closing) {
             if (name == "polylist") polylist = 0;
+            if (name == "vertex_weights" && weights.line) {
+                // Skin weights: one <vcount> value per vertex, and in <v> as
+                // many (joint, weight) groups as the <vcount> values add up to.
+                // Counts that disagree made assimp 5.2 read past its lists (SIGSEGV, fuzz_mesh).
+                const std::string at = path + ": line " + std::to_string(weights.line) + ": <vertex_weights count=\"" +
+                                       std::to_string(weights.count) + "\">";
+                if (weights.vcount_values != weights.count)
+                    throw FileError(at + " has " + std::to_string(weights.vcount_values) + " values in its <vcount> (one per vertex expected; a damaged file)");
+                if (weights.v_values != weights.vcount_sum * std::max<std::uintmax_t>(weights.inputs, 1))
+                    throw FileError(at + " has " + std::to_string(weights.v_values) + " values in its <v>, not " +
+                                    std::to_string(weights.vcount_sum) + " x " + std::to_string(weights.inputs) +
+                                    " (the <vcount> values times the inputs; a damaged file)");
+                weights = {};
+            }
+            continue;
+        }
+        if (weights.line && (name == "input" || name == "vcount" || name == "v")) {
+            if (name == "input") {
+                ++weights.inputs;
+                continue;
+            }
+            while (c != kEnd && c != '>') c = next();
+            if (c == kEnd) return;
+            // The values up to the end tag (whole numbers; others are the <p> check's kind of damage).
+            std::uintmax_t values = 0, sum = 0, current = 0;
+            bool in_value = false;
+            for (c = next(); c != kEnd && c != '<'; c = next()) {
+                if (is_space(c)) {
+                    if (in_value) sum += current;
+                    in_value = false;
+                    current = 0;
+                } else {
+                    if (!in_value) ++values;
+                    in_value = true;
+                    current = (c >= '0' && c <= '9' && current < (std::uintmax_t(1) << 40)) ? current * 10 + std::uintmax_t(c - '0') : current;
+                }
+            }
+            if (in_value) sum += current;
+            if (name == "vcount") {
+                weights.vcount_values = values;
+                weights.vcount_sum = sum;
+            } else {
+                weights.v_values = values;
+            }
             continue;
         }
         if (name == "polylist") {
             polylist = line;
             vcount = false;
+            continue;
+        }
+        if (name == "vertex_weights") {
+            std::string tag;
+            while (c != kEnd && c != '>' && tag.size() < 4096) {
+                tag.push_back(static_cast<char>(c));
+                c = next();
+            }
+            if (c == kEnd) return;
+            if (!tag.empty() && tag.back() == '/') continue;
+            weights = {};
+            weights.line = line;
+            weights.count = whole_attribute(tag, "count").value_or(0);
             continue;
         }
         if (name == "vcount") vcount = true;

@@ -397,6 +397,20 @@ private slots:
         } catch (const FileError& e) {
             QVERIFY2(QString(e.what()).contains("<accessor> reads 1000"), e.what());
         }
+        // Skin weights whose count is not their <vcount>'s: assimp read past its lists (SIGSEGV, fuzz_mesh).
+        std::string skin = read_bytes(model("Collada/box_nested_animation.dae"));
+        const auto w0 = skin.find("<vertex_weights count=\"8\"");
+        QVERIFY(w0 != std::string::npos);
+        skin.replace(w0, 25, "<vertex_weights count=\"4\"");
+        const std::string weights = tmp("weights.dae");
+        write_bytes(weights, skin);
+        try {
+            import_scene(weights);
+            QFAIL("skin weights with the wrong count were imported");
+        } catch (const FileError& e) {
+            QVERIFY2(QString(e.what()).contains("<vertex_weights count=\"4\"> has 8 values in its <vcount>"), e.what());
+        }
+        QVERIFY(!import_scene(model("Collada/box_nested_animation.dae")).meshes.empty()); // the intact file still imports
     }
 };
 

@@ -13,6 +13,7 @@
 #include "importers/garment_scene.hpp"
 
 #include <algorithm>
+#include <sys/resource.h>
 #include <chrono>
 #include <stdexcept>
 #include <cstdio>
@@ -24,6 +25,13 @@
 using namespace drape;
 
 namespace {
+
+long peak_mb()
+{
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss / 1024;
+}
 
 double load_average()
 {
@@ -66,8 +74,8 @@ int main(int argc, char** argv)
                     settle.dt, settle.duration, settle.damping_rate, settle.iterations);
         cloth::single_threaded_blas(); // as the drape command runs
         auto m = std::make_shared<importers::Mannequin>(importers::load_mannequin(body));
-        std::printf("%-28s %8s %8s %10s %8s %6s %9s %7s %6s\n", "fabric", "wall_s", "newton", "status", "hem_mm", "folds",
-                    "self_int", "inside", "load");
+        std::printf("%-28s %8s %8s %10s %8s %6s %9s %7s %8s %6s\n", "fabric", "wall_s", "newton", "status", "hem_mm", "folds",
+                    "self_int", "inside", "peak_MB", "load");
         double rmin = 1e9, rmax = 0;
         for (const auto& name : fabrics) {
             const auto starter = library::find_starter(name);
@@ -81,9 +89,22 @@ int main(int argc, char** argv)
             std::vector<char> pinned(static_cast<std::size_t>(sys.vertex_count()), 0);
             for (int i = 0; i < sys.vertex_count(); ++i) pinned[static_cast<std::size_t>(i)] = sys.pinned(i) ? 1 : 0;
             const auto gm = importers::garment_metrics(sys.x, sys.mesh().F, pinned, m.get(), scene.waist.centre);
-            std::printf("%-28s %8.1f %8ld %10s %8.1f %6d %9ld %7d %6.2f\n", preset.name.c_str(), st.wall_seconds, st.newton_iterations,
+            std::printf("%-28s %8.1f %8ld %10s %8.1f %6d %9ld %7d %8ld %6.2f\n", preset.name.c_str(), st.wall_seconds, st.newton_iterations,
                         cloth::to_string(st.outcome).c_str(), gm.hem_mean_radius_m * 1e3, gm.hem_fold_count, gm.self_intersections,
-                        gm.vertices_inside_body, load_average());
+                        gm.vertices_inside_body, peak_mb(), load_average());
+            if (st.converged()) {
+                // Warm: the same skirt with 10 % more bending, from this rest state (as a fit re-solves).
+                fabric::FabricPreset stiffer = preset;
+                cloth::FabricParams p = stiffer.params;
+                p[cloth::Param::BendWarp] *= 1.1;
+                p[cloth::Param::BendWeft] *= 1.1;
+                stiffer.set_params(p);
+                importers::Scene warm = importers::make_skirt_scene(m, stiffer, so);
+                warm.system->x = sys.x;
+                const cloth::SolverStatus ws = cloth::run_to_rest(*warm.system, ro);
+                std::printf("%-28s %8.1f %8ld %10s   (warm: +10 %% bending from the rest state)  %8ld %6.2f\n", "", ws.wall_seconds,
+                            ws.newton_iterations, cloth::to_string(ws.outcome).c_str(), peak_mb(), load_average());
+            }
             if (!st.converged()) {
                 std::printf("    %s\n", st.message.c_str());
                 if (trace) { // where the unbalanced force sits

@@ -86,9 +86,7 @@ int main(int argc, char** argv)
             if (max_newton > 0) ro.max_newton = max_newton;
             const cloth::SolverStatus st = importers::drape_to_rest(scene, ro, settle);
             const auto& sys = *scene.system;
-            std::vector<char> pinned(static_cast<std::size_t>(sys.vertex_count()), 0);
-            for (int i = 0; i < sys.vertex_count(); ++i) pinned[static_cast<std::size_t>(i)] = sys.pinned(i) ? 1 : 0;
-            const auto gm = importers::garment_metrics(sys.x, sys.mesh().F, pinned, m.get(), scene.waist.centre);
+            const auto gm = importers::garment_metrics(sys.x, sys.mesh().F, sys.model().pinned, m.get(), scene.waist.centre);
             std::printf("%-28s %8.1f %8ld %10s %8.1f %6d %9ld %7d %8ld %6.2f\n", preset.name.c_str(), st.wall_seconds, st.newton_iterations,
                         cloth::to_string(st.outcome).c_str(), gm.hem_mean_radius_m * 1e3, gm.hem_fold_count, gm.self_intersections,
                         gm.vertices_inside_body, peak_mb(), load_average());

@@ -86,10 +86,8 @@ int run(const std::vector<std::string>& argv)
         };
     const cloth::SolverStatus st = importers::drape_to_rest(scene, ro);
     if (!quiet && tty) std::fprintf(stderr, "\n");
-    std::vector<char> pinned(static_cast<std::size_t>(sys.vertex_count()), 0);
-    for (int i = 0; i < sys.vertex_count(); ++i) pinned[static_cast<std::size_t>(i)] = sys.pinned(i) ? 1 : 0;
     const importers::GarmentMetrics gm =
-        importers::garment_metrics(sys.x, sys.mesh().F, pinned, mannequin.get(), scene.waist.centre);
+        importers::garment_metrics(sys.x, sys.mesh().F, sys.model().pinned, mannequin.get(), scene.waist.centre);
 
     nlohmann::json j;
     j["converged"] = st.converged();

@@ -793,6 +793,49 @@ void check_collada_indices(const std::string& path, const std::string& ext)
         return false;
     };
     auto is_space = [](int c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
+    // The rest of a start tag from `c` up to its '>' (quoted values may hold
+    // '>'); `c` is left on the '>' (kEnd at the end of the file). The text
+    // kept for attributes is capped at 4 KiB; `self_closing`: it ends in "/>".
+    struct Tag {
+        std::string text;
+        bool self_closing = false;
+    };
+    auto read_tag = [&](int& c) {
+        Tag t;
+        int quote = 0, before = 0;
+        while (c != kEnd && (quote || c != '>')) {
+            if (quote && c == quote) quote = 0;
+            else if (!quote && (c == '"' || c == '\'')) quote = c;
+            if (t.text.size() < 4096) t.text.push_back(static_cast<char>(c));
+            before = c;
+            c = next();
+        }
+        t.self_closing = before == '/';
+        return t;
+    };
+    // The values of an element's text up to the next tag: how many (separated
+    // by white space) and the sum of those that are whole numbers.
+    struct Values {
+        std::uintmax_t count = 0, sum = 0;
+    };
+    auto read_values = [&](int& c) {
+        Values v;
+        std::uintmax_t current = 0;
+        bool in_value = false;
+        for (c = next(); c != kEnd && c != '<'; c = next()) {
+            if (is_space(c)) {
+                if (in_value) v.sum += current;
+                in_value = false;
+                current = 0;
+            } else {
+                if (!in_value) ++v.count;
+                in_value = true;
+                current = (c >= '0' && c <= '9' && current < (std::uintmax_t(1) << 40)) ? current * 10 + std::uintmax_t(c - '0') : current;
+            }
+        }
+        if (in_value) v.sum += current;
+        return v;
+    };
     // Value arrays: <float_array count="N"> etc. must hold N values (a count
     // of 0 before 24 values: assimp 5.2 kept an empty array, an accessor read
     // it through a null pointer and `drape import` died of SIGSEGV), and every
@@ -857,28 +900,15 @@ void check_collada_indices(const std::string& path, const std::string& ext)
                 ++weights.inputs;
                 continue;
             }
-            while (c != kEnd && c != '>') c = next();
+            read_tag(c);
             if (c == kEnd) return;
             // The values up to the end tag (whole numbers; others are the <p> check's kind of damage).
-            std::uintmax_t values = 0, sum = 0, current = 0;
-            bool in_value = false;
-            for (c = next(); c != kEnd && c != '<'; c = next()) {
-                if (is_space(c)) {
-                    if (in_value) sum += current;
-                    in_value = false;
-                    current = 0;
-                } else {
-                    if (!in_value) ++values;
-                    in_value = true;
-                    current = (c >= '0' && c <= '9' && current < (std::uintmax_t(1) << 40)) ? current * 10 + std::uintmax_t(c - '0') : current;
-                }
-            }
-            if (in_value) sum += current;
+            const Values v = read_values(c);
             if (name == "vcount") {
-                weights.vcount_values = values;
-                weights.vcount_sum = sum;
+                weights.vcount_values = v.count;
+                weights.vcount_sum = v.sum;
             } else {
-                weights.v_values = values;
+                weights.v_values = v.count;
             }
             continue;
         }
@@ -888,29 +918,18 @@ void check_collada_indices(const std::string& path, const std::string& ext)
             continue;
         }
         if (name == "vertex_weights") {
-            std::string tag;
-            while (c != kEnd && c != '>' && tag.size() < 4096) {
-                tag.push_back(static_cast<char>(c));
-                c = next();
-            }
+            const Tag tag = read_tag(c);
             if (c == kEnd) return;
-            if (!tag.empty() && tag.back() == '/') continue;
+            if (tag.self_closing) continue;
             weights = {};
             weights.line = line;
-            weights.count = whole_attribute(tag, "count").value_or(0);
+            weights.count = whole_attribute(tag.text, "count").value_or(0);
             continue;
         }
         if (name == "vcount") vcount = true;
         if (is_array(name) || name == "accessor") {
-            // The start tag's attributes (quoted values may hold '>').
-            std::string tag;
-            int q = 0;
-            while (c != kEnd && (q || c != '>') && tag.size() < 4096) {
-                if (q && c == q) q = 0;
-                else if (!q && (c == '"' || c == '\'')) q = c;
-                tag.push_back(static_cast<char>(c));
-                c = next();
-            }
+            const Tag t = read_tag(c);
+            const std::string& tag = t.text;
             if (c == kEnd) return;
             const std::uintmax_t at = line;
             const auto count = whole_attribute(tag, "count");
@@ -927,17 +946,9 @@ void check_collada_indices(const std::string& path, const std::string& ext)
                                     printable(src, 60) + "', which holds " + std::to_string(it->second) + " (a damaged file)");
                 continue;
             }
-            if (tag.empty() || tag.back() == '/') continue; // <float_array/>
+            if (tag.empty() || t.self_closing) continue; // <float_array> without attributes, <float_array/>
             // The values up to the end tag: as many as the count says.
-            std::uintmax_t values = 0;
-            bool in_value = false;
-            for (c = next(); c != kEnd && c != '<'; c = next()) {
-                if (is_space(c)) in_value = false;
-                else if (!in_value) {
-                    in_value = true;
-                    ++values;
-                }
-            }
+            const std::uintmax_t values = read_values(c).count;
             if (!count || *count != values)
                 throw FileError(path + ": line " + std::to_string(at) + ": <" + name + "> declares count " +
                                 (count ? std::to_string(*count) : std::string("(none)")) + " but holds " + std::to_string(values) +
@@ -949,16 +960,9 @@ void check_collada_indices(const std::string& path, const std::string& ext)
         if (polylist && !vcount)
             throw FileError(path + ": line " + std::to_string(line) + ": the <polylist> opened on line " + std::to_string(polylist) +
                             " has an index list <p> but no <vcount> before it (the number of corners of each polygon)");
-        // The rest of the start tag: attributes (quoted values may hold '>').
-        int quote = 0, before = 'p';
-        while (c != kEnd && (quote || c != '>')) {
-            if (quote && c == quote) quote = 0;
-            else if (!quote && (c == '"' || c == '\'')) quote = c;
-            before = c;
-            c = next();
-        }
+        const bool empty = read_tag(c).self_closing;
         if (c == kEnd) return;
-        if (before == '/') continue; // <p/>
+        if (empty) continue; // <p/>
         const std::uintmax_t start = line;
         for (c = next(); c != kEnd; c = next()) {
             if ((c >= '0' && c <= '9') || c == '+' || c == '-' || is_space(c)) continue;

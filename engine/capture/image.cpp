@@ -76,6 +76,49 @@ std::optional<std::pair<long, long>> header_size(const std::string& b, Format f)
     return std::nullopt;
 }
 
+/// A photo's bytes with its format and the size its header declares, read
+/// before any pixel is decoded (decoding allocates whatever size it finds).
+struct PhotoFile {
+    std::string path, bytes;
+    Format format = Format::Other;
+    long width = 0, height = 0;
+};
+
+PhotoFile read_photo(const std::string& path, std::size_t limit)
+{
+    PhotoFile f{path, read_file(path, limit)};
+    if (f.bytes.empty()) throw FileError(path + ": empty file");
+    f.format = format_of(f.bytes);
+    if (f.format == Format::Other)
+        throw FileError(path + ": not a JPEG, PNG or BMP image (the formats whose size is read before the pixels are decoded)");
+    const auto wh = header_size(f.bytes, f.format);
+    if (!wh) throw FileError(path + ": no image size in the file's header (a damaged or truncated image)");
+    f.width = wh->first;
+    f.height = wh->second;
+    return f;
+}
+
+cv::Mat decode(const PhotoFile& f)
+{
+    // libjpeg decodes a truncated file with a grey bottom and only a warning;
+    // a JPEG must end with the EOI marker FF D9 (trailing padding allowed).
+    if (f.format == Format::Jpeg) {
+        std::size_t end = f.bytes.size();
+        while (end > 2 && f.bytes[end - 1] == '\0') --end;
+        if (!(static_cast<unsigned char>(f.bytes[end - 2]) == 0xFF && static_cast<unsigned char>(f.bytes[end - 1]) == 0xD9))
+            throw FileError(f.path + ": truncated JPEG (no end-of-image marker after " + std::to_string(f.bytes.size()) + " bytes)");
+    }
+    const std::vector<unsigned char> buf(f.bytes.begin(), f.bytes.end());
+    cv::Mat img;
+    try {
+        img = cv::imdecode(buf, cv::IMREAD_COLOR);
+    } catch (const cv::Exception& e) {
+        throw FileError(f.path + ": not a readable image (" + e.what() + ")");
+    }
+    if (img.empty()) throw FileError(f.path + ": not a readable image");
+    return img;
+}
+
 } // namespace
 
 cv::Mat load_image(const record::Record& rec, const std::string& camera)
@@ -84,69 +127,25 @@ cv::Mat load_image(const record::Record& rec, const std::string& camera)
     if (it == rec.cameras.end())
         throw FileError(rec.dir.string() + "/meta.json: field 'cameras." + camera + "' is missing");
     const record::Camera& cam = it->second;
-    const std::string path = rec.file(cam.image).string();
-    const std::string bytes = read_file(path, std::size_t(128) << 20);
-    if (bytes.empty()) throw FileError(path + ": empty file");
+    const PhotoFile f = read_photo(rec.file(cam.image).string(), std::size_t(128) << 20);
     auto size_mismatch = [&](long w, long h) {
-        return FileError(path + ": image is " + std::to_string(w) + " x " + std::to_string(h) +
+        return FileError(f.path + ": image is " + std::to_string(w) + " x " + std::to_string(h) +
                          " px but meta.json field 'cameras." + camera + ".width/height' declares " + std::to_string(cam.width) +
                          " x " + std::to_string(cam.height));
     };
-    const Format format = format_of(bytes);
-    if (format == Format::Other)
-        throw FileError(path + ": not a JPEG, PNG or BMP image (the formats whose size is read before the pixels are decoded)");
-    const auto wh = header_size(bytes, format);
-    if (!wh) throw FileError(path + ": no image size in the file's header (a damaged or truncated image)");
-    if (wh->first != cam.width || wh->second != cam.height) throw size_mismatch(wh->first, wh->second);
-    // libjpeg decodes a truncated file with a grey bottom and only a warning;
-    // a JPEG must end with the EOI marker FF D9 (trailing padding allowed).
-    if (format == Format::Jpeg) {
-        std::size_t end = bytes.size();
-        while (end > 2 && bytes[end - 1] == '\0') --end;
-        if (!(static_cast<unsigned char>(bytes[end - 2]) == 0xFF && static_cast<unsigned char>(bytes[end - 1]) == 0xD9))
-            throw FileError(path + ": truncated JPEG (no end-of-image marker after " + std::to_string(bytes.size()) + " bytes)");
-    }
-    const std::vector<unsigned char> buf(bytes.begin(), bytes.end());
-    cv::Mat img;
-    try {
-        img = cv::imdecode(buf, cv::IMREAD_COLOR);
-    } catch (const cv::Exception& e) {
-        throw FileError(path + ": not a readable image (" + e.what() + ")");
-    }
-    if (img.empty()) throw FileError(path + ": not a readable image");
+    if (f.width != cam.width || f.height != cam.height) throw size_mismatch(f.width, f.height);
+    const cv::Mat img = decode(f);
     if (img.cols != cam.width || img.rows != cam.height) throw size_mismatch(img.cols, img.rows);
     return img;
 }
 
 cv::Mat load_photo(const record::Record& rec, const std::string& name)
 {
-    const std::string path = rec.file(name).string();
-    const std::string bytes = read_file(path, std::size_t(256) << 20);
-    if (bytes.empty()) throw FileError(path + ": empty file");
-    const Format format = format_of(bytes);
-    if (format == Format::Other)
-        throw FileError(path + ": not a JPEG, PNG or BMP image (the formats whose size is read before the pixels are decoded)");
-    const auto wh = header_size(bytes, format);
-    if (!wh) throw FileError(path + ": no image size in the file's header (a damaged or truncated image)");
-    if (wh->first < 16 || wh->second < 16 || wh->first > 20000 || wh->second > 20000 ||
-        static_cast<double>(wh->first) * wh->second > 200e6)
-        throw FileError(path + ": image is " + std::to_string(wh->first) + " x " + std::to_string(wh->second) +
+    const PhotoFile f = read_photo(rec.file(name).string(), std::size_t(256) << 20);
+    if (f.width < 16 || f.height < 16 || f.width > 20000 || f.height > 20000 || static_cast<double>(f.width) * f.height > 200e6)
+        throw FileError(f.path + ": image is " + std::to_string(f.width) + " x " + std::to_string(f.height) +
                         " px (accepted: 16 .. 20000 px a side, at most 200 megapixels)");
-    if (format == Format::Jpeg) {
-        std::size_t end = bytes.size();
-        while (end > 2 && bytes[end - 1] == '\0') --end;
-        if (!(static_cast<unsigned char>(bytes[end - 2]) == 0xFF && static_cast<unsigned char>(bytes[end - 1]) == 0xD9))
-            throw FileError(path + ": truncated JPEG (no end-of-image marker after " + std::to_string(bytes.size()) + " bytes)");
-    }
-    const std::vector<unsigned char> buf(bytes.begin(), bytes.end());
-    cv::Mat img;
-    try {
-        img = cv::imdecode(buf, cv::IMREAD_COLOR);
-    } catch (const cv::Exception& e) {
-        throw FileError(path + ": not a readable image (" + e.what() + ")");
-    }
-    if (img.empty()) throw FileError(path + ": not a readable image");
-    return img;
+    return decode(f);
 }
 
 cv::Matx33d camera_matrix(const record::Camera& c) { return {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1}; }

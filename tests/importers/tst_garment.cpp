@@ -33,9 +33,7 @@ Drape drape_skirt(const std::shared_ptr<const Mannequin>& m, const std::string& 
     Drape d;
     d.status = drape_to_rest(scene, garment_rest_options());
     const auto& s = *scene.system;
-    std::vector<char> pinned(static_cast<std::size_t>(s.vertex_count()), 0);
-    for (int i = 0; i < s.vertex_count(); ++i) pinned[static_cast<std::size_t>(i)] = s.pinned(i) ? 1 : 0;
-    d.metrics = garment_metrics(s.x, s.mesh().F, pinned, m.get(), scene.waist.centre);
+    d.metrics = garment_metrics(s.x, s.mesh().F, s.model().pinned, m.get(), scene.waist.centre);
     return d;
 }
 

@@ -1,4 +1,5 @@
 #include "engine/estimate/fit.hpp"
+#include "engine/core/clock.hpp"
 
 #include "engine/fabric/preset.hpp"
 
@@ -10,18 +11,6 @@ namespace drape::estimate {
 
 using nlohmann::json;
 
-namespace {
-std::string now_utc()
-{
-    const std::time_t t = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return buf;
-}
-} // namespace
-
 json fit_to_json(const FitResult& r)
 {
     fabric::FabricPreset preset;
@@ -31,7 +20,7 @@ json fit_to_json(const FitResult& r)
     preset.source = "fitted by drape fit to drape-test records";
     fabric::Provenance provenance;
     provenance.tool = "drape fit";
-    provenance.date = now_utc();
+    provenance.date = utc_now();
     provenance.grid = r.options.grid;
     json prov;
     json recs = json::array();

@@ -1,4 +1,5 @@
 #include "engine/library/fabric_library.hpp"
+#include "engine/core/clock.hpp"
 
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
@@ -32,16 +33,6 @@ using sql::Transaction;
 namespace {
 
 constexpr const char* kLibraryFormat = "drapekit-fabric-library";
-
-std::string now_utc()
-{
-    const auto t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return buf;
-}
 
 void validate_date(const std::string& d, const std::string& what)
 {
@@ -299,7 +290,7 @@ std::int64_t FabricLibrary::put(const fabric::FabricPreset& in, const std::strin
     // What is stored must read back: the same check a later read applies.
     const fabric::FabricPreset check = fabric::fabric_from_json(j, m_path + ": fabric '" + name + "'");
     const Columns d = derive_columns(check);
-    const std::string now = now_utc();
+    const std::string now = utc_now();
     std::int64_t id = 0;
     if (existing >= 0) {
         Stmt u(m_db, m_path,
@@ -364,7 +355,7 @@ void FabricLibrary::rename(const std::string& from_in, const std::string& to_in)
     }
     r.preset.name = to;
     Stmt u(m_db, m_path, "UPDATE fabrics SET name = ?1, preset = ?2, modified = ?3, revision = revision + 1 WHERE id = ?4");
-    u.bind(1, to).bind(2, fabric::fabric_to_json(r.preset).dump()).bind(3, now_utc()).bind(4, r.id);
+    u.bind(1, to).bind(2, fabric::fabric_to_json(r.preset).dump()).bind(3, utc_now()).bind(4, r.id);
     u.run();
     tx.commit();
 }
@@ -508,7 +499,7 @@ json FabricLibrary::export_all() const
     json doc;
     doc["format"] = kLibraryFormat;
     doc["version"] = 1;
-    doc["exported"] = now_utc();
+    doc["exported"] = utc_now();
     doc["fabrics"] = json::array();
     Stmt s(m_db, m_path, std::string("SELECT ") + kColumns + " FROM fabrics ORDER BY name COLLATE NOCASE");
     while (s.step()) {

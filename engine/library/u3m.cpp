@@ -1,4 +1,5 @@
 #include "engine/library/u3m.hpp"
+#include "engine/core/clock.hpp"
 
 #include "engine/cloth/params.hpp"
 #include "engine/core/error.hpp"
@@ -22,16 +23,6 @@ using nlohmann::json;
 constexpr const char* kBlock = "drapekit";
 constexpr const char* kBlockFormat = "drapekit-u3m-physics";
 constexpr int kBlockVersion = 1;
-
-std::string now_utc()
-{
-    const std::time_t t = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return buf;
-}
 
 std::uint64_t fnv1a(const std::string& s, std::uint64_t h)
 {
@@ -115,7 +106,7 @@ json composition_parts(const std::string& composition)
 json preset_to_u3m(const fabric::FabricPreset& p, const U3mOptions& opt)
 {
     const cloth::FabricParams& v = p.params;
-    const std::string created = opt.created.empty() ? now_utc() : opt.created;
+    const std::string created = opt.created.empty() ? utc_now() : opt.created;
     json parameters = json::object();
     for (const cloth::ParamSpec& s : cloth::param_table())
         parameters[std::string(s.key)] = {{"value", v[s.id]}, {"unit", std::string(s.unit)}, {"doc", std::string(s.doc)}};

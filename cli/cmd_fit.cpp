@@ -1,6 +1,7 @@
 // drape fit: fit a fabric preset to drape-test records.
 #include "cli/command.hpp"
 #include "cli/progress.hpp"
+#include "cli/setup.hpp"
 
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
@@ -38,6 +39,7 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
                       | stiffening (+ stiffening bending, bend_stiffening_radius_m)
                       | softening (+ yielding bending, bend_softening_radius_m)
                       | full (stiffening + tensile stiffness warp/weft)
+                      | buckling (+ the membrane's compression limit, buckling_length_m)
   --recentre-contours measurement model: re-centre every contour stack (record and simulation)
                       on its own axis, for a profiler or specimen off the pedestal axis
   --vertex-contact-only  contact at mesh vertices only (the seed's; coarse elements then cut the
@@ -58,6 +60,9 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
   --cold-local        local stage from flat starts too (every simulation is a fresh drop,
                       as the lab's and `drape predict`'s; slower)
   --start FABRIC      start point / values of the parameters not fitted (a library preset)
+  --set KEY=VALUE     hold a parameter the model does not fit at VALUE (a key of the parameter
+                      table in its unit, e.g. --set buckling_length_m=0.005; a fitted one starts there;
+                      over --start; repeatable)
   --name NAME         name of the preset (default: the first record's id)
   --no-uncertainty    skip the Jacobian (no intervals)
   --quiet             no progress bar on stderr
@@ -97,7 +102,7 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only", "--cold-global", "--cold-local"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
@@ -137,6 +142,7 @@ int run(const std::vector<std::string>& argv)
     if (const auto s = a.get("--start")) {
         fo.start = fabric::load_fabric(*s).params; // a seed-19 preset starts from its continuum equivalent
     }
+    if (!a.get_all("--set").empty()) fo.start = apply_set_flags(a, fo.start.value_or(cloth::FabricParams{}));
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     if (const auto n = a.get("--name"); n && !try_normalize_name(*n))
         throw UsageError("--name: '" + printable(*n) + "' is not a name (1..200 characters of UTF-8 text, no control characters)");

@@ -73,10 +73,14 @@ fabric::FabricPreset load_fabric_flags(const Args& a, const std::string& fallbac
 #else
     fabric::FabricPreset preset = fabric::load_fabric(*arg);
 #endif
-    const auto overrides = a.get_all("--set");
-    if (overrides.empty()) return preset;
-    cloth::FabricParams p = preset.params;
-    for (const auto& kv : overrides) {
+    if (a.get_all("--set").empty()) return preset;
+    preset.set_params(apply_set_flags(a, preset.params));
+    return preset;
+}
+
+cloth::FabricParams apply_set_flags(const Args& a, cloth::FabricParams p)
+{
+    for (const auto& kv : a.get_all("--set")) {
         const auto eq = kv.find('=');
         if (eq == std::string::npos) throw UsageError("--set: '" + kv + "' is not KEY=VALUE (e.g. --set bend_warp_Nm=2e-6)");
         const std::string key = kv.substr(0, eq), text = kv.substr(eq + 1);
@@ -93,8 +97,7 @@ fabric::FabricPreset load_fabric_flags(const Args& a, const std::string& fallbac
                              format_value(sp->lower) + ", " + format_value(sp->upper) + "]");
         p[sp->id] = v;
     }
-    preset.set_params(p);
-    return preset;
+    return p;
 }
 
 } // namespace drape::cli

@@ -47,5 +47,8 @@ cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup defaults);
 fabric::FabricPreset load_fabric_flags(const Args& a, const std::string& fallback = {});
 /// The value flags load_fabric_flags reads: --fabric and --set.
 std::set<std::string> fabric_flags();
+/// p with every --set KEY=VALUE applied (a key of the parameter table, a value
+/// inside its bounds; UsageError naming the flag, key and value otherwise).
+cloth::FabricParams apply_set_flags(const Args& a, cloth::FabricParams p);
 
 } // namespace drape::cli

@@ -79,6 +79,7 @@ struct DrapeResult {
     Polygon2 outline;       ///< shadow outline [m]
     HemProfile hem;
     std::vector<Slice> slices;
+    double potential_energy = 0; ///< [J] of the rest state (springs, bending, gravity, contact): compares fold branches
 };
 
 /// Measures a draped system (shadow, hem, slices) through the shared metric code.

@@ -30,6 +30,7 @@ json drape_summary_json(const DrapeResult& r, const DrapeSetup& setup, Integrato
     j["node_angles_deg"] = angles;
     j["node_amplitudes_m"] = amps;
     j["shadow_area_m2"] = m.shadow_area_m2;
+    j["potential_energy_J"] = r.potential_energy;
     j["mean_radius_m"] = m.mean_radius_m;
     j["min_radius_m"] = m.min_radius_m;
     j["max_radius_m"] = m.max_radius_m;

@@ -20,7 +20,9 @@ enum class SpringKind : unsigned char { StretchU, StretchV, Shear, FlexionU, Fle
 /// with fc > 0 the compressive force approaches fc and never exceeds it, the
 /// post-buckling response of Choi and Ko 2002 ("Stable but responsive cloth"): a
 /// strip shorter than its rest length by more than about fc / k has buckled at a
-/// scale below the mesh. The force is linear up to half the buckling load and
+/// scale below the mesh. fc is the Euler stress of the fabric, pi^2 B / l^2 per
+/// unit width (Param::BucklingLength l), times the width of the strip the spring
+/// stands for: a force per unit width that does not depend on the mesh. The force is linear up to half the buckling load and
 /// then saturates exponentially,
 ///   f(x) = -fc + fc/2 exp(2 k (x - x1) / fc)   for x < x1 = -fc / (2 k),
 /// so force and stiffness are continuous (the energy is C2: Newton's method keeps
@@ -64,9 +66,10 @@ struct Spring {
 /// They are scaled so that sum_i w_i x_i is the curvature vector [1/m] for a
 /// cylindrical bend across the stencil.
 struct BendStencil {
-    int n = 3;        ///< 3 (grid line) or 4 (hinge)
-    int v[4] = {-1, -1, -1, -1};
-    double w[4] = {0, 0, 0, 0}; ///< [1/m^2]
+    static constexpr int kMax = 9;
+    int n = 3;        ///< 3 (grid line), 4 (grid cell, triangle hinge), up to 9 (a grid's 3x3 block at the hem)
+    int v[kMax] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
+    double w[kMax] = {}; ///< [1/m^2]
     double k; ///< [N*m^3]: energy in J with weights in 1/m^2 and positions in m
     double d; ///< [N*m^3*s] damping of the same stencil
 };
@@ -83,20 +86,6 @@ struct ModelOptions {
     /// hanging below it cuts the corner of the pedestal (3.9 mm deep at grid 25), and
     /// the laser slices next to the disc come out too narrow. See docs/model-discrepancy.md.
     bool edge_contact = true;
-    /// Buckling below the mesh scale (Spring::fc): every stretch and shear spring
-    /// gives way in compression at the Euler load of the strip of cloth it stands
-    /// for, pi^2 B w / L^2 (B the bending rigidity along the strip, w its width, L
-    /// its length; pinned ends). A coarse mesh cannot form the small folds a
-    /// fabric makes where it is compressed; without this it shortens only by
-    /// stretching its springs, which locks it (a circle skirt crumples, a limp
-    /// drape comes out too stiff on coarse grids: silk D 29.9 % at grid 41 and
-    /// 24.4 % at grid 61). The load grows as 1 / L^2, so refining the mesh takes
-    /// the limit away where the mesh resolves the folds itself. No parameter:
-    /// it follows from the bending rigidity. None: the seed's linear springs, the
-    /// default until the fits have been checked with it (docs/model-discrepancy.md);
-    /// the starter fabrics and garments use Euler.
-    enum class Buckling { None, Euler };
-    Buckling buckling = Buckling::None;
 };
 
 /// A horizontal tether of a material point to a place: energy 1/2 k |P (x - target)|^2

@@ -31,6 +31,7 @@ enum class Param : int {
     Friction,         ///< [-] Coulomb friction coefficient with colliders (0 = frictionless, the seed's)
     BendStiffeningRadius, ///< [m] radius of curvature at which the bending stiffness doubles (0 = linear bending, the seed's)
     BendSofteningRadius,  ///< [m] bending that yields: moment B kappa / sqrt(1 + (rho kappa)^2), at most B / rho (0 = linear)
+    BucklingLength,       ///< [m] compression limit of the membrane: at most pi^2 B / l^2 per unit width (0 = linear in compression)
     Count
 };
 

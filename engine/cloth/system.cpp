@@ -577,13 +577,11 @@ HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
     for (const auto& sp : m.springs) m_spring_blocks.push_back(block(std::min(sp.i, sp.j), std::max(sp.i, sp.j)));
     m_diag_blocks.reserve(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) m_diag_blocks.push_back(block(i, i));
+    m_bend_offset.reserve(m.bends.size());
     for (const auto& b : m.bends) {
-        std::array<Block, 6> bl{};
-        int t = 0;
-        for (int p = 0; p < 4; ++p)
-            for (int q = p + 1; q < 4; ++q, ++t)
-                if (q < b.n) bl[static_cast<std::size_t>(t)] = block(std::min(b.v[p], b.v[q]), std::max(b.v[p], b.v[q]));
-        m_bend_blocks.push_back(bl);
+        m_bend_offset.push_back(m_bend_blocks.size());
+        for (int p = 0; p < b.n; ++p)
+            for (int q = p + 1; q < b.n; ++q) m_bend_blocks.push_back(block(std::min(b.v[p], b.v[q]), std::max(b.v[p], b.v[q])));
     }
     m_edge_blocks.reserve(s.edges().size());
     for (const auto& e : s.edges()) m_edge_blocks.push_back(block(e[0], e[1]));
@@ -650,10 +648,9 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
             Kd += b.k * ((1.0 / q - 1.0 + beta * s2) * I + (2.0 * beta - rho2 / (q * q * q)) * d * d.transpose());
         }
         for (int p = 0; p < b.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(b.v[p])], b.w[p] * b.w[p] * Kd);
-        int t = 0;
-        for (int p = 0; p < 4; ++p)
-            for (int q = p + 1; q < 4; ++q, ++t)
-                if (q < b.n) add_off(m_bend_blocks[s][static_cast<std::size_t>(t)], b.w[p] * b.w[q] * Kd);
+        std::size_t t = m_bend_offset[s];
+        for (int p = 0; p < b.n; ++p)
+            for (int q = p + 1; q < b.n; ++q, ++t) add_off(m_bend_blocks[t], b.w[p] * b.w[q] * Kd);
     }
     const int n = m_s.vertex_count();
     for (int i = 0; i < n; ++i) {

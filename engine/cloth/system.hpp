@@ -138,7 +138,8 @@ private:
     std::vector<std::vector<int>> m_nbr; // per column vertex j: sorted row vertices i <= j
     std::vector<Block> m_spring_blocks;  // per spring: off-diagonal block (min, max)
     std::vector<Block> m_diag_blocks;    // per vertex
-    std::vector<std::array<Block, 6>> m_bend_blocks; // per stencil: pairs (p<q) in order 01,02,03,12,13,23
+    std::vector<Block> m_bend_blocks;        // every stencil's pairs (p<q) in order 01,02,..,12,..; n(n-1)/2 each
+    std::vector<std::size_t> m_bend_offset;  // per stencil: its first pair in m_bend_blocks
     std::vector<Block> m_edge_blocks;    // per mesh edge (ClothSystem::edges): off-diagonal block
 };
 

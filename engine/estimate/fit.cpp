@@ -73,7 +73,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     const int local = options.local_evaluations > 0 ? options.local_evaluations : 8 * n + 8;
     // An upper bound: CRS2 may overrun its budget by a few evaluations, and the
     // mirror check may add a second local stage of half the budget.
-    ev.set_planned(options.scan_evaluations + global + n + 2 + local + 1 + local / 2 + (options.spread_seeds > 0 ? 1 : 0) +
+    ev.set_planned((options.start ? 1 : 0) + options.scan_evaluations + global + n + 2 + local + 1 + local / 2 + (options.spread_seeds > 0 ? 1 : 0) +
                    (options.uncertainty ? 2 * n : 0));
 
     bool cancelled = false;
@@ -87,6 +87,11 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     Box box;
     for (const auto& v : vars) box.push_back({v.lower, v.upper});
     try {
+        // A given start (a library preset, or the coarse optimum a refit starts from)
+        // is a candidate: the fit does not end worse than where it began. (A refit
+        // whose scan and small budget got lost ended at chi2 108 where its start,
+        // the coarse optimum, explained the record.)
+        if (options.start) ev.objective(x, Start::Cold, "start");
         if (have_dc && !bend_vars.empty() && options.scan_evaluations > 0)
             scan_bending(ev, vars, bend_vars, options.scan_evaluations, x, box);
     } catch (const CancelledFit&) {

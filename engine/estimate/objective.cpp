@@ -15,7 +15,8 @@ ModelVariant parse_model_variant(const std::string& name)
     if (name == "stiffening") return ModelVariant::Stiffening;
     if (name == "softening") return ModelVariant::Softening;
     if (name == "full") return ModelVariant::Full;
-    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, softening, full");
+    if (name == "buckling") return ModelVariant::Buckling;
+    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, softening, full, buckling");
 }
 
 std::string to_string(ModelVariant v)
@@ -25,6 +26,7 @@ std::string to_string(ModelVariant v)
     case ModelVariant::Stiffening: return "stiffening";
     case ModelVariant::Softening: return "softening";
     case ModelVariant::Full: return "full";
+    case ModelVariant::Buckling: return "buckling";
     }
     return "baseline";
 }
@@ -51,6 +53,7 @@ std::vector<FitVariable> fit_variables(ModelVariant v)
     add(Param::Shear);
     if (v == ModelVariant::Stiffening || v == ModelVariant::Full) add(Param::BendStiffeningRadius);
     if (v == ModelVariant::Softening) add(Param::BendSofteningRadius);
+    if (v == ModelVariant::Buckling) add(Param::BucklingLength);
     if (v == ModelVariant::Full) {
         add(Param::StretchWarp);
         add(Param::StretchWeft);

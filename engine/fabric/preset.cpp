@@ -199,7 +199,6 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
     read_descriptions(r, j, out);
     if (!j.contains("parameters") || !j["parameters"].is_object())
         throw ParameterError(where + ": missing object field 'parameters'");
-    out.model.buckling = cloth::ModelOptions::Buckling::None; // no "model" block: a preset from before the buckling model
     for (const auto& [k, v] : j["parameters"].items()) {
         const cloth::ParamSpec* sp = cloth::find_param(k);
         if (!sp) throw ParameterError(where + ": unknown parameter 'parameters." + k + "'");
@@ -224,11 +223,15 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
                 throw ParameterError(where + ": field 'model.edge_contact' = " + describe_json(m["edge_contact"]) + " must be true or false");
             out.model.edge_contact = m["edge_contact"].get<bool>();
         }
-        // Presets written before the buckling model drape as they were fitted: without it.
+        // "buckling": "euler" was the first buckling model (2026-11-29), the Euler
+        // load of a strip as long as the mesh spacing; it is read as the material
+        // length it had on the default grid (60 nodes on 300 mm: 5 mm) unless the
+        // preset gives buckling_length_m. "none": the linear membrane.
         if (m.contains("buckling")) {
             const std::string b = m["buckling"].is_string() ? m["buckling"].get<std::string>() : m["buckling"].dump();
-            if (b == "euler") out.model.buckling = cloth::ModelOptions::Buckling::Euler;
-            else if (b != "none")
+            if (b == "euler") {
+                if (!j["parameters"].contains("buckling_length_m")) out.params[cloth::Param::BucklingLength] = 0.005;
+            } else if (b != "none")
                 throw ParameterError(where + ": field 'model.buckling' = \"" + b + "\" must be \"euler\" or \"none\"");
         }
         if (m.contains("contact_depth_m")) {
@@ -258,7 +261,6 @@ json fabric_to_json(const FabricPreset& preset)
         for (const auto& sp : cloth::param_table()) params[std::string(sp.key)] = preset.params[sp.id];
         j["parameters"] = params;
         j["model"] = {{"bending", bending_name(preset.model.bending)},
-                      {"buckling", preset.model.buckling == cloth::ModelOptions::Buckling::Euler ? "euler" : "none"},
                       {"contact_depth_m", preset.model.contact_depth},
                       {"edge_contact", preset.model.edge_contact}};
     }

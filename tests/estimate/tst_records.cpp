@@ -158,6 +158,9 @@ private slots:
         QCOMPARE(to_string(parse_model_variant("stiffening")), std::string("stiffening"));
         QCOMPARE(fit_variables(ModelVariant::Softening).back().name, std::string("bend_softening_radius_m"));
         QCOMPARE(to_string(parse_model_variant("softening")), std::string("softening"));
+        QCOMPARE(fit_variables(ModelVariant::Buckling).back().name, std::string("buckling_length_m"));
+        QVERIFY(!fit_variables(ModelVariant::Buckling).back().log_scale); // 0 = the linear membrane stays reachable
+        QCOMPARE(to_string(parse_model_variant("buckling")), std::string("buckling"));
         for (const auto& v : fit_variables(ModelVariant::Full))
             for (auto p : v.params) QVERIFY(cloth::spec(p).affects_statics); // never fit a damper
         QVERIFY_THROWS_EXCEPTION(ParameterError, parse_model_variant("nonsense"));

@@ -2,6 +2,7 @@
 
 #include "engine/capture/measure.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
 #include "engine/core/units.hpp"
 #include "engine/record/record.hpp"
 
@@ -43,6 +44,23 @@ std::vector<double> MeasuredDrape::depths() const
     return d;
 }
 
+namespace {
+/// A contours file without data: empty, blank, or only its header line.
+bool no_contour_rows(const std::string& path)
+{
+    std::istringstream in(read_file(path, record::kMaxContoursBytes));
+    std::string line;
+    int lines = 0;
+    bool header_only = true;
+    while (std::getline(in, line)) {
+        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        ++lines;
+        if (lines > 1 || line.find("depth_mm") == std::string::npos) header_only = false;
+    }
+    return lines == 0 || header_only;
+}
+} // namespace
+
 MeasuredDrape load_record(const std::string& dir, bool use_photos)
 {
     const record::Record rec = record::read_record(dir);
@@ -73,26 +91,39 @@ MeasuredDrape load_record(const std::string& dir, bool use_photos)
     }
 
     const std::string cpath = rec.file(rec.contours_file).string();
-    const record::ContourStack stack = record::read_contours(rec);
-    for (std::size_t d = 0; d < stack.depths.size(); ++d) {
-        // The profiler reports a depth only where the cut closes: every ray has its point.
-        if (!stack.profiles[d].complete())
-            throw FileError(cpath + ": depth " + format_value(stack.depths[d] * 1e3) + " mm has missing angles (" +
-                            std::to_string(stack.points[d].size()) + " of " + std::to_string(stack.profiles[d].size()) + " rays)");
-        m.contours.push_back({stack.depths[d], stack.profiles[d]});
+    // Most labs have a camera, not a laser profiler: a record without contours
+    // (no file, an empty one, or its header only) is fitted from its photos.
+    const bool laser = rec.has_contours() && !no_contour_rows(cpath);
+    if (laser) {
+        const record::ContourStack stack = record::read_contours(rec);
+        for (std::size_t d = 0; d < stack.depths.size(); ++d) {
+            // The profiler reports a depth only where the cut closes: every ray has its point.
+            if (!stack.profiles[d].complete())
+                throw FileError(cpath + ": depth " + format_value(stack.depths[d] * 1e3) + " mm has missing angles (" +
+                                std::to_string(stack.points[d].size()) + " of " + std::to_string(stack.profiles[d].size()) + " rays)");
+            m.contours.push_back({stack.depths[d], stack.profiles[d]});
+        }
+        if (m.contours.empty()) throw FileError(cpath + ": no contours");
+    } else {
+        m.notes.push_back(cpath + ": no laser contours; fitted from the photos (drape coefficient, nodes, hem)");
     }
-    if (m.contours.empty()) throw FileError(cpath + ": no contours");
-    if (use_photos && m.node_count < 0) {
+    if ((use_photos || !laser) && (m.node_count < 0 || !laser)) {
         // The photos: node count from the top view's perspective-corrected
         // outline, lowest hem point from the side view (capture layer).
         try {
             const capture::MeasureOptions mo;
             const capture::Measurement cm = capture::measure_record(rec, mo);
             if (cm.top.measured) {
-                m.node_count = cm.top.metrics.node_count;
-                m.node_source = "top photo (capture layer)";
-                m.node_metric_options = mo.metrics;
+                if (m.node_count < 0) {
+                    m.node_count = cm.top.metrics.node_count;
+                    m.node_source = "top photo (capture layer)";
+                    m.node_metric_options = mo.metrics;
+                }
                 m.photo_drape_coefficient_percent = cm.top.metrics.drape_coefficient_percent;
+                if (!laser && !std::isfinite(m.drape_coefficient_percent)) {
+                    m.drape_coefficient_percent = cm.top.metrics.drape_coefficient_percent;
+                    m.notes.push_back("drape coefficient from the top photo (meta.json gives none)");
+                }
             }
             if (cm.side.measured && std::isfinite(cm.side.hem_min_z)) {
                 m.hem_min_z = cm.side.hem_min_z;
@@ -101,10 +132,14 @@ MeasuredDrape load_record(const std::string& dir, bool use_photos)
             for (const auto& w : cm.warnings) m.notes.push_back("capture: " + w);
             for (const auto& w : cm.not_measured) m.notes.push_back("capture: not measured: " + w);
         } catch (const drape::Error& e) {
+            if (!laser) throw FileError(cpath + ": no laser contours, and the photos could not be measured: " + e.what());
             m.notes.push_back(std::string("capture failed, contours only: ") + e.what());
         }
     }
-    if (m.node_count < 0) m.node_source = "crests of the deepest contour";
+    if (!laser && !std::isfinite(m.drape_coefficient_percent) && m.node_count < 0 && !std::isfinite(m.hem_min_z))
+        throw FileError(cpath + ": no laser contours, and neither meta.json nor the photos give a drape coefficient, node count or "
+                                "hem height: nothing to fit");
+    if (m.node_count < 0 && laser) m.node_source = "crests of the deepest contour";
     return m;
 }
 

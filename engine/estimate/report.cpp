@@ -381,13 +381,18 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
             files.push_back(id + "_top_overlay.png");
             md << "![top overlay](" << id << "_top_overlay.png)\n\n";
         }
-        outline_plot(rf, rot, (root / (id + "_contours.png")).string());
-        r_theta_plot(rf, rot, (root / (id + "_r_theta.png")).string());
-        harmonic_plot(r, i, (root / (id + "_harmonics.png")).string());
-        files.insert(files.end(), {id + "_contours.png", id + "_r_theta.png", id + "_harmonics.png"});
-        md << "![contours](" << id << "_contours.png)\n\n![r(theta)](" << id << "_r_theta.png)\n\n![harmonics](" << id
-           << "_harmonics.png)\n\n";
-        md << "| depth [mm] | mean r measured / fitted [mm] | RMS fold amplitude measured / fitted [mm] | nodes measured / fitted |\n|---|---|---|---|\n";
+        if (rf.measured.contours.empty()) {
+            md << "No laser contours: fitted from the photos (drape coefficient, nodes, hem height).\n\n";
+        } else {
+            outline_plot(rf, rot, (root / (id + "_contours.png")).string());
+            r_theta_plot(rf, rot, (root / (id + "_r_theta.png")).string());
+            harmonic_plot(r, i, (root / (id + "_harmonics.png")).string());
+            files.insert(files.end(), {id + "_contours.png", id + "_r_theta.png", id + "_harmonics.png"});
+            md << "![contours](" << id << "_contours.png)\n\n![r(theta)](" << id << "_r_theta.png)\n\n![harmonics](" << id
+               << "_harmonics.png)\n\n";
+        }
+        if (!rf.measured_features.contours.empty())
+            md << "| depth [mm] | mean r measured / fitted [mm] | RMS fold amplitude measured / fitted [mm] | nodes measured / fitted |\n|---|---|---|---|\n";
         json depths = json::array();
         for (std::size_t d = 0; d < rf.measured_features.contours.size(); ++d) {
             const auto& m = rf.measured_features.contours[d];

@@ -1,5 +1,6 @@
 // Record loading, features and the residual analysis: no simulations, fast.
 #include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
 #include "engine/estimate/measured.hpp"
 #include "engine/estimate/objective.hpp"
 #include "engine/estimate/residual.hpp"
@@ -54,6 +55,48 @@ private slots:
         // the pedestal axis at the pedestal top projects near the principal point of the top camera
         const Eigen::Vector2d c = m.top_camera->project({0, 0, 0});
         QVERIFY(std::abs(c.x() - m.top_camera->cx) < 2 && std::abs(c.y() - m.top_camera->cy) < 2);
+    }
+
+    /// Most labs have a camera, not a laser profiler: a record whose contours.csv
+    /// is emptied (its header only), empty or missing is read from its photos (the
+    /// top view's nodes, the side view's lowest hem point) and the meta's D; with
+    /// neither photos nor numbers it is refused, naming the file.
+    void recordWithoutContoursIsReadFromItsPhotos()
+    {
+        namespace fs = std::filesystem;
+        const fs::path dir = fs::temp_directory_path() / "drape_est_photos_only";
+        fs::remove_all(dir);
+        fs::copy(kSetA + "DL-A02", dir, fs::copy_options::recursive);
+        for (const char* contents : std::initializer_list<const char*>{"depth_mm,theta_deg,x_mm,y_mm\n", "", nullptr}) {
+            if (contents) std::ofstream(dir / "contours.csv", std::ios::trunc) << contents;
+            else fs::remove(dir / "contours.csv");
+            const MeasuredDrape m = load_record(dir.string());
+            QVERIFY(m.contours.empty());
+            QVERIFY(std::isfinite(m.drape_coefficient_percent));
+            QVERIFY2(m.node_count >= 2, qPrintable(QString::fromStdString(m.node_source)));
+            QCOMPARE(m.node_source, std::string("top photo (capture layer)"));
+            QVERIFY(m.hem_from_side_view && std::isfinite(m.hem_min_z));
+            bool noted = false;
+            for (const auto& n : m.notes) noted |= n.find("no laser contours") != std::string::npos;
+            QVERIFY(noted);
+        }
+        // No contours and no photos: the meta's D alone is still a measurement...
+        for (const char* photo : {"top.jpg", "side.jpg", "iso.jpg"}) fs::remove(dir / photo);
+        const MeasuredDrape d_only = load_record(dir.string());
+        QVERIFY(d_only.contours.empty() && std::isfinite(d_only.drape_coefficient_percent) && d_only.node_count < 0);
+        // ...without it there is nothing to fit.
+        std::string meta = read_file((dir / "meta.json").string());
+        const auto at = meta.find("\"lab_drape_coefficient_percent\"");
+        QVERIFY(at != std::string::npos);
+        meta.replace(at, std::string("\"lab_drape_coefficient_percent\"").size(), "\"lab_note\"");
+        std::ofstream(dir / "meta.json", std::ios::trunc) << meta;
+        try {
+            load_record(dir.string());
+            QFAIL("expected an error");
+        } catch (const FileError& e) {
+            QVERIFY2(std::string(e.what()).find("contours.csv: no laser contours") != std::string::npos, e.what());
+        }
+        fs::remove_all(dir);
     }
 
     void badFolderThrowsFileError()

@@ -142,6 +142,10 @@ int run(const std::vector<std::string>& argv)
     if (const auto s = a.get("--start")) {
         fo.start = fabric::load_fabric(*s).params; // a seed-19 preset starts from its continuum equivalent
     }
+    for (const auto& kv : a.get_all("--set"))
+        for (const char* declared : {"areal_density_kg_m2=", "thickness_m="})
+            if (kv.rfind(declared, 0) == 0)
+                throw UsageError("--set " + kv + ": the record declares it (meta.json 'fabric'); a fit takes the lab's value");
     if (!a.get_all("--set").empty()) fo.start = apply_set_flags(a, fo.start.value_or(cloth::FabricParams{}));
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     if (const auto n = a.get("--name"); n && !try_normalize_name(*n))

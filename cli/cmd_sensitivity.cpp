@@ -50,17 +50,11 @@ int run(const std::vector<std::string>& argv)
     o.span_decades = a.get_double("--span", 1.0);
     if (const auto ps = a.get("--params")) {
         o.params.clear();
-        std::string s = *ps;
-        std::size_t pos = 0;
-        while (pos <= s.size()) {
-            const std::size_t c = s.find(',', pos);
-            const std::string key = s.substr(pos, c == std::string::npos ? std::string::npos : c - pos);
+        for (const auto& key : split_list(*ps)) {
             const cloth::ParamSpec* sp = cloth::find_param(key);
             if (!sp) throw UsageError("--params: unknown parameter '" + key + "'");
             if (!sp->affects_statics) throw UsageError("--params: '" + key + "' is a damper; it does not change the rest state");
             o.params.push_back(sp->id);
-            if (c == std::string::npos) break;
-            pos = c + 1;
         }
     }
     if (!a.has("--quiet"))

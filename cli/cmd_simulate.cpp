@@ -6,7 +6,9 @@
 
 #include "engine/cloth/blas_threads.hpp"
 #include "engine/cloth/drape_io.hpp"
+#include "engine/cloth/rest_sensitivity.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 #include "engine/fabric/preset.hpp"
 #ifdef HAVE_DRAPE_CAPTURE
 #include "engine/capture/mesh_picture.hpp"
@@ -15,6 +17,8 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+
+#include <nlohmann/json.hpp>
 
 namespace drape::cli {
 namespace {
@@ -49,13 +53,16 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
                         a log or pipe plain lines)
   --disc-grip           the specimen cannot slide on the disc top (large static friction)
   --vertex-contact-only contact at mesh vertices only (the seed's): coarse elements cut the pedestal rim
-  --trace               print every static-solver iteration on stderr)";
+  --trace               print every static-solver iteration on stderr
+  --sensitivity KEYS    at the rest state, the exact derivative of D and of the mean hem height with
+                        respect to each parameter (comma-separated keys of the parameter table, or
+                        all): dx/dp = H^-1 df/dp, one factorisation, no further drapes (static solver))";
 
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv,
            fabric_flags() + setup_value_flags(kAllSetup) +
-               std::set<std::string>{"--integrator", "--dt", "--tolerance", "--max-time", "--out", "--max-iterations"},
+               std::set<std::string>{"--integrator", "--dt", "--tolerance", "--max-time", "--out", "--max-iterations", "--sensitivity"},
            setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet", "--trace", "--vertex-contact-only"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     fabric::FabricPreset preset = load_fabric_flags(a);
@@ -76,6 +83,24 @@ int run(const std::vector<std::string>& argv)
     ro.max_sim_time = a.get_double("--max-time", 60.0);
     if (!(ro.max_sim_time > 0) || ro.max_sim_time > 1e5) throw UsageError("--max-time must be in (0, 1e5] s of simulated time");
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
+    std::vector<cloth::Param> sens_params;
+    if (const auto keys = a.get("--sensitivity")) {
+        if (ro.integrator != cloth::Integrator::Static) throw UsageError("--sensitivity needs the static solver (a rest state)");
+        if (preset.seed) throw UsageError("--sensitivity: a seed-19 preset's grid springs are not continuum parameters");
+        for (const auto& key : split_list(*keys)) {
+            if (key == "all") {
+                for (const auto& sp : cloth::param_table())
+                    if (sp.affects_statics && preset.params[sp.id] != 0) sens_params.push_back(sp.id);
+                continue;
+            }
+            const cloth::ParamSpec* sp = cloth::find_param(key);
+            if (!sp) throw UsageError("--sensitivity: unknown parameter '" + printable(key) + "'");
+            if (!sp->affects_statics) throw UsageError("--sensitivity " + key + ": a damper does not move a rest state");
+            if (preset.params[sp->id] == 0) throw UsageError("--sensitivity " + key + ": the value is 0 (set it with --set first)");
+            sens_params.push_back(sp->id);
+        }
+        if (sens_params.empty()) throw UsageError("--sensitivity: no parameter");
+    }
     ro.trace = a.has("--trace");
     preset.model.edge_contact = !a.has("--vertex-contact-only");
     Progress progress("simulate", quiet);
@@ -84,7 +109,37 @@ int run(const std::vector<std::string>& argv)
     const cloth::DrapeResult r = cloth::simulate_drape(preset.material(), setup, ro, preset.model);
     progress.finish(to_string(r.status.outcome), r.status.converged());
     if (!check_drape_result(r, setup)) return 4;
-    const auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
+    auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
+    struct Sens {
+        std::string key, unit;
+        double value, dD, dhem;
+    };
+    std::vector<Sens> sens;
+    if (!sens_params.empty() && r.status.converged()) {
+        const auto s = cloth::rest_sensitivities(preset.material(), setup, r.x, sens_params, preset.model);
+        auto sys = cloth::make_drape_system(preset.material(), setup, preset.model);
+        nlohmann::json arr = nlohmann::json::array();
+        for (const auto& sv : s) {
+            const auto& sp = cloth::spec(sv.param);
+            const double v = preset.params[sv.param], e = 1e-3 * std::abs(v);
+            // The metrics along the first-order path x + dp dx/dp (central difference).
+            sys->x = r.x + e * sv.dx;
+            const cloth::DrapeResult up = cloth::measure_drape(*sys, setup);
+            sys->x = r.x - e * sv.dx;
+            const cloth::DrapeResult dn = cloth::measure_drape(*sys, setup);
+            Sens t{std::string(sp.key), std::string(sp.unit), v,
+                   (up.metrics.drape_coefficient_percent - dn.metrics.drape_coefficient_percent) / (2 * e),
+                   (up.hem.mean_z - dn.hem.mean_z) / (2 * e)};
+            arr.push_back({{"key", t.key},
+                           {"value", v},
+                           {"dD_dp_percent", t.dD},
+                           {"dD_per_10_percent_change", t.dD * 0.1 * v},
+                           {"dhem_mean_dp_m", t.dhem},
+                           {"solve_residual", sv.solve_residual}});
+            sens.push_back(t);
+        }
+        summary["sensitivities"] = arr;
+    }
     if (const auto out = a.get("--out")) {
         auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // for the mesh topology
         cloth::write_drape_outputs(*out, r, setup, ro.integrator, sys->mesh());
@@ -125,6 +180,10 @@ int run(const std::vector<std::string>& argv)
         std::printf("solver             %s: %s, %ld steps, %ld force evaluations, %.2f s\n", to_string(ro.integrator).c_str(),
                     to_string(r.status.outcome).c_str(), r.status.steps, r.status.force_evaluations, r.status.wall_seconds);
         if (!r.status.message.empty()) std::printf("                   %s\n", r.status.message.c_str());
+        if (!sens.empty()) std::printf("sensitivity        D change for +10 %% of each parameter (exact, at this rest state):\n");
+        for (const auto& t : sens)
+            std::printf("  %-26s %10.4g %-7s  dD %+7.2f points   mean hem %+7.2f mm\n", t.key.c_str(), t.value, t.unit.c_str(), t.dD * 0.1 * t.value,
+                        t.dhem * 0.1 * t.value * 1e3);
     }
     return r.status.converged() ? 0 : 4;
 }

@@ -100,4 +100,16 @@ cloth::FabricParams apply_set_flags(const Args& a, cloth::FabricParams p)
     return p;
 }
 
+std::vector<std::string> split_list(const std::string& list)
+{
+    std::vector<std::string> out;
+    std::size_t pos = 0;
+    while (true) {
+        const std::size_t c = list.find(',', pos);
+        out.push_back(list.substr(pos, c == std::string::npos ? std::string::npos : c - pos));
+        if (c == std::string::npos) return out;
+        pos = c + 1;
+    }
+}
+
 } // namespace drape::cli

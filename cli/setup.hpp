@@ -50,5 +50,7 @@ std::set<std::string> fabric_flags();
 /// p with every --set KEY=VALUE applied (a key of the parameter table, a value
 /// inside its bounds; UsageError naming the flag, key and value otherwise).
 cloth::FabricParams apply_set_flags(const Args& a, cloth::FabricParams p);
+/// The items of a comma-separated list, in order (empty items kept: "a,,b" has three).
+std::vector<std::string> split_list(const std::string& list);
 
 } // namespace drape::cli

@@ -124,13 +124,13 @@ bool hem_stencil(ClothModel& m, const ClothMesh& mesh, int i, int j, const doubl
         const double du = (mesh.uv(ids[q], 0) - mesh.uv(c, 0)) / g.hu, dv = (mesh.uv(ids[q], 1) - mesh.uv(c, 1)) / g.hv;
         P.col(q) << 1.0, du, dv, du * du, du * dv, dv * dv; // monomials in cell units
     }
+    // The wanted derivative of each monomial in cell units: f_uu of (u/hu)^2 is
+    // 2/hu^2, f_uv of (u/hu)(v/hv) is 1/(hu hv); the weights come out in 1/m^2.
     Eigen::Matrix<double, 6, 1> t;
-    t << 0, 0, 0, 2 * want[0] * g.hu * g.hu, want[1] * g.hu * g.hv, 2 * want[2] * g.hv * g.hv;
-    // L(f) for the scaled monomials: f_uu of (u/hu)^2 is 2/hu^2, so the weights below
-    // (in 1/m^2) come out of a system in cell units.
+    t << 0, 0, 0, 2 * want[0] / (g.hu * g.hu), want[1] / (g.hu * g.hv), 2 * want[2] / (g.hv * g.hv);
     const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(P);
     if (cod.rank() < 6) return false;
-    const Eigen::VectorXd w = cod.solve(t) / (g.hu * g.hu * g.hv * g.hv);
+    const Eigen::VectorXd w = cod.solve(t);
     BendStencil st;
     st.n = n;
     for (int q = 0; q < n; ++q) {
@@ -180,14 +180,23 @@ void add_line_stencil(ClothModel& m, const ClothMesh& mesh, int a, int b, int c,
 /// bending energy of one along a grid line. B_t = sqrt(B_u B_v), the usual closure for
 /// orthotropic fabrics.
 /// A cell with a node moved onto the hem: hem_stencil's mixed derivative around
-/// the cell's corner (i, j), standing for the cell's material area.
+/// the cell's corner nearest the specimen's centre (its 3x3 block holds the most
+/// nodes; the block of an outer corner may hold only five), else the kernel
+/// weights over the cell's four nodes; standing for the cell's material area.
 void add_twist_stencil(ClothModel& m, const ClothMesh& mesh, int a, int b, int c, int d, double Bt, double cb, double hu, double hv, int i,
-                       int j)
+                       int j, const Eigen::RowVector2d& centre)
 {
     if (a < 0 || b < 0 || c < 0 || d < 0) return;
     if (!all_on_grid(mesh, {a, b, c, d})) {
         const double A = material_area(mesh, {a, b, d, c});
-        hem_stencil(m, mesh, i, j, {0.0, 1.0, 0.0}, 2 * Bt * A, 2 * cb * A);
+        const int corner[4][3] = {{a, i, j}, {b, i + 1, j}, {c, i, j + 1}, {d, i + 1, j + 1}};
+        int best = 0;
+        for (int q = 1; q < 4; ++q)
+            if ((mesh.uv.row(corner[q][0]) - centre).squaredNorm() < (mesh.uv.row(corner[best][0]) - centre).squaredNorm()) best = q;
+        if (hem_stencil(m, mesh, corner[best][1], corner[best][2], {0.0, 1.0, 0.0}, 2 * Bt * A, 2 * cb * A)) return;
+        const int ids[4] = {a, b, c, d};
+        double w[4];
+        if (kernel_weights(mesh, ids, [](double du, double dv) { return du * dv; }, w)) add_kernel_stencil(m, ids, w, 2 * Bt * A, 2 * cb * A);
         return;
     }
     BendStencil st;
@@ -231,6 +240,7 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
         const double ku = std::max(Eu - G * hu * hu / (hv * hv), 0.5 * Eu) * hv / hu;
         const double kv = std::max(Ev - G * hv * hv / (hu * hu), 0.5 * Ev) * hu / hv;
         const double ksh = (hu * hu + hv * hv) / (2 * hu * hv);
+        const Eigen::RowVector2d uv_centre = mesh.uv.colwise().mean();
         Eigen::VectorXd material_areas = Eigen::VectorXd::Zero(mesh.vertex_count());
         for (int t = 0; t < mesh.F.rows(); ++t) {
             const double at = material_area(mesh, {mesh.F(t, 0), mesh.F(t, 1), mesh.F(t, 2)});
@@ -263,7 +273,7 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
                 if (quadratic) {
                     add_line_stencil(m, mesh, g.at(i - 1, j), a, g.at(i + 1, j), Bu, cb, line_area[0](a), 0, i, j);
                     add_line_stencil(m, mesh, g.at(i, j - 1), a, g.at(i, j + 1), Bv, cb, line_area[1](a), 1, i, j);
-                    add_twist_stencil(m, mesh, a, g.at(i + 1, j), g.at(i, j + 1), g.at(i + 1, j + 1), std::sqrt(Bu * Bv), cb, hu, hv, i, j);
+                    add_twist_stencil(m, mesh, a, g.at(i + 1, j), g.at(i, j + 1), g.at(i + 1, j + 1), std::sqrt(Bu * Bv), cb, hu, hv, i, j, uv_centre);
                 }
             }
         m.description = "grid mass-spring model (stretch, shear, quadratic bending) from continuum parameters";

@@ -136,9 +136,9 @@ MeasuredDrape load_record(const std::string& dir, bool use_photos)
             m.notes.push_back(std::string("capture failed, contours only: ") + e.what());
         }
     }
-    if (!laser && !std::isfinite(m.drape_coefficient_percent) && m.node_count < 0 && !std::isfinite(m.hem_min_z))
-        throw FileError(cpath + ": no laser contours, and neither meta.json nor the photos give a drape coefficient, node count or "
-                                "hem height: nothing to fit");
+    if (!laser && !std::isfinite(m.drape_coefficient_percent))
+        throw FileError(cpath + ": no laser contours, and neither meta.json (lab_drape_coefficient_percent) nor the top photo gives a "
+                                "drape coefficient: nothing to fit the drape to");
     if (m.node_count < 0 && laser) m.node_source = "crests of the deepest contour";
     return m;
 }

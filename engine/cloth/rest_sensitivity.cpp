@@ -1,0 +1,98 @@
+#include "engine/cloth/rest_sensitivity.hpp"
+
+#include "engine/cloth/sparse_cholesky.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/units.hpp"
+
+#include <cmath>
+
+namespace drape::cloth {
+
+Positions axis_turn(const Positions& x)
+{
+    Positions t(x.rows(), 3);
+    for (int i = 0; i < x.rows(); ++i) t.row(i) << -x(i, 1), x(i, 0), 0.0;
+    return t;
+}
+
+namespace {
+
+Eigen::Map<const Eigen::VectorXd> flat(const Positions& p) { return {p.data(), p.size()}; }
+
+/// The force at fixed positions of the drape scene built with parameters `p`.
+Positions forces_with(const FabricParams& p, const DrapeSetup& setup, const ModelOptions& mopt, const Positions& x)
+{
+    auto sys = make_drape_system(Material(p), setup, mopt);
+    Positions f;
+    sys->conservative_forces(x, f);
+    for (int i = 0; i < sys->vertex_count(); ++i)
+        if (sys->pinned(i)) f.row(i).setZero();
+    return f;
+}
+
+} // namespace
+
+std::vector<RestSensitivity> rest_sensitivities(const Material& fabric, const DrapeSetup& setup, const Positions& rest,
+                                                const std::vector<Param>& params, const ModelOptions& mopt,
+                                                const RestSensitivityOptions& opt)
+{
+    if (fabric.grid_springs)
+        throw ParameterError("rest sensitivities: a seed-19 preset's grid springs are not continuum parameters (use its continuum equivalent)");
+    if (!(opt.relative_step > 0 && opt.relative_step < 0.1))
+        throw ParameterError("rest sensitivities: relative step = " + format_value(opt.relative_step) + " must be in (0, 0.1)");
+    for (Param p : params) {
+        const ParamSpec& sp = spec(p);
+        if (!sp.affects_statics)
+            throw ParameterError("rest sensitivities: " + std::string(sp.key) + " is a damper; it does not move a rest state");
+        if (!(std::abs(fabric.params[p]) > 0))
+            throw ParameterError("rest sensitivities: " + std::string(sp.key) + " = 0 has no relative step (set it to a value first)");
+    }
+    auto sys = make_drape_system(fabric, setup, mopt);
+    const int n = sys->vertex_count();
+    if (rest.rows() != n || !rest.allFinite())
+        throw ParameterError("rest sensitivities: the rest state has " + std::to_string(rest.rows()) + " vertices (finite: " +
+                             (rest.allFinite() ? "yes" : "no") + "), the drape mesh " + std::to_string(n));
+
+    // H = -df/dx, the exact Hessian (no projection: at a stable rest state it is
+    // positive semi-definite). Its one neutral direction, the turn about the axis,
+    // gets a tiny shift; the solution is then made orthogonal to it.
+    HessianAssembler H(*sys);
+    H.assemble(rest, Eigen::VectorXd(), 0.0, HessianAssembler::Projection::None);
+    detail::SpMat A = H.matrix();
+    double max_diag = 0;
+    for (int k = 0; k < A.rows(); ++k) max_diag = std::max(max_diag, A.coeff(k, k));
+    const double shift = 1e-10 * max_diag;
+    detail::SpMat As = A;
+    for (int k = 0; k < As.rows(); ++k) As.coeffRef(k, k) += shift;
+    bool reused = false;
+    auto llt = detail::take_analysed(As, reused);
+    llt->factorize(As);
+    if (llt->info() != Eigen::Success)
+        throw Error("rest sensitivities: the Hessian at the given state is not positive definite (not a stable rest state)");
+    const Eigen::SparseMatrix<double> Afull = A.selfadjointView<Eigen::Upper>();
+
+    const Positions turn = axis_turn(rest);
+    const Eigen::VectorXd t = flat(turn) / flat(turn).norm();
+    std::vector<RestSensitivity> out;
+    for (Param p : params) {
+        const double v = fabric.params[p], h = opt.relative_step * std::abs(v);
+        FabricParams lo = fabric.params, hi = fabric.params;
+        lo[p] = v - h;
+        hi[p] = v + h;
+        const Positions dfdp = (forces_with(hi, setup, mopt, rest) - forces_with(lo, setup, mopt, rest)) / (2 * h);
+        const Eigen::VectorXd b = flat(dfdp);
+        Eigen::VectorXd x = llt->solve(b);
+        x += llt->solve(b - Afull * x); // one step of refinement against the unshifted H
+        x -= t.dot(x) * t;
+        RestSensitivity s;
+        s.param = p;
+        s.dx = Eigen::Map<const Positions>(x.data(), n, 3);
+        const double bn = b.norm();
+        s.solve_residual = bn > 0 ? (Afull * x - b).norm() / bn : 0.0;
+        out.push_back(std::move(s));
+    }
+    detail::keep_analysed(std::move(llt), As);
+    return out;
+}
+
+} // namespace drape::cloth

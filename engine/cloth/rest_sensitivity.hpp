@@ -1,0 +1,50 @@
+#pragma once
+// Sensitivity of a rest state to the fabric's parameters (issue 15): at rest the
+// net force f(x, p) = 0, so along a change of a parameter p the rest state moves
+// by dx/dp = H^-1 df/dp, with H = -df/dx the Hessian of the potential energy that
+// the static solver factorises anyway. One factorisation and one back-substitution
+// per parameter give the derivative of every vertex, hence of every drape metric,
+// without another drape.
+#include "engine/cloth/drape.hpp"
+#include "engine/cloth/params.hpp"
+#include "engine/cloth/system.hpp"
+
+#include <string>
+#include <vector>
+
+namespace drape::cloth {
+
+struct RestSensitivity {
+    Param param;
+    /// d x / d p per vertex [m per unit of the parameter], with the turn about the
+    /// pedestal axis removed (the drapemeter's rest states are a family turned
+    /// about it: a neutral direction of H that no parameter moves along).
+    Positions dx;
+    /// Relative residual of the linear solve, |H dx - df/dp| / |df/dp|.
+    double solve_residual = 0;
+};
+
+struct RestSensitivityOptions {
+    /// Relative step of the parameter for df/dp (central difference of the force
+    /// at fixed positions: no drape, no solve; the force is smooth in every
+    /// parameter, so this is exact to ~step^2).
+    double relative_step = 1e-4;
+};
+
+/// The sensitivities of the drapemeter rest state `rest` (positions of the
+/// system make_drape_system(fabric, setup, mopt) builds, at rest: relative
+/// residual well below the parameter's effect, e.g. 1e-8) to each of `params`.
+/// Throws ParameterError when `rest` does not fit the mesh, a parameter is
+/// a damper (it does not move a rest state) or its value is 0 (no relative
+/// step), and Error when the Hessian at `rest` is not positive definite (not
+/// a stable rest state).
+std::vector<RestSensitivity> rest_sensitivities(const Material& fabric, const DrapeSetup& setup, const Positions& rest,
+                                                const std::vector<Param>& params, const ModelOptions& mopt = {},
+                                                const RestSensitivityOptions& opt = {});
+
+/// The same positions turned about the pedestal axis (z) by the infinitesimal
+/// rotation: (-y, x, 0) per vertex. The neutral direction the sensitivities are
+/// made orthogonal to.
+Positions axis_turn(const Positions& x);
+
+} // namespace drape::cloth

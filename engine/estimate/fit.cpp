@@ -1,5 +1,7 @@
 #include "engine/estimate/fit.hpp"
 
+#include "engine/cloth/rest_sensitivity.hpp"
+
 #include "engine/cloth/blas_threads.hpp"
 #include "engine/core/error.hpp"
 #include "engine/estimate/evaluator.hpp"
@@ -157,6 +159,30 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             rf.cold_features = ev.cold_features()[r];
             rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
             rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
+        }
+        if (!cancelled && !rf.simulations.empty() && rf.simulations.front().status.converged()) {
+            // The sensitivity of D to each fitted parameter at the optimum: one
+            // factorisation of the rest state's Hessian, no further drape.
+            try {
+                const cloth::FabricParams pr = params_for_record(out.params, records[r]);
+                std::vector<Param> ps;
+                for (const auto& v : vars)
+                    for (Param q : v.params)
+                        if (pr[q] != 0) ps.push_back(q);
+                const auto& rest = rf.simulations.front().x;
+                const auto sens = cloth::rest_sensitivities(cloth::Material(pr), rf.setup, rest, ps, options.model_options);
+                auto sys = cloth::make_drape_system(cloth::Material(pr), rf.setup, options.model_options);
+                for (const auto& s : sens) {
+                    const double e = 1e-3 * std::abs(pr[s.param]);
+                    sys->x = rest + e * s.dx;
+                    const double up = cloth::measure_drape(*sys, rf.setup).metrics.drape_coefficient_percent;
+                    sys->x = rest - e * s.dx;
+                    const double dn = cloth::measure_drape(*sys, rf.setup).metrics.drape_coefficient_percent;
+                    rf.d_drape_per_10_percent.emplace_back(s.param, (up - dn) / (2 * e) * 0.1 * pr[s.param]);
+                }
+            } catch (const drape::Error&) {
+                rf.d_drape_per_10_percent.clear(); // not a stable rest state: no sensitivity reported
+            }
         }
         out.records.push_back(std::move(rf));
     }

@@ -139,6 +139,11 @@ struct RecordFit {
     DrapeFeatures cold_features;
     double cold_dc_error_percent = 0;
     double cold_node_error = 0;
+    /// Exact sensitivity of the first seed's drape coefficient at the optimum to
+    /// each fitted parameter: D change [points] for +10 % of the parameter (dx/dp =
+    /// H^-1 df/dp at its rest state, cloth/rest_sensitivity.hpp). Empty when the
+    /// rest state was not converged or the fit was cancelled.
+    std::vector<std::pair<cloth::Param, double>> d_drape_per_10_percent;
 };
 
 struct FitResult {

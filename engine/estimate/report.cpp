@@ -409,7 +409,21 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
                               {"fitted_harmonic_magnitudes_m", s.magnitudes_m}});
         }
         md << "\n";
-        recs.push_back({{"id", rf.measured.id}, {"rotation_for_plots_deg", rot * 180 / kPi}, {"depths", depths}});
+        json dsens = json::object();
+        if (!rf.d_drape_per_10_percent.empty()) {
+            md << "Sensitivity of D at the optimum (exact, from the rest state's Hessian): D change for +10 % of each "
+                  "fitted parameter.\n\n| parameter | value | D change [points] |\n|---|---|---|\n";
+            for (const auto& [q, d] : rf.d_drape_per_10_percent) {
+                const auto& sp = cloth::spec(q);
+                md << "| " << sp.key << " | " << num(r.params[q], "%.3g") << " " << sp.unit << " | " << num(d, "%+.2f") << " |\n";
+                dsens[std::string(sp.key)] = d;
+            }
+            md << "\n";
+        }
+        recs.push_back({{"id", rf.measured.id},
+                        {"rotation_for_plots_deg", rot * 180 / kPi},
+                        {"depths", depths},
+                        {"d_drape_coefficient_per_10_percent", dsens}});
     }
 
     const ResidualAnalysis& a = r.residual;

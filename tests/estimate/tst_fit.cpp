@@ -64,6 +64,14 @@ private slots:
         QVERIFY(std::isfinite(r.records[0].cold_dc_error_percent) && r.records[0].cold_features.drape_coefficient_percent > 0);
         QVERIFY(std::abs(r.records[0].cold_dc_error_percent - (r.records[0].cold_features.drape_coefficient_percent -
                                                                r.records[0].measured_features.drape_coefficient_percent)) < 1e-12);
+        // The exact sensitivity of D to each fitted parameter at the optimum: one
+        // entry per fitted parameter, stiffer bending drapes higher.
+        QCOMPARE(r.records[0].d_drape_per_10_percent.size(), r.variables.size());
+        for (const auto& [q, d] : r.records[0].d_drape_per_10_percent) {
+            qInfo("dD for +10 %% of %s: %+.3f points", std::string(cloth::spec(q).key).c_str(), d);
+            QVERIFY(std::isfinite(d));
+            if (q == Param::BendWarp || q == Param::BendWeft) QVERIFY(d > 0);
+        }
         // What one small-grid drape constrains is the overall bending (the
         // mean of log10 warp and weft bending): it is inside its 95 % interval
         // from the fit's covariance. (The warp/weft split of one drape is not

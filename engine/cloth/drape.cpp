@@ -219,7 +219,6 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
 {
     DrapeResult r;
     r.x = s.x;
-    r.potential_energy = s.potential_energy(s.x);
     r.outline = shadow_outline(s.x, s.mesh().F);
     r.metrics = drape_metrics(r.outline, setup.sample_diameter / 2, setup.disc_diameter / 2, mopt);
     r.hem = hem_profile(s.x, s.mesh().boundary);
@@ -270,6 +269,7 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         r.status.wall_seconds += pre.wall_seconds;
     }
     DrapeResult m = measure_drape(*sys, setup);
+    m.potential_energy = sys->potential_energy(sys->x);
     m.status = r.status;
     return m;
 }
@@ -285,6 +285,7 @@ DrapeResult simulate_drape_from(const Material& fabric, const DrapeSetup& setup,
     DrapeResult r;
     const SolverStatus st = run_to_rest(*sys, ropt);
     r = measure_drape(*sys, setup);
+    r.potential_energy = sys->potential_energy(sys->x);
     r.status = st;
     return r;
 }

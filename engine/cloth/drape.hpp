@@ -79,7 +79,7 @@ struct DrapeResult {
     Polygon2 outline;       ///< shadow outline [m]
     HemProfile hem;
     std::vector<Slice> slices;
-    double potential_energy = 0; ///< [J] of the rest state (springs, bending, gravity, contact): compares fold branches
+    double potential_energy = 0; ///< [J] of the rest state (springs, bending, gravity, contact): compares fold branches; set by simulate_drape(_from), not by measure_drape
 };
 
 /// Measures a draped system (shadow, hem, slices) through the shared metric code.

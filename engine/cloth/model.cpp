@@ -69,13 +69,14 @@ bool kernel_weights(const ClothMesh& mesh, const int (&ids)[4], Q q, double (&w)
     return true;
 }
 
-void add_kernel_stencil(ClothModel& m, const int (&ids)[4], const double (&w)[4], double k, double d)
+/// Appends the bending stencil over the n nodes `ids` with weights `w`.
+void add_stencil(ClothModel& m, int n, const int* ids, const double* w, double k, double d)
 {
     BendStencil st;
-    st.n = 4;
-    for (int i = 0; i < 4; ++i) {
-        st.v[i] = ids[i];
-        st.w[i] = w[i];
+    st.n = n;
+    for (int q = 0; q < n; ++q) {
+        st.v[q] = ids[q];
+        st.w[q] = w[q];
     }
     st.k = k;
     st.d = d;
@@ -131,15 +132,7 @@ bool hem_stencil(ClothModel& m, const ClothMesh& mesh, int i, int j, const doubl
     const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(P);
     if (cod.rank() < 6) return false;
     const Eigen::VectorXd w = cod.solve(t);
-    BendStencil st;
-    st.n = n;
-    for (int q = 0; q < n; ++q) {
-        st.v[q] = ids[q];
-        st.w[q] = w(q);
-    }
-    st.k = k;
-    st.d = d;
-    m.bends.push_back(st);
+    add_stencil(m, n, ids, w.data(), k, d);
     return true;
 }
 
@@ -161,17 +154,10 @@ void add_line_stencil(ClothModel& m, const ClothMesh& mesh, int a, int b, int c,
         return;
     }
     const double sa = mesh.uv(a, axis), sb = mesh.uv(b, axis), sc = mesh.uv(c, axis);
-    BendStencil st;
-    st.n = 3;
-    st.v[0] = a;
-    st.v[1] = b;
-    st.v[2] = c;
-    st.w[0] = 2.0 / ((sb - sa) * (sc - sa));
-    st.w[2] = 2.0 / ((sc - sb) * (sc - sa));
-    st.w[1] = -(st.w[0] + st.w[2]);
-    st.k = B * area_b;
-    st.d = cb * area_b;
-    m.bends.push_back(st);
+    const int ids[3] = {a, b, c};
+    const double wa = 2.0 / ((sb - sa) * (sc - sa)), wc = 2.0 / ((sc - sb) * (sc - sa));
+    const double w[3] = {wa, -(wa + wc), wc};
+    add_stencil(m, 3, ids, w, B * area_b, cb * area_b);
 }
 
 /// Twist stencil on a grid cell: the mixed derivative x_uv = (x11 - x10 - x01 + x00)/(hu hv),
@@ -196,20 +182,12 @@ void add_twist_stencil(ClothModel& m, const ClothMesh& mesh, int a, int b, int c
         if (hem_stencil(m, mesh, corner[best][1], corner[best][2], {0.0, 1.0, 0.0}, 2 * Bt * A, 2 * cb * A)) return;
         const int ids[4] = {a, b, c, d};
         double w[4];
-        if (kernel_weights(mesh, ids, [](double du, double dv) { return du * dv; }, w)) add_kernel_stencil(m, ids, w, 2 * Bt * A, 2 * cb * A);
+        if (kernel_weights(mesh, ids, [](double du, double dv) { return du * dv; }, w)) add_stencil(m, 4, ids, w, 2 * Bt * A, 2 * cb * A);
         return;
     }
-    BendStencil st;
-    st.n = 4;
     const int ids[4] = {a, b, c, d};
-    const double w[4] = {1, -1, -1, 1};
-    for (int q = 0; q < 4; ++q) {
-        st.v[q] = ids[q];
-        st.w[q] = w[q] / (hu * hv);
-    }
-    st.k = 2 * Bt * hu * hv;
-    st.d = 2 * cb * hu * hv;
-    m.bends.push_back(st);
+    const double w[4] = {1 / (hu * hv), -1 / (hu * hv), -1 / (hu * hv), 1 / (hu * hv)};
+    add_stencil(m, 4, ids, w, 2 * Bt * hu * hv, 2 * cb * hu * hv);
 }
 
 } // namespace
@@ -334,7 +312,7 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
         const double c2 = across.x() * across.x(), s2 = across.y() * across.y();
         const double Bphi = Bu * c2 + Bv * s2;
         const double Ahinge = (tri_area(tris[0]) + tri_area(tris[1])) / 3.0;
-        add_kernel_stencil(m, ids, w, Bphi * Ahinge, cb * Ahinge);
+        add_stencil(m, 4, ids, w, Bphi * Ahinge, cb * Ahinge);
     }
     m.description = "triangle mass-spring model (edge springs, quadratic hinge bending) from continuum parameters";
     return m;

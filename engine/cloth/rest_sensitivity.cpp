@@ -58,18 +58,18 @@ std::vector<RestSensitivity> rest_sensitivities(const Material& fabric, const Dr
     // gets a tiny shift; the solution is then made orthogonal to it.
     HessianAssembler H(*sys);
     H.assemble(rest, Eigen::VectorXd(), 0.0, HessianAssembler::Projection::None);
-    detail::SpMat A = H.matrix();
+    detail::SpMat As = H.matrix(); // upper triangle; shifted in place below
     double max_diag = 0;
-    for (int k = 0; k < A.rows(); ++k) max_diag = std::max(max_diag, A.coeff(k, k));
+    for (int k = 0; k < As.rows(); ++k) max_diag = std::max(max_diag, As.coeff(k, k));
     const double shift = 1e-10 * max_diag;
-    detail::SpMat As = A;
     for (int k = 0; k < As.rows(); ++k) As.coeffRef(k, k) += shift;
     bool reused = false;
     auto llt = detail::take_analysed(As, reused);
     llt->factorize(As);
     if (llt->info() != Eigen::Success)
         throw Error("rest sensitivities: the Hessian at the given state is not positive definite (not a stable rest state)");
-    const Eigen::SparseMatrix<double> Afull = A.selfadjointView<Eigen::Upper>();
+    // H x of the unshifted Hessian.
+    auto H_times = [&](const Eigen::VectorXd& x) -> Eigen::VectorXd { return As.selfadjointView<Eigen::Upper>() * x - shift * x; };
 
     const Positions turn = axis_turn(rest);
     const Eigen::VectorXd t = flat(turn) / flat(turn).norm();
@@ -82,16 +82,35 @@ std::vector<RestSensitivity> rest_sensitivities(const Material& fabric, const Dr
         const Positions dfdp = (forces_with(hi, setup, mopt, rest) - forces_with(lo, setup, mopt, rest)) / (2 * h);
         const Eigen::VectorXd b = flat(dfdp);
         Eigen::VectorXd x = llt->solve(b);
-        x += llt->solve(b - Afull * x); // one step of refinement against the unshifted H
+        x += llt->solve(b - H_times(x)); // one step of refinement against the unshifted H
         x -= t.dot(x) * t;
         RestSensitivity s;
         s.param = p;
         s.dx = Eigen::Map<const Positions>(x.data(), n, 3);
         const double bn = b.norm();
-        s.solve_residual = bn > 0 ? (Afull * x - b).norm() / bn : 0.0;
+        s.solve_residual = bn > 0 ? (H_times(x) - b).norm() / bn : 0.0;
         out.push_back(std::move(s));
     }
     detail::keep_analysed(std::move(llt), As);
+    return out;
+}
+
+std::vector<DrapeMetricSensitivity> drape_metric_sensitivities(const Material& fabric, const DrapeSetup& setup, const Positions& rest,
+                                                               const std::vector<Param>& params, const ModelOptions& mopt)
+{
+    const auto sens = rest_sensitivities(fabric, setup, rest, params, mopt);
+    auto sys = make_drape_system(fabric, setup, mopt);
+    std::vector<DrapeMetricSensitivity> out;
+    for (const auto& s : sens) {
+        // The metrics along the first-order path x + dp dx/dp (central difference).
+        const double v = fabric.params[s.param], e = 1e-3 * std::abs(v);
+        sys->x = rest + e * s.dx;
+        const DrapeResult up = measure_drape(*sys, setup);
+        sys->x = rest - e * s.dx;
+        const DrapeResult dn = measure_drape(*sys, setup);
+        out.push_back({s.param, v, (up.metrics.drape_coefficient_percent - dn.metrics.drape_coefficient_percent) / (2 * e),
+                       (up.hem.mean_z - dn.hem.mean_z) / (2 * e), s.solve_residual});
+    }
     return out;
 }
 

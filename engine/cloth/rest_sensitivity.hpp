@@ -42,6 +42,19 @@ std::vector<RestSensitivity> rest_sensitivities(const Material& fabric, const Dr
                                                 const std::vector<Param>& params, const ModelOptions& mopt = {},
                                                 const RestSensitivityOptions& opt = {});
 
+/// The drape metrics' derivatives at the rest state: the shadow's drape
+/// coefficient and the hem's mean height along dx/dp (a central difference of the
+/// shared metric code along x +- e dx/dp, e = 1e-3 of the parameter).
+struct DrapeMetricSensitivity {
+    Param param;
+    double value;                      ///< the parameter's value at the rest state
+    double d_drape_coefficient_percent; ///< dD/dp [% per unit of the parameter]
+    double d_hem_mean_z;               ///< d(mean hem height)/dp [m per unit of the parameter]
+    double solve_residual;             ///< of the linear solve (RestSensitivity)
+};
+std::vector<DrapeMetricSensitivity> drape_metric_sensitivities(const Material& fabric, const DrapeSetup& setup, const Positions& rest,
+                                                               const std::vector<Param>& params, const ModelOptions& mopt = {});
+
 /// The same positions turned about the pedestal axis (z) by the infinitesimal
 /// rotation: (-y, x, 0) per vertex. The neutral direction the sensitivities are
 /// made orthogonal to.

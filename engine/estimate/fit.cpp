@@ -169,17 +169,9 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
                 for (const auto& v : vars)
                     for (Param q : v.params)
                         if (pr[q] != 0) ps.push_back(q);
-                const auto& rest = rf.simulations.front().x;
-                const auto sens = cloth::rest_sensitivities(cloth::Material(pr), rf.setup, rest, ps, options.model_options);
-                auto sys = cloth::make_drape_system(cloth::Material(pr), rf.setup, options.model_options);
-                for (const auto& s : sens) {
-                    const double e = 1e-3 * std::abs(pr[s.param]);
-                    sys->x = rest + e * s.dx;
-                    const double up = cloth::measure_drape(*sys, rf.setup).metrics.drape_coefficient_percent;
-                    sys->x = rest - e * s.dx;
-                    const double dn = cloth::measure_drape(*sys, rf.setup).metrics.drape_coefficient_percent;
-                    rf.d_drape_per_10_percent.emplace_back(s.param, (up - dn) / (2 * e) * 0.1 * pr[s.param]);
-                }
+                for (const auto& s : cloth::drape_metric_sensitivities(cloth::Material(pr), rf.setup, rf.simulations.front().x, ps,
+                                                                       options.model_options))
+                    rf.d_drape_per_10_percent.emplace_back(s.param, s.d_drape_coefficient_percent * 0.1 * s.value);
             } catch (const drape::Error&) {
                 rf.d_drape_per_10_percent.clear(); // not a stable rest state: no sensitivity reported
             }

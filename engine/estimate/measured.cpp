@@ -2,13 +2,13 @@
 
 #include "engine/capture/measure.hpp"
 #include "engine/core/error.hpp"
-#include "engine/core/io.hpp"
 #include "engine/core/units.hpp"
 #include "engine/record/record.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <numbers>
 #include <random>
@@ -45,19 +45,23 @@ std::vector<double> MeasuredDrape::depths() const
 }
 
 namespace {
-/// A contours file without data: empty, blank, or only its header line.
+/// A contours file without data: empty, blank, or only its header line. Reads up
+/// to its second non-blank line; a file it cannot read, or one larger than the
+/// reader takes, is left to record::read_contours to report.
 bool no_contour_rows(const std::string& path)
 {
-    std::istringstream in(read_file(path, record::kMaxContoursBytes));
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    if (ec || size > record::kMaxContoursBytes) return false;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return false;
     std::string line;
     int lines = 0;
-    bool header_only = true;
     while (std::getline(in, line)) {
         if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-        ++lines;
-        if (lines > 1 || line.find("depth_mm") == std::string::npos) header_only = false;
+        if (++lines > 1 || line.find("depth_mm") == std::string::npos) return false;
     }
-    return lines == 0 || header_only;
+    return true;
 }
 } // namespace
 
@@ -107,7 +111,8 @@ MeasuredDrape load_record(const std::string& dir, bool use_photos)
     } else {
         m.notes.push_back(cpath + ": no laser contours; fitted from the photos (drape coefficient, nodes, hem)");
     }
-    if ((use_photos || !laser) && (m.node_count < 0 || !laser)) {
+    // The photos: always without contours, else for the node count when asked to.
+    if (!laser || (use_photos && m.node_count < 0)) {
         // The photos: node count from the top view's perspective-corrected
         // outline, lowest hem point from the side view (capture layer).
         try {

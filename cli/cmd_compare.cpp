@@ -63,6 +63,7 @@ int run(const std::vector<std::string>& argv)
     estimate::FoldBranch branch = estimate::FoldBranch::Random;
     try {
         branch = estimate::parse_fold_branch(a.get_or("--branch", "random"));
+        if (branch == estimate::FoldBranch::Mixed) throw ParameterError("branch: 'mixed' is a fit's choice; compare drapes random or measured");
     } catch (const Error& e) {
         throw UsageError(std::string("--") + e.what());
     }

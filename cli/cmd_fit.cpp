@@ -26,11 +26,13 @@ namespace {
 const char* kUsage = R"(usage: drape fit RECORD_DIR [RECORD_DIR ...] --out FABRIC.json [options]
 
 Fits one fabric preset to one or more drape-test records of the same fabric
-(repeats, other sample/disc sizes): simulates the drapemeter at a coarse grid,
-compares drape coefficient, node count and the laser contours' phase-free
-Fourier features with the measurement (each divided by its noise), minimises
-with NLopt (CRS2 global stage, BOBYQA local stage) and estimates 95 % intervals
-from the Jacobian at the optimum. Dampers are reported as not identifiable.
+(repeats, other sample/disc sizes): simulates the drapemeter (grid 41),
+compares drape coefficient, node count, hem and the laser contours' phase-free
+Fourier features with the measurement (each divided by its noise), minimises by
+Levenberg-Marquardt on the exact sensitivities of the rest states (or NLopt's
+CRS2 and BOBYQA), estimates 95 % intervals from the Jacobian at the optimum and
+tests a library of candidate effects against the residual. Dampers are reported
+as not identifiable.
 
   --out FILE          fitted preset (drapekit-fabric JSON with provenance, intervals, residual)
   --report DIR        write the report folder (PNG plots, report.json, report.md)
@@ -46,20 +48,29 @@ from the Jacobian at the optimum. Dampers are reported as not identifiable.
                       pedestal rim): reproduces fits made before edge contact
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
-  --grid N            nodes across the specimen in the fit's simulations (default 25)
+  --grid N            nodes across the specimen in the fit's simulations (default 41: 7.5 mm
+                      between nodes on a 300 mm specimen, where presets carry over to finer meshes)
   --refine-grid N     when the optimum is grid-bound (a fitted bending length below the mesh
-                      spacing), fit again on grid N from it (default 41; 0 = never)
+                      spacing), fit again on grid N from it (default 41 when --grid is below 41,
+                      else 0 = never)
   --seed K            optimizer and perturbation seed (default 1; same seed = same fit)
   --seeds S           perturbation seeds averaged per evaluation (default 2)
-  --global N          global-stage evaluations (default 4 per fitted parameter)
-  --local N           local-stage evaluations (default 8 per fitted parameter + 8)
+  --method M          lm (default): Levenberg-Marquardt on the exact sensitivities of the rest
+                      states; nlopt: the derivative-free search (CRS2 global, BOBYQA local)
+  --global N          global-stage (CRS2) evaluations (default: 4 per fitted parameter with
+                      --method nlopt, none with lm)
+  --local N           local-stage evaluations (default: lm 4 per fitted parameter + 6,
+                      nlopt 8 per fitted parameter + 8)
   --branch B          where cold drapes start: measured (default; on the record's measured fold
-                      count, an n-fold lift of the flat sheet) or random (the seeded mix of modes)
+                      count, an n-fold lift of the flat sheet), random (the seeded mix of modes, as
+                      the preset drapes from flat) or mixed (even seeds measured, odd seeds random)
   --cold-global       global stage from flat starts (default: from the best point's rest
                       states, faster, but each seed keeps its fold pattern)
   --cold-local        local stage from flat starts too (every simulation is a fresh drop,
                       as the lab's and `drape predict`'s; slower)
-  --start FABRIC      start point / values of the parameters not fitted (a library preset)
+  --start FABRIC      start point / values of the parameters not fitted (a library preset;
+                      default: the table's defaults with buckling_length_m = 7.5 mm, the starters'
+                      documented typical compression limit)
   --set KEY=VALUE     hold a parameter the model does not fit at VALUE (a key of the parameter
                       table in its unit, e.g. --set buckling_length_m=0.005; a fitted one starts there;
                       over --start; repeatable)
@@ -102,7 +113,7 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only", "--cold-global", "--cold-local"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
@@ -117,11 +128,16 @@ int run(const std::vector<std::string>& argv)
         throw UsageError(std::string("--") + e.what());
     }
     try {
+        fo.method = estimate::parse_fit_method(a.get_or("--method", "lm"));
+    } catch (const Error& e) {
+        throw UsageError(std::string("--") + e.what());
+    }
+    try {
         if (const auto ch = a.get("--channels")) fo.channels = estimate::parse_channels(*ch);
     } catch (const Error& e) {
         throw UsageError(std::string("--") + e.what());
     }
-    fo.grid = a.get_int("--grid", 25, 9, 200);
+    fo.grid = a.get_int("--grid", 41, 9, 200);
     fo.refine_grid = a.get_int("--refine-grid", fo.grid < 41 ? 41 : 0, 0, 200);
     if (fo.refine_grid != 0 && fo.refine_grid <= fo.grid)
         throw UsageError("--refine-grid " + std::to_string(fo.refine_grid) + " must be above --grid " + std::to_string(fo.grid) + " (or 0)");
@@ -146,7 +162,10 @@ int run(const std::vector<std::string>& argv)
         for (const char* declared : {"areal_density_kg_m2=", "thickness_m="})
             if (kv.rfind(declared, 0) == 0)
                 throw UsageError("--set " + kv + ": the record declares it (meta.json 'fabric'); a fit takes the lab's value");
-    if (!a.get_all("--set").empty()) fo.start = apply_set_flags(a, fo.start.value_or(cloth::FabricParams{}));
+    // Without --start the fit holds the membrane's compression limit at the
+    // documented typical value (estimate::kTypicalBucklingLength), not the seed's 0.
+    if (!fo.start) fo.start = estimate::default_fit_start();
+    if (!a.get_all("--set").empty()) fo.start = apply_set_flags(a, *fo.start);
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     if (const auto n = a.get("--name"); n && !try_normalize_name(*n))
         throw UsageError("--name: '" + printable(*n) + "' is not a name (1..200 characters of UTF-8 text, no control characters)");
@@ -228,6 +247,12 @@ int run(const std::vector<std::string>& argv)
         for (const auto& b : r.residual.exceeds_because) std::printf("  beyond noise by %s\n", b.c_str());
         for (std::size_t i = 0; i < r.residual.candidate_effects.size(); ++i)
             std::printf("  candidate effect: %s (%s)\n", r.residual.candidate_effects[i].c_str(), r.residual.evidence[i].c_str());
+        for (const auto& c : r.residual.candidates)
+            if (c.verdict == "beyond noise")
+                std::printf("  effect test: %s beyond noise (z %.1f, delta chi2 %.1f for %d parameter(s), amplitude %.3g %s)\n", c.name.c_str(), c.z,
+                            c.delta_chi2, c.parameters, c.amplitude, c.amplitude_unit.c_str());
+        if (!r.residual.named_effect.empty()) std::printf("named effect: %s (refit with it explains the residual)\n", r.residual.named_effect.c_str());
+        else if (!r.residual.unexplained.empty()) std::printf("%s\n", r.residual.unexplained.c_str());
         if (r.refinement.from_grid > 0) std::printf("grid refinement: %s\n", r.refinement.reason.c_str());
         if (r.grid_bound)
             std::printf("WARNING: grid-bound preset: a fitted bending length is below the mesh spacing of grid %d; "

@@ -16,8 +16,8 @@ if build/bin/drape help measure >/dev/null 2>&1 && [ -d "$record" ]; then
   build/bin/drape measure "$record" --overlay "$out/measure-overlay.png"
 fi
 if build/bin/drape help fit >/dev/null 2>&1 && [ -d "$record" ]; then
-  echo "== drape fit $record (quick: grid 25 only; a full fit refits a grid-bound optimum on grid 41, minutes)"
-  build/bin/drape fit "$record" --refine-grid 0 --out "$out/fabric.json" --report "$out/report"
+  echo "== drape fit $record (grid 41, Levenberg-Marquardt on the exact sensitivities of the rest states; about 40 s)"
+  build/bin/drape fit "$record" --out "$out/fabric.json" --report "$out/report"
   echo "== drape predict at 360/180 mm"
   build/bin/drape predict --fabric "$out/fabric.json" --sample-diameter 360mm --disc-diameter 180mm
 fi

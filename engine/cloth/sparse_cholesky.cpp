@@ -65,6 +65,16 @@ struct AnalysedPattern {
 };
 thread_local AnalysedPattern t_last_analysis;
 
+/// One symbolic analysis at a time in the process. METIS (Debian's libmetis
+/// 5.1.0) draws its random numbers from the C library's rand(), reseeded with
+/// srand(4321) at the start of every ordering: one stream for the whole
+/// process. Two analyses at once (a fit's seeds on two threads) interleave their
+/// draws and get other orderings than a lone analysis, hence other rounding in
+/// every factorisation: the drapes, and a fit's chi2, depended on timing (chi2
+/// 44.8 / 46.8 for the same grid-41 fit). The wait is at most one analysis
+/// (2 ms at grid 25, 6 ms at grid 41), once per mesh and thread.
+std::mutex g_analysis_mutex;
+
 } // namespace
 
 std::unique_ptr<Cholmod> take_analysed(const SpMat& A, bool& reused)
@@ -75,7 +85,10 @@ std::unique_ptr<Cholmod> take_analysed(const SpMat& A, bool& reused)
     last.llt.reset(); // free the old factor before the new analysis
     auto llt = std::make_unique<Cholmod>();
     configure_cholmod(*llt);
-    llt->analyzePattern(A);
+    {
+        std::lock_guard lock(g_analysis_mutex);
+        llt->analyzePattern(A);
+    }
     return llt;
 }
 

@@ -1,8 +1,11 @@
 #include "engine/estimate/evaluator.hpp"
 
+#include "engine/cloth/rest_sensitivity.hpp"
+#include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <mutex>
 
 namespace drape::estimate::detail {
@@ -29,13 +32,15 @@ Evaluator::Evaluator(const std::vector<MeasuredDrape>& recs, const FitOptions& o
 cloth::DrapeSetup Evaluator::setup_for(int r, std::uint64_t seed, bool on_branch) const
 {
     const cloth::DrapeSetup s = m_recs[static_cast<std::size_t>(r)].setup(m_opt.grid, seed);
-    const int n = on_branch ? branch_of(r) : 0;
+    // Mixed: the odd seeds (counted from the fit's seed) start from the random mix.
+    const bool random_seed = m_opt.branch == FoldBranch::Mixed && ((seed - m_opt.seed) % 2 == 1);
+    const int n = on_branch && !random_seed ? branch_of(r) : 0;
     return n > 0 ? cloth::on_fold_branch(s, n, m_opt.branch_lift_m) : s;
 }
 
 int Evaluator::branch_of(int r) const
 {
-    return m_opt.branch == FoldBranch::Measured ? measured_fold_branch(m_meas[static_cast<std::size_t>(r)].node_count) : 0;
+    return m_opt.branch != FoldBranch::Random ? measured_fold_branch(m_meas[static_cast<std::size_t>(r)].node_count) : 0;
 }
 
 cloth::FabricParams Evaluator::params_at(const Eigen::VectorXd& x) const
@@ -49,8 +54,15 @@ cloth::FabricParams Evaluator::params_at(const Eigen::VectorXd& x) const
 
 Evaluation Evaluator::evaluate(const Eigen::VectorXd& x, Start from)
 {
+    Evaluation e = evaluate_params(params_at(x), from);
+    m_last_x = x;
+    return e;
+}
+
+Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
+{
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
-    const cloth::FabricParams p = params_at(x);
+    m_last_x = Eigen::VectorXd(); // not a search point (evaluate sets it after)
     const int S = std::max(1, m_opt.seeds_per_evaluation);
     const int R = static_cast<int>(m_recs.size());
     Evaluation e;
@@ -95,7 +107,6 @@ Evaluation Evaluator::evaluate(const Eigen::VectorXd& x, Start from)
     e.chi2 = chi_square(e.terms);
     ++m_evaluations;
     m_last = e;
-    m_last_x = x;
     return e;
 }
 
@@ -189,8 +200,370 @@ double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::str
     return e.chi2;
 }
 
-void Evaluator::report(const std::string& stage) const
+namespace {
+/// Whether the slice of term t's depth closed for the same fraction of seeds on
+/// both sides of a difference (terms without a depth: always).
+bool same_closure(const std::vector<double>& a, const std::vector<double>& b, const DrapeFeatures& meas, const ResidualTerm& t)
 {
+    if (t.depth_m == 0 || t.kind == "dc" || t.kind == "hem" || t.kind == "nodes") return true;
+    for (std::size_t d = 0; d < meas.contours.size(); ++d)
+        if (std::abs(meas.contours[d].depth_m - t.depth_m) < 1e-9) return d >= a.size() || d >= b.size() || a[d] == b[d];
+    return true;
+}
+} // namespace
+
+Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& e, bool resolves)
+{
+    if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
+    ++m_jacobians;
+    const cloth::FabricParams p = params_at(x);
+    const int S = std::max(1, m_opt.seeds_per_evaluation);
+    const int R = static_cast<int>(m_recs.size());
+    const int n = static_cast<int>(m_vars.size());
+    const Eigen::Index rows = static_cast<Eigen::Index>(e.terms.size());
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(rows, n);
+    if (static_cast<int>(e.sims.size()) != R) return J;
+
+    // Which variables the sensitivities serve: every parameter of the group
+    // nonzero and inside its bounds (clamped coordinates do not move anything),
+    // and every drape at rest.
+    bool all_at_rest = true;
+    for (const auto& rs : e.sims)
+        for (const auto& sim : rs) all_at_rest = all_at_rest && sim.status.converged();
+    std::vector<char> exact(static_cast<std::size_t>(n), all_at_rest ? 1 : 0);
+    for (int i = 0; i < n; ++i)
+        for (Param q : m_vars[static_cast<std::size_t>(i)].params)
+            if (!(p[q] > cloth::spec(q).lower) || !(p[q] < cloth::spec(q).upper) || !cloth::spec(q).affects_statics) exact[static_cast<std::size_t>(i)] = 0;
+
+    // Coordinate step of the metric's central difference along dx/dc: the
+    // first-order path is linear, so the step only has to be small against the
+    // metrics' own kinks (a shadow vertex crossing the rim).
+    auto delta = [&](int i) {
+        const auto& v = m_vars[static_cast<std::size_t>(i)];
+        return v.log_scale ? 1e-3 : 1e-3 * (v.upper - v.lower);
+    };
+    // features[r][s][2 i + (0 up, 1 down)]
+    std::vector<std::vector<std::vector<DrapeFeatures>>> feats(static_cast<std::size_t>(R),
+        std::vector<std::vector<DrapeFeatures>>(static_cast<std::size_t>(S), std::vector<DrapeFeatures>(static_cast<std::size_t>(2 * n))));
+    std::vector<Param> qs;
+    for (int i = 0; i < n; ++i)
+        if (exact[static_cast<std::size_t>(i)])
+            for (Param q : m_vars[static_cast<std::size_t>(i)].params) qs.push_back(q);
+    bool sens_ok = !qs.empty();
+    if (sens_ok) {
+        const int nthreads = std::clamp(m_opt.parallel_seeds, 1, R * S);
+        try {
+            parallel_for(static_cast<std::size_t>(R * S), nthreads, [&](std::size_t j) {
+                const int r = static_cast<int>(j) / S, s = static_cast<int>(j) % S;
+                const auto& rec = m_recs[static_cast<std::size_t>(r)];
+                const auto& sim = e.sims[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)];
+                const cloth::DrapeSetup setup = setup_for(r, m_opt.seed + static_cast<std::uint64_t>(s), true);
+                const cloth::FabricParams pr = params_for_record(p, rec);
+                const cloth::Material mat(pr);
+                const auto sens = cloth::rest_sensitivities(mat, setup, sim.x, qs, m_opt.model_options);
+                auto sys = cloth::make_drape_system(mat, setup, m_opt.model_options);
+                std::size_t k = 0;
+                for (int i = 0; i < n; ++i) {
+                    if (!exact[static_cast<std::size_t>(i)]) continue;
+                    const auto& v = m_vars[static_cast<std::size_t>(i)];
+                    cloth::Positions dxdc = cloth::Positions::Zero(sim.x.rows(), 3);
+                    for (Param q : v.params) {
+                        // d value / d coordinate: value ln 10 on a log scale.
+                        const double dv = v.log_scale ? pr[q] * std::log(10.0) : 1.0;
+                        dxdc += dv * sens[k++].dx;
+                    }
+                    const double d = delta(i);
+                    auto& f = feats[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)];
+                    sys->x = sim.x + d * dxdc;
+                    f[static_cast<std::size_t>(2 * i)] = drape_features(cloth::measure_drape(*sys, setup), rec);
+                    sys->x = sim.x - d * dxdc;
+                    f[static_cast<std::size_t>(2 * i + 1)] = drape_features(cloth::measure_drape(*sys, setup), rec);
+                }
+            });
+        } catch (const drape::Error&) {
+            sens_ok = false; // not a stable rest state: differences of re-solves below
+        }
+        if (sens_ok) {
+            m_factorisations += R * S;
+            m_back_substitutions += static_cast<long>(R * S) * static_cast<long>(qs.size());
+        }
+    }
+    std::vector<std::size_t> first(static_cast<std::size_t>(R) + 1, 0); // record r's terms: [first[r], first[r + 1])
+    for (int r = 0; r < R; ++r) {
+        const auto& mr = m_meas[static_cast<std::size_t>(r)];
+        first[static_cast<std::size_t>(r) + 1] =
+            first[static_cast<std::size_t>(r)] + residual_terms(r, mr, mr, std::vector<double>(mr.contours.size(), 1.0), m_noise).size();
+    }
+    if (first.back() != e.terms.size()) return J; // not this evaluator's terms
+    // The closure rows count seeds whose slice closed: no derivative (a flip
+    // between x + d and x - d would read as a slope of thousands).
+    auto keep_row = [&](std::size_t k) {
+        return e.terms[k].smooth && e.terms[k].fitted && e.terms[k].sigma > 0 && e.terms[k].kind != "closure";
+    };
+    for (int i = 0; i < n; ++i) {
+        if (sens_ok && exact[static_cast<std::size_t>(i)]) {
+            const double d = delta(i);
+            for (int r = 0; r < R; ++r) {
+                std::vector<DrapeFeatures> up, dn;
+                for (int s = 0; s < S; ++s) {
+                    up.push_back(feats[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)][static_cast<std::size_t>(2 * i)]);
+                    dn.push_back(feats[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)][static_cast<std::size_t>(2 * i + 1)]);
+                }
+                std::vector<double> cu, cd;
+                const DrapeFeatures au = average_features(up, &cu), ad = average_features(dn, &cd);
+                const auto& mr = m_meas[static_cast<std::size_t>(r)];
+                const auto tu = residual_terms(r, mr, au, cu, m_noise), td = residual_terms(r, mr, ad, cd, m_noise);
+                const std::size_t count = first[static_cast<std::size_t>(r) + 1] - first[static_cast<std::size_t>(r)];
+                if (tu.size() != count || td.size() != count) continue; // rows would not line up: leave the column's rows at 0
+                for (std::size_t k = 0; k < tu.size() && k < td.size(); ++k) {
+                    const std::size_t row = first[static_cast<std::size_t>(r)] + k;
+                    // A depth whose slice closed for another set of seeds on the two
+                    // sides averages other drapes: no derivative there.
+                    if (!same_closure(cu, cd, mr, e.terms[row])) continue;
+                    if (keep_row(row) && std::isfinite(tu[k].simulated) && std::isfinite(td[k].simulated))
+                        J(static_cast<Eigen::Index>(row), i) = (tu[k].simulated - td[k].simulated) / (2 * d) / e.terms[row].sigma;
+                }
+            }
+            continue;
+        }
+        if (!resolves) continue;
+        // A one-sided difference of warm re-solves, into the box.
+        const auto& v = m_vars[static_cast<std::size_t>(i)];
+        double h = v.log_scale ? 0.05 : 0.02 * (v.upper - v.lower);
+        Eigen::VectorXd xp = x;
+        if (x[i] + h > v.upper) h = -h;
+        xp[i] = x[i] + h;
+        const Evaluation ep = evaluate(xp, Start::Best);
+        report("jacobian");
+        for (std::size_t k = 0; k < e.terms.size() && k < ep.terms.size(); ++k)
+            if (keep_row(k) && std::isfinite(ep.terms[k].simulated) && std::isfinite(e.terms[k].simulated))
+                J(static_cast<Eigen::Index>(k), i) = (ep.terms[k].simulated - e.terms[k].simulated) / h / e.terms[k].sigma;
+    }
+    return J;
+}
+
+std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd& x, const Evaluation& e)
+{
+    if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
+    const auto& lib = effect_library();
+    const cloth::FabricParams p = params_at(x);
+    const int S = std::max(1, m_opt.seeds_per_evaluation);
+    const int R = static_cast<int>(m_recs.size());
+    const Eigen::Index rows = static_cast<Eigen::Index>(e.terms.size());
+    std::vector<EffectSignature> out(lib.size());
+    bool all_at_rest = static_cast<int>(e.sims.size()) == R;
+    for (const auto& rs : e.sims)
+        for (const auto& sim : rs) all_at_rest = all_at_rest && sim.status.converged();
+    auto fitted_param = [&](Param q) {
+        for (const auto& v : m_vars)
+            for (Param w : v.params)
+                if (w == q) return true;
+        return false;
+    };
+    // Which effects can be made here, and their columns.
+    std::vector<Param> sens_params; // parameters whose dx/dp the sensitivities give
+    for (std::size_t k = 0; k < lib.size(); ++k) {
+        const EffectSpec& sp = lib[k];
+        auto& sig = out[k];
+        sig.spec = &sp;
+        const int cols = sp.kind == EffectKind::ProfilerAxis ? 2 : 1;
+        sig.columns = Eigen::MatrixXd::Zero(rows, cols);
+        if (!all_at_rest) {
+            sig.available = false;
+            sig.why_not = "the fit's drapes are not at rest: no linearisation";
+            continue;
+        }
+        for (Param q : sp.params)
+            if (fitted_param(q)) {
+                sig.available = false;
+                sig.why_not = "the model fits it already (" + std::string(cloth::spec(q).key) + ")";
+            }
+        if (!sig.available) continue;
+        if (sp.kind == EffectKind::Parameter) {
+            for (Param q : sp.params)
+                if (!(p[q] > 0) || !cloth::spec(q).affects_statics) {
+                    sig.available = false;
+                    sig.why_not = std::string(cloth::spec(q).key) + " is 0 in this model (no relative change)";
+                }
+            if (sig.available)
+                for (Param q : sp.params)
+                    if (std::find(sens_params.begin(), sens_params.end(), q) == sens_params.end()) sens_params.push_back(q);
+        } else if (sp.kind == EffectKind::Switch) {
+            for (Param q : sp.params)
+                if (p[q] != 0) {
+                    sig.available = false;
+                    sig.why_not = std::string(cloth::spec(q).key) + " is already on in this model";
+                }
+        }
+    }
+    // Features of every (record, seed) with each effect on: [r][s][effect][column].
+    std::vector<std::vector<std::vector<std::vector<DrapeFeatures>>>> on(
+        static_cast<std::size_t>(R), std::vector<std::vector<std::vector<DrapeFeatures>>>(
+                                         static_cast<std::size_t>(S), std::vector<std::vector<DrapeFeatures>>(lib.size())));
+    std::vector<std::vector<DrapeFeatures>> off(static_cast<std::size_t>(R), std::vector<DrapeFeatures>(static_cast<std::size_t>(S)));
+    constexpr double kRel = 1e-3;   // relative change of a parameter along its dx/d ln p (first order: any small step)
+    constexpr double kScale = 1e-3; // scale error
+    constexpr double kShift = 1e-4; // [m] axis shift
+    long resolves = 0;
+    std::atomic<bool> parameter_failed{false};
+    std::vector<std::atomic<char>> switch_failed(lib.size());
+    for (auto& f : switch_failed) f = 0;
+    const auto t0 = Clock::now();
+    const int nthreads = std::clamp(m_opt.parallel_seeds, 1, R * S);
+    if (all_at_rest) {
+        std::mutex count_mutex;
+        parallel_for(static_cast<std::size_t>(R * S), nthreads, [&](std::size_t j) {
+            const int r = static_cast<int>(j) / S, s = static_cast<int>(j) % S;
+            const auto& rec = m_recs[static_cast<std::size_t>(r)];
+            const auto& sim = e.sims[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)];
+            const cloth::DrapeSetup setup = setup_for(r, m_opt.seed + static_cast<std::uint64_t>(s), true);
+            const cloth::FabricParams pr = params_for_record(p, rec);
+            const cloth::Material mat(pr);
+            auto sys = cloth::make_drape_system(mat, setup, m_opt.model_options);
+            auto measure = [&](const cloth::Positions& X) {
+                sys->x = X;
+                return drape_features(cloth::measure_drape(*sys, setup), rec);
+            };
+            off[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)] = measure(sim.x);
+            std::vector<cloth::RestSensitivity> sens;
+            std::vector<Param> qs;
+            for (Param q : sens_params)
+                if (pr[q] > 0) qs.push_back(q);
+            bool sens_ok = true;
+            try {
+                if (!qs.empty()) sens = cloth::rest_sensitivities(mat, setup, sim.x, qs, m_opt.model_options);
+            } catch (const drape::Error&) {
+                sens_ok = false; // not a stable rest state: no parameter signatures (the others need no Hessian)
+                parameter_failed = true;
+            }
+            auto& mine = on[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)];
+            long my_resolves = 0;
+            for (std::size_t k = 0; k < lib.size(); ++k) {
+                if (!out[k].available) continue;
+                const EffectSpec& sp = lib[k];
+                switch (sp.kind) {
+                case EffectKind::Parameter: {
+                    if (!sens_ok) break;
+                    cloth::Positions dx = cloth::Positions::Zero(sim.x.rows(), 3);
+                    for (Param q : sp.params)
+                        for (std::size_t i = 0; i < qs.size(); ++i)
+                            if (qs[i] == q) dx += pr[q] * sens[i].dx; // d x / d ln p
+                    mine[k] = {measure(sim.x + kRel * dx)};
+                    break;
+                }
+                case EffectKind::Switch: {
+                    cloth::FabricParams q = pr;
+                    for (Param w : sp.params) q[w] = sp.on_value;
+                    cloth::DrapeSetup su = setup;
+                    su.disc_grip = su.disc_grip || sp.disc_grip;
+                    cloth::ModelOptions mo = m_opt.model_options;
+                    if (sp.vertex_contact) mo.edge_contact = false;
+                    cloth::RestOptions ro = m_opt.rest;
+                    ro.cancel = m_opt.cancel;
+                    ro.progress = nullptr;
+                    const cloth::DrapeResult d = cloth::simulate_drape_from(cloth::Material(q), su, sim.x, ro, mo);
+                    ++my_resolves;
+                    if (!d.status.converged()) switch_failed[k] = 1; // not at rest: no signature
+                    mine[k] = {drape_features(d, rec)};
+                    break;
+                }
+                case EffectKind::CameraScale: // the photos: every length, the hem's height too
+                    mine[k] = {measure(sim.x * (1 + kScale))};
+                    break;
+                case EffectKind::ProfilerScale: { // the laser: radii only (the depths are the profiler's own setting)
+                    cloth::Positions X = sim.x;
+                    X.leftCols(2) *= 1 + kScale;
+                    mine[k] = {measure(X)};
+                    break;
+                }
+                case EffectKind::ProfilerAxis: {
+                    cloth::Positions X = sim.x, Y = sim.x;
+                    X.col(0).array() += kShift;
+                    Y.col(1).array() += kShift;
+                    mine[k] = {measure(X), measure(Y)};
+                    break;
+                }
+                }
+            }
+            std::lock_guard lock(count_mutex);
+            resolves += my_resolves;
+        });
+        m_simulations += resolves;
+        m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
+        if (!sens_params.empty() && !parameter_failed) {
+            m_factorisations += R * S;
+            m_back_substitutions += static_cast<long>(R * S) * static_cast<long>(sens_params.size());
+        }
+        for (std::size_t k = 0; k < lib.size(); ++k) {
+            if (!out[k].available) continue;
+            if (lib[k].kind == EffectKind::Parameter && parameter_failed) {
+                out[k].available = false;
+                out[k].why_not = "the Hessian at a rest state is not positive definite: no sensitivity";
+            }
+            if (switch_failed[k]) {
+                out[k].available = false;
+                out[k].why_not = "the drape with the effect switched on did not come to rest";
+            }
+        }
+    }
+    if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
+    std::vector<std::size_t> first(static_cast<std::size_t>(R) + 1, 0);
+    for (int r = 0; r < R; ++r) {
+        const auto& mr = m_meas[static_cast<std::size_t>(r)];
+        first[static_cast<std::size_t>(r) + 1] =
+            first[static_cast<std::size_t>(r)] + residual_terms(r, mr, mr, std::vector<double>(mr.contours.size(), 1.0), m_noise).size();
+    }
+    if (first.back() != e.terms.size()) return out;
+    auto photo_row = [](const std::string& kind) { return kind == "dc" || kind == "hem"; };
+    for (std::size_t k = 0; k < lib.size() && all_at_rest; ++k) {
+        auto& sig = out[k];
+        if (!sig.available) continue;
+        const EffectSpec& sp = lib[k];
+        const double unit = sp.kind == EffectKind::Parameter ? kRel : sp.kind == EffectKind::Switch ? 1.0
+                            : sp.kind == EffectKind::ProfilerAxis                                 ? kShift
+                                                                                                  : kScale;
+        for (Eigen::Index c = 0; c < sig.columns.cols(); ++c)
+            for (int r = 0; r < R; ++r) {
+                std::vector<DrapeFeatures> up, base;
+                for (int s = 0; s < S; ++s) {
+                    up.push_back(on[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)][k][static_cast<std::size_t>(c)]);
+                    base.push_back(off[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)]);
+                }
+                std::vector<double> cu, cb;
+                const DrapeFeatures au = average_features(up, &cu), ab = average_features(base, &cb);
+                const auto& mr = m_meas[static_cast<std::size_t>(r)];
+                const auto tu = residual_terms(r, mr, au, cu, m_noise), tb = residual_terms(r, mr, ab, cb, m_noise);
+                const std::size_t count = first[static_cast<std::size_t>(r) + 1] - first[static_cast<std::size_t>(r)];
+                if (tu.size() != count || tb.size() != count) continue;
+                for (std::size_t i = 0; i < tu.size() && i < tb.size(); ++i) {
+                    const std::size_t row = first[static_cast<std::size_t>(r)] + i;
+                    const auto& t = e.terms[row];
+                    if (!t.smooth || !t.fitted || !(t.sigma > 0) || t.kind == "closure") continue;
+                    if (!same_closure(cu, cb, mr, t)) continue;
+                    // The instruments act on their own channels only.
+                    if (sp.kind == EffectKind::CameraScale && !photo_row(t.kind)) continue;
+                    if ((sp.kind == EffectKind::ProfilerScale || sp.kind == EffectKind::ProfilerAxis) && photo_row(t.kind)) continue;
+                    if (!std::isfinite(tu[i].simulated) || !std::isfinite(tb[i].simulated)) continue;
+                    sig.columns(static_cast<Eigen::Index>(row), c) = (tu[i].simulated - tb[i].simulated) / unit / t.sigma;
+                }
+            }
+    }
+    return out;
+}
+
+void Evaluator::report(const std::string& stage)
+{
+    if (m_evaluations > m_traced) {
+        m_traced = m_evaluations;
+        FitTraceEntry t;
+        t.evaluation = m_evaluations;
+        t.stage = stage;
+        t.chi2 = m_last.chi2;
+        t.best_chi2 = m_best.chi2;
+        t.coords.assign(m_last_x.data(), m_last_x.data() + m_last_x.size());
+        t.elapsed_s = std::chrono::duration<double>(Clock::now() - m_t0).count();
+        m_trace.push_back(std::move(t));
+    }
     if (!m_opt.progress) return;
     FitProgress p;
     p.stage = stage;

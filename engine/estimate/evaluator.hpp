@@ -4,6 +4,7 @@
 // rest states), turns them into whitened residuals, keeps the best point, and
 // measures the drape-to-drape spread of every residual term. Internal to the
 // estimate layer (fit.cpp, stages.cpp, uncertainty.cpp).
+#include "engine/estimate/effects.hpp"
 #include "engine/estimate/fit.hpp"
 
 #include <chrono>
@@ -56,9 +57,35 @@ public:
     /// Objective for the optimizers: evaluates, keeps the best point and its rest states.
     double objective(const Eigen::VectorXd& x, Start from, const std::string& stage);
     /// Calls FitOptions::progress with the state so far.
-    void report(const std::string& stage) const;
+    /// Also appends the evaluation to the trace (once per evaluation).
+    void report(const std::string& stage);
+
+    /// Jacobian of the whitened residual terms of `e` (the evaluation at x, whose
+    /// rest states it linearises) with respect to the search coordinates: rows in
+    /// the order of e.terms, one column per variable. Columns come from the exact
+    /// rest-state sensitivities (dx/dp = H^-1 df/dp, one factorisation per drape,
+    /// one back-substitution per parameter) pushed through the shared metric code
+    /// along x +- d dx/dc; a variable they cannot serve (its value is 0, where it
+    /// switches an effect on, or a drape not at rest) gets a one-sided difference
+    /// of warm re-solves. Rows of terms that are not smooth (the node count) or
+    /// not fitted are zero. `resolves` = false: no re-solves; the columns the
+    /// sensitivities cannot serve stay zero. Throws CancelledFit.
+    Eigen::MatrixXd jacobian(const Eigen::VectorXd& x, const Evaluation& e, bool resolves = true);
+    const std::vector<FitTraceEntry>& trace() const { return m_trace; }
+    /// Signatures of the candidate effects (effects.hpp) at the evaluation `e`
+    /// at x: rows as e.terms (whitened with their sigmas; zero for terms not
+    /// fitted or not smooth). Parameter effects from the rest-state
+    /// sensitivities, switches from warm re-solves (counted as simulations),
+    /// instrument effects from re-measured positions. Throws CancelledFit.
+    std::vector<EffectSignature> effect_signatures(const Eigen::VectorXd& x, const Evaluation& e);
+    /// The evaluation at full parameters p (not a search point; not the best).
+    Evaluation evaluate_params(const cloth::FabricParams& p, Start from);
+    long factorisations() const { return m_factorisations; }
+    int jacobians() const { return m_jacobians; }
+    long back_substitutions() const { return m_back_substitutions; }
 
     const Evaluation& last() const { return m_last; }
+    const Eigen::VectorXd& last_x() const { return m_last_x; }
     const std::vector<DrapeFeatures>& measured() const { return m_meas; }
     const Evaluation& best() const { return m_best; }
     const Eigen::VectorXd& best_x() const { return m_best_x; }
@@ -91,6 +118,10 @@ private:
     std::vector<std::vector<cloth::Positions>> m_states;
     bool m_have_states = false;
     long m_simulations = 0, m_unconverged = 0;
+    long m_factorisations = 0, m_back_substitutions = 0;
+    int m_jacobians = 0;
+    std::vector<FitTraceEntry> m_trace;
+    int m_traced = 0; ///< evaluations already in m_trace
     int m_evaluations = 0;
     int m_planned = 0;
     double m_sim_seconds = 0;

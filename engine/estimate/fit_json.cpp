@@ -38,7 +38,7 @@ json fit_to_json(const FitResult& r)
     prov["local_stage_starts"] = r.options.warm_local ? "warm" : "cold";
     prov["channels"] = r.options.channels;
     prov["fold_branch"] = to_string(r.options.branch);
-    if (r.options.branch == FoldBranch::Measured) prov["fold_branch_lift_m"] = r.options.branch_lift_m;
+    if (r.options.branch != FoldBranch::Random) prov["fold_branch_lift_m"] = r.options.branch_lift_m;
     provenance.details = prov;
     preset.provenance = provenance;
 
@@ -50,6 +50,15 @@ json fit_to_json(const FitResult& r)
     json fit;
     fit["evaluations"] = r.evaluations;
     fit["simulations"] = r.simulations;
+    fit["method"] = to_string(r.options.method);
+    fit["factorisations"] = r.factorisations;
+    fit["back_substitutions"] = r.back_substitutions;
+    fit["jacobians"] = r.jacobians;
+    json trace = json::array();
+    for (const auto& t : r.trace)
+        trace.push_back({{"evaluation", t.evaluation}, {"stage", t.stage}, {"chi2", t.chi2}, {"best_chi2", t.best_chi2},
+                         {"coords", t.coords}, {"elapsed_s", t.elapsed_s}});
+    fit["trace"] = trace;
     fit["seconds_per_simulation"] = r.seconds_per_simulation;
     fit["wall_seconds"] = r.wall_seconds;
     fit["cancelled"] = r.cancelled;

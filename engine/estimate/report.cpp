@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -282,6 +283,37 @@ void parameter_plot(const FitResult& fr, const std::string& path)
     pl.save(path);
 }
 
+/// The fit's convergence: chi2 of every evaluation (points, one colour per
+/// stage) and the best so far (line), against the evaluation number.
+void convergence_plot(const FitResult& fr, const std::string& path)
+{
+    Plot pl(820, 420, "fit convergence: chi2 of each evaluation and the best so far", "evaluation", "chi2 (fitted terms)");
+    std::vector<double> ev, best;
+    std::vector<std::string> stages;
+    for (const auto& t : fr.trace) {
+        ev.push_back(t.evaluation);
+        best.push_back(t.best_chi2);
+        if (std::find(stages.begin(), stages.end(), t.stage) == stages.end()) stages.push_back(t.stage);
+    }
+    const Rgb palette[] = {{70, 70, 70}, {30, 110, 200}, {220, 120, 20}, {40, 150, 60}, {200, 50, 50}, {140, 70, 170}, {20, 160, 160}, {150, 120, 40}};
+    double top = 0;
+    for (const auto& t : fr.trace)
+        if (std::isfinite(t.chi2)) top = std::max(top, std::min(t.chi2, 4 * (best.empty() ? t.chi2 : best.back())));
+    for (std::size_t k = 0; k < stages.size(); ++k) {
+        std::vector<double> x, y;
+        for (const auto& t : fr.trace)
+            if (t.stage == stages[k] && std::isfinite(t.chi2)) x.push_back(t.evaluation), y.push_back(std::min(t.chi2, top));
+        pl.points(x, y, palette[k % 8], stages[k], 4);
+    }
+    std::vector<double> bx, by;
+    for (std::size_t i = 0; i < ev.size(); ++i)
+        if (std::isfinite(best[i])) bx.push_back(ev[i]), by.push_back(best[i]);
+    pl.line(bx, by, {0, 0, 0}, "best so far", 2);
+    if (top > 0) pl.set_yrange(0, top * 1.05);
+    pl.set_caption("values above 4x the final best are drawn at that height; the spread stage re-scores with the measured drape-to-drape noise");
+    pl.save(path);
+}
+
 std::string num(double v, const char* f = "%.3g") { return std::isfinite(v) ? fmt(f, v) : std::string("n/a"); }
 
 } // namespace
@@ -427,7 +459,38 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
     }
 
     const ResidualAnalysis& a = r.residual;
+    if (!r.trace.empty()) {
+        md << "## Convergence\n\nMethod `" << to_string(r.options.method) << "`: " << r.evaluations << " evaluations ("
+           << r.simulations << " drapes), " << r.factorisations << " Hessian factorisations and " << r.back_substitutions
+           << " back-substitutions for exact sensitivities, " << r.jacobians << " Jacobians.\n\n";
+        convergence_plot(r, (root / "convergence.png").string());
+        files.push_back("convergence.png");
+        md << "![convergence](convergence.png)\n\n| evaluation | stage | chi2 | best so far | coordinates (";
+        for (std::size_t i = 0; i < r.variables.size(); ++i) md << (i ? ", " : "") << (r.variables[i].log_scale ? "log10 " : "") << r.variables[i].name;
+        md << ") | time [s] |\n|---|---|---|---|---|---|\n";
+        for (const auto& t : r.trace) {
+            md << "| " << t.evaluation << " | " << t.stage << " | " << num(t.chi2, "%.1f") << " | " << num(t.best_chi2, "%.1f") << " | ";
+            for (std::size_t i = 0; i < t.coords.size(); ++i) md << (i ? ", " : "") << num(t.coords[i], "%.3f");
+            md << " | " << num(t.elapsed_s, "%.1f") << " |\n";
+        }
+        md << "\n";
+    }
     md << "## Residual analysis\n\n";
+    if (!r.residual.candidates.empty()) {
+        md << "### Candidate effects (engine-made signatures, docs/model-discrepancy.md section 11)\n\n";
+        md << (r.residual.named_effect.empty() ? std::string("Named effect: **none**") : "Named effect: **" + r.residual.named_effect + "**");
+        if (!r.residual.unexplained.empty()) md << " (" << r.residual.unexplained << ")";
+        md << ".\n\n| effect | family | parameters | z | delta chi2 | information | amplitude | verdict | note |\n|---|---|---|---|---|---|---|---|---|\n";
+        for (const auto& c : r.residual.candidates) {
+            md << "| " << c.name << " | " << c.family << " | " << c.parameters << " | ";
+            if (c.verdict == "not testable") md << "- | - | - | - | ";
+            else
+                md << num(c.z, "%+.2f") << " | " << num(c.delta_chi2, "%.2f") << " | " << num(c.information, "%+.2f") << " | "
+                   << num(c.amplitude, "%.3g") << " " << c.amplitude_unit << " | ";
+            md << c.verdict << " | " << c.note << " |\n";
+        }
+        md << "\n";
+    }
     md << "chi2 = " << num(a.chi2, "%.1f") << " for " << a.dof << " degrees of freedom (RMS whitened residual "
        << num(a.rms_whitened, "%.2f") << "; 1 = at the noise): the residual **" << (a.exceeds_noise ? "exceeds" : "is within")
        << "** the measurement noise. RMS contour residual " << num(a.rms_m * 1e3, "%.2f") << " mm.\n\n";

@@ -212,6 +212,23 @@ nlohmann::json residual_to_json(const ResidualAnalysis& a)
     nlohmann::json z = nlohmann::json::object();
     for (const auto& [name, v] : a.signature_z) z[name] = v;
     j["signature_z"] = z;
+    nlohmann::json cands = nlohmann::json::array();
+    for (const auto& c : a.candidates) {
+        nlohmann::json e = {{"name", c.name}, {"family", c.family}, {"parameters", c.parameters}, {"verdict", c.verdict}};
+        if (c.verdict != "not testable") {
+            e["z"] = c.z;
+            e["delta_chi2"] = c.delta_chi2;
+            e["information"] = c.information;
+            e["amplitude"] = c.amplitude;
+            e["amplitude_unit"] = c.amplitude_unit;
+            if (std::isfinite(c.verified_delta_chi2)) e["verified_delta_chi2"] = c.verified_delta_chi2;
+        }
+        if (!c.note.empty()) e["note"] = c.note;
+        cands.push_back(std::move(e));
+    }
+    j["candidates"] = cands;
+    j["named_effect"] = a.named_effect.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.named_effect);
+    if (!a.unexplained.empty()) j["unexplained"] = a.unexplained;
     j["evidence"] = a.evidence;
     return j;
 }

@@ -2,6 +2,7 @@
 // Residual analysis of a fit (issue 7): is what the model leaves over larger
 // than the measurement noise, where is it structured (harmonics, depths,
 // channels), and which missing effects is that structure consistent with.
+#include "engine/estimate/effects.hpp"
 #include "engine/estimate/objective.hpp"
 
 #include <nlohmann/json.hpp>
@@ -14,7 +15,8 @@ namespace drape::estimate {
 struct ResidualAnalysis {
     double chi2 = 0;
     int dof = 0;                      ///< residual terms minus fitted coordinates
-    bool exceeds_noise = false;       ///< chi2 beyond dof + 3 sqrt(2 dof), or one channel / harmonic beyond its own 3-sigma chi2 bound
+    bool exceeds_noise = false;       ///< chi2 beyond dof + 3 sqrt(2 dof), or one channel / harmonic beyond its own 3-sigma chi2 bound, or a candidate effect beyond noise
+    bool exceeds_noise_by_residual = false; ///< the same without the candidate effects' tests
     double rms_m = 0;                 ///< RMS of the contour residuals in metres (radius, folds, harmonics)
     double rms_whitened = 0;          ///< RMS of all whitened residuals (1 = at the noise)
     std::vector<int> dominant_harmonics; ///< harmonics whose whitened residual RMS exceeds 2, largest first
@@ -36,6 +38,13 @@ struct ResidualAnalysis {
     std::vector<std::pair<std::string, double>> signature_z;
     /// Which test put the residual beyond noise (e.g. "harmonic 3: chi2 18.1 over 5 terms").
     std::vector<std::string> exceeds_because;
+    /// The candidate effects tested against the residual with engine-made
+    /// signatures (effects.hpp, issue 20), in library order; empty when not run.
+    std::vector<EffectCandidate> candidates;
+    /// The effect the refit names (name_effect), or empty.
+    std::string named_effect;
+    /// When the residual is beyond noise and no effect explains it: where it is.
+    std::string unexplained;
 };
 
 /// Analyses the residual terms of a fit with `fitted` coordinates.

@@ -3,7 +3,10 @@
 #include "engine/core/error.hpp"
 #include "engine/estimate/root.hpp"
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
+#include <cmath>
 #include <exception>
 
 namespace drape::estimate::detail {
@@ -82,14 +85,15 @@ bool run_stage(nlopt::algorithm alg, Evaluator& ev, const std::vector<FitVariabl
 }
 
 void scan_bending(Evaluator& ev, const std::vector<FitVariable>& vars, const std::vector<int>& bend_vars, int budget,
-                  Eigen::VectorXd& x, Box& box)
+                  Eigen::VectorXd& x, Box& box, bool newton)
 {
     const double lower = vars[static_cast<std::size_t>(bend_vars[0])].lower, upper = vars[static_cast<std::size_t>(bend_vars[0])].upper;
     int used = 0;
     double best_c = 0, best_err = HUGE_VAL;
     auto dc_error = [&](double c) { // mean simulated - measured D [points]
         for (int i : bend_vars) x[i] = c;
-        ev.objective(x, Start::Cold, "scan");
+        // The fit's start is often the scan's first point: its cold drapes are the last evaluation.
+        if (!(used == 0 && ev.last_x().size() == x.size() && ev.last_x() == x)) ev.objective(x, Start::Cold, "scan");
         ++used;
         double err = 0;
         int cnt = 0;
@@ -104,6 +108,42 @@ void scan_bending(Evaluator& ev, const std::vector<FitVariable>& vars, const std
     c0 = std::clamp(c0, lower, upper);
     const double e0 = dc_error(c0);
     constexpr double tol = 0.5;
+    if (newton) {
+        // Safeguarded Newton on the exact slope dD/dc of the drape just made (its
+        // rest-state sensitivities): a step at most a decade long, inside the
+        // bracket once the sign has changed (else the bracket's midpoint).
+        double c = c0, e = e0;
+        double blo = lower, bhi = upper; // bracket: D - Dm < 0 at blo, > 0 at bhi (when seen)
+        bool seen_lo = false, seen_hi = false;
+        while (std::abs(e) > tol && used < budget) {
+            if (e > 0) bhi = c, seen_hi = true;
+            else blo = c, seen_lo = true;
+            const Eigen::MatrixXd J = ev.jacobian(x, ev.last(), false);
+            double slope = 0;
+            int cnt = 0;
+            for (std::size_t k = 0; k < ev.last().terms.size(); ++k) {
+                const auto& t = ev.last().terms[k];
+                if (t.kind != "dc") continue;
+                for (int i : bend_vars) slope += J(static_cast<Eigen::Index>(k), i) * t.sigma;
+                ++cnt;
+            }
+            slope = cnt ? slope / cnt : 0.0;
+            double cn;
+            if (slope > 1e-3) cn = c - std::clamp(e / slope, -1.0, 1.0);
+            else cn = c + (e > 0 ? -1.0 : 1.0); // no usable slope: a decade towards the measured D
+            if (seen_lo && seen_hi && !(cn > blo && cn < bhi)) cn = 0.5 * (blo + bhi); // outside the bracket: bisect
+            cn = std::clamp(cn, lower, upper);
+            if (std::abs(cn - c) < 0.005) break; // at a bound, or converged below the coordinate's resolution
+            c = cn;
+            e = dc_error(c);
+        }
+        for (int i : bend_vars) {
+            const auto& v = vars[static_cast<std::size_t>(i)];
+            x[i] = best_c;
+            box[static_cast<std::size_t>(i)] = {std::max(v.lower, best_c - 0.7), std::min(v.upper, best_c + 0.7)};
+        }
+        return;
+    }
     bool bracketed = false;
     double lo = c0, hi = c0, elo = e0, ehi = e0;
     // Step a decade at a time towards the measured D until the sign changes.
@@ -131,8 +171,92 @@ void scan_bending(Evaluator& ev, const std::vector<FitVariable>& vars, const std
     }
 }
 
+bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Eigen::VectorXd& x, const Box& box, int budget,
+                         const std::string& stage, Start from)
+{
+    const int n = static_cast<int>(vars.size());
+    std::vector<double> lo(static_cast<std::size_t>(n)), hi(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+        lo[static_cast<std::size_t>(i)] = box.empty() ? vars[static_cast<std::size_t>(i)].lower : box[static_cast<std::size_t>(i)].first;
+        hi[static_cast<std::size_t>(i)] = box.empty() ? vars[static_cast<std::size_t>(i)].upper : box[static_cast<std::size_t>(i)].second;
+    }
+    // Every evaluation counts, the Jacobian's fallback re-solves too.
+    const int at_entry = ev.evaluations();
+    auto used_now = [&] { return ev.evaluations() - at_entry; };
+    try {
+        if (ev.best_x().size() != x.size()) ev.objective(x, Start::Cold, stage);
+        x = ev.best_x();
+        double lambda = 0.1;
+        // Trust radius as a fraction of the largest step (half a decade on log
+        // scales, a tenth of the range otherwise): halved on every rejected step,
+        // so a coordinate the data hardly sees (a small diagonal of J^T J, whose
+        // Marquardt damping stays weak) cannot keep proposing the same far step.
+        double radius = 1.0;
+        while (used_now() < budget) {
+            const Evaluation cur = ev.best();
+            const Eigen::MatrixXd J = ev.jacobian(x, cur);
+            Eigen::VectorXd r = Eigen::VectorXd::Zero(J.rows());
+            for (Eigen::Index k = 0; k < J.rows(); ++k)
+                if (cur.terms[static_cast<std::size_t>(k)].fitted) r[k] = cur.terms[static_cast<std::size_t>(k)].whitened();
+            const Eigen::MatrixXd A = J.transpose() * J;
+            const Eigen::VectorXd g = J.transpose() * r;
+            const double amax = std::max(A.diagonal().maxCoeff(), 1e-300);
+            if (!(g.allFinite() && A.allFinite()) || amax <= 1e-300) return false; // the data does not see any coordinate
+            bool accepted = false;
+            double gain = 0;
+            Eigen::VectorXd step;
+            while (used_now() < budget) {
+                Eigen::MatrixXd M = A;
+                for (int i = 0; i < n; ++i) M(i, i) += lambda * std::max(A(i, i), 1e-9 * amax) + 1e-12 * amax;
+                Eigen::VectorXd d = -M.ldlt().solve(g);
+                // Half a decade at most per step on log scales (the linearisation of
+                // a rest state does not reach further), a tenth of the range otherwise.
+                double scale = 1;
+                for (int i = 0; i < n; ++i) {
+                    const auto& v = vars[static_cast<std::size_t>(i)];
+                    const double cap = radius * (v.log_scale ? 0.5 : 0.1 * (v.upper - v.lower));
+                    if (std::abs(d[i]) > cap) scale = std::min(scale, cap / std::abs(d[i]));
+                }
+                d *= scale;
+                Eigen::VectorXd xn = x + d;
+                for (int i = 0; i < n; ++i) xn[i] = std::clamp(xn[i], lo[static_cast<std::size_t>(i)], hi[static_cast<std::size_t>(i)]);
+                step = xn - x;
+                bool moves = false;
+                for (int i = 0; i < n; ++i) {
+                    const auto& v = vars[static_cast<std::size_t>(i)];
+                    const double xtol = v.log_scale ? 0.003 : 0.002 * (v.upper - v.lower);
+                    moves = moves || std::abs(step[i]) > xtol;
+                }
+                if (!moves) return false; // converged: the step is below the coordinates' resolution
+                const double predicted = -(2 * g.dot(step) + step.dot(A * step));
+                const double before = cur.chi2;
+                const double after = ev.objective(xn, from, stage);
+                if (after < before) {
+                    gain = before - after;
+                    const double rho = predicted > 0 ? gain / predicted : 0.0;
+                    lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3));
+                    if (rho > 0.75) radius = std::min(1.0, 2 * radius);
+                    x = ev.best_x();
+                    accepted = true;
+                    break;
+                }
+                lambda = std::max(lambda, 1e-4) * 4;
+                radius *= 0.5;
+                if (lambda > 1e6) return false; // no descent along any damped step: a minimum at this resolution
+            }
+            // A gain below 0.2 in chi2 moves the parameters by a small fraction of
+            // their 1-sigma (a change of 1 in chi2): within the drape-to-drape noise.
+            if (!accepted || gain < 0.2) return false;
+        }
+    } catch (const CancelledFit&) {
+        if (ev.best_x().size() == x.size()) x = ev.best_x();
+        return true;
+    }
+    return false;
+}
+
 bool mirror_check(Evaluator& ev, const std::vector<FitVariable>& vars, const std::vector<int>& bend_vars, Eigen::VectorXd& x,
-                  int local, Start from, std::uint64_t seed)
+                  int local, Start from, std::uint64_t seed, bool lm)
 {
     if (bend_vars.size() != 2 || ev.best_x().size() != x.size()) return false;
     Eigen::VectorXd xs = ev.best_x();
@@ -143,6 +267,7 @@ bool mirror_check(Evaluator& ev, const std::vector<FitVariable>& vars, const std
         const double mirrored = ev.objective(xs, from, "mirror");
         if (mirrored < before) {
             x = xs;
+            if (lm) return levenberg_marquardt(ev, vars, x, {}, local, "local", from);
             return run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, from, "local", seed);
         }
     } catch (const CancelledFit&) {

@@ -15,7 +15,6 @@ std::vector<double> coordinate_sigmas(Evaluator& ev, const std::vector<FitVariab
                                       const Evaluation& best, FitResult& out)
 {
     const int n = static_cast<int>(vars.size());
-    std::vector<double> sigma(static_cast<std::size_t>(n), std::numeric_limits<double>::infinity());
     std::vector<int> rows;
     for (int i = 0; i < static_cast<int>(best.terms.size()); ++i)
         if (best.terms[static_cast<std::size_t>(i)].smooth && best.terms[static_cast<std::size_t>(i)].fitted) rows.push_back(i);
@@ -35,6 +34,13 @@ std::vector<double> coordinate_sigmas(Evaluator& ev, const std::vector<FitVariab
             J(static_cast<Eigen::Index>(r), i) = (ep.terms[k].whitened() - em.terms[k].whitened()) / (xp[i] - xm[i]);
         }
     }
+    return sigmas_from_jacobian(J, out);
+}
+
+std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J, FitResult& out)
+{
+    const int n = static_cast<int>(J.cols());
+    std::vector<double> sigma(static_cast<std::size_t>(n), std::numeric_limits<double>::infinity());
     // Linearised least squares: cov = s^2 (J^T J)^-1, with s^2 the reduced
     // chi-square when the fit is worse than the noise (the noise model was then
     // too optimistic; this keeps intervals honest).

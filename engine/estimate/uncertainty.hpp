@@ -16,6 +16,10 @@ namespace drape::estimate::detail {
 std::vector<double> coordinate_sigmas(Evaluator& ev, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
                                       const Evaluation& best, FitResult& out);
 
+/// The same from a Jacobian of the whitened residual terms (any rows: zero
+/// rows for terms left out, e.g. Evaluator::jacobian, add nothing).
+std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J_terms, FitResult& out);
+
 /// Fills out.estimates (every parameter of the table) and out.grid_bound from
 /// the optimum x and the coordinate sigmas. `mesh_spacing_m` is the fit's grid
 /// spacing: a fitted bending whose bending length is below it is grid-bound.

@@ -86,13 +86,19 @@ private slots:
                  qPrintable(branch.err));
         const Run refine = drape({"fit", record, "--out", out, "--refine-grid", "21", "--quiet"});
         QVERIFY(refine.code != 0);
-        QVERIFY2(refine.err.contains("--refine-grid 21") && refine.err.contains("--grid 25"), qPrintable(refine.err));
+        QVERIFY2(refine.err.contains("--refine-grid 21") && refine.err.contains("--grid 41"), qPrintable(refine.err)); // the default grid
         const Run folds = drape({"simulate", "--fabric", "seed-table1", "--folds", "1", "--quiet"});
         QVERIFY(folds.code != 0);
         QVERIFY2(folds.err.contains("--folds") && folds.err.contains("1 is outside [2, 16]"), qPrintable(folds.err));
         const Run cmp = drape({"compare", record, "--fabric", DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json", "--branch", "x", "--quiet"});
         QCOMPARE(cmp.code, 2);
         QVERIFY2(cmp.err.contains("--branch: 'x'"), qPrintable(cmp.err));
+        const Run mixed = drape({"compare", record, "--fabric", DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json", "--branch", "mixed", "--quiet"});
+        QCOMPARE(mixed.code, 2);
+        QVERIFY2(mixed.err.contains("'mixed' is a fit's choice"), qPrintable(mixed.err));
+        const Run method = drape({"fit", record, "--out", out, "--method", "bobyqa", "--quiet"});
+        QCOMPARE(method.code, 2);
+        QVERIFY2(method.err.contains("--method: 'bobyqa'") && method.err.contains("lm, nlopt"), qPrintable(method.err));
     }
 
     /// --set KEY=VALUE changes one parameter of the preset by its table key

@@ -122,6 +122,53 @@ private slots:
         QVERIFY(j["residual"]["rms_m"].get<double>() >= 0);
     }
 
+    void sensitivityFitKeepsAnIsotropicFabricIsotropic()
+    {
+        // The default method: Levenberg-Marquardt on the exact rest-state
+        // sensitivities. An isotropic fabric (warp = weft bending) at grid 25,
+        // where its bending length (17 mm) is above the mesh spacing (12.5 mm).
+        cloth::FabricParams p = truth();
+        p[Param::BendWarp] = p[Param::BendWeft] = 1.0e-5;
+        const MeasuredDrape rec = synthetic(p, 0.30, 0.15, 25, 11);
+        FitOptions o;
+        o.grid = 25;
+        o.seed = 1;
+        const FitResult r = fit_fabric({rec}, o);
+        QCOMPARE(r.options.method, FitMethod::Sensitivity);
+        QVERIFY(!r.cancelled && !r.grid_bound);
+        // Sensitivities, not re-solves: one factorisation per linearised drape (two
+        // seeds per Jacobian), each serving several back-substitutions (the fitted
+        // parameters; the effect tests' parameters); no derivative-free global stage.
+        QVERIFY(r.jacobians > 0);
+        QVERIFY(r.factorisations >= r.jacobians);
+        QVERIFY(r.back_substitutions >= r.factorisations * 2);
+        QVERIFY(!r.trace.empty());
+        for (const auto& t : r.trace) QVERIFY2(t.stage != "global", "no CRS2 stage by default");
+        QCOMPARE(r.trace.back().evaluation, r.evaluations);
+        int iw = -1, If = -1;
+        for (int i = 0; i < static_cast<int>(r.variables.size()); ++i) {
+            if (r.variables[i].params.front() == Param::BendWarp) iw = i;
+            if (r.variables[i].params.front() == Param::BendWeft) If = i;
+        }
+        // warp - weft in decades against its own 95 % interval (the fit's covariance)
+        const double diff = r.best_coords[iw] - r.best_coords[If];
+        const double var = r.covariance(iw, iw) + r.covariance(If, If) - 2 * r.covariance(iw, If);
+        qInfo("log10 warp/weft bending: %+.3f +- %.3f (95 %%), %d evaluations, %ld drapes, %ld factorisations, chi2 %.1f / %d", diff,
+              1.96 * std::sqrt(std::max(var, 0.0)), r.evaluations, r.simulations, r.factorisations, r.chi2, r.dof);
+        QVERIFY(std::isfinite(var) && var > 0);
+        QVERIFY2(std::abs(diff) <= 1.96 * std::sqrt(var), "an isotropic fabric fitted as anisotropic beyond its interval");
+        // and the common bending comes back within its interval
+        const double mean_fit = 0.5 * (r.best_coords[iw] + r.best_coords[If]);
+        const double var_mean = 0.25 * (r.covariance(iw, iw) + r.covariance(If, If) + 2 * r.covariance(iw, If));
+        QVERIFY(std::abs(mean_fit - std::log10(1.0e-5)) <= 1.96 * std::sqrt(var_mean));
+        QVERIFY(!r.residual.exceeds_noise);
+        // The preset JSON carries the method, the counts and the trace.
+        const auto j = fit_to_json(r);
+        QCOMPARE(j["fit"]["method"].get<std::string>(), std::string("lm"));
+        QCOMPARE(j["fit"]["trace"].size(), r.trace.size());
+        QCOMPARE(j["fit"]["factorisations"].get<long>(), r.factorisations);
+    }
+
     void sameSeedSameFit()
     {
         const MeasuredDrape rec = synthetic(truth(), 0.30, 0.15, 17, 3);
@@ -221,6 +268,8 @@ private slots:
 
     void badInputThrows()
     {
+        QVERIFY_THROWS_EXCEPTION(ParameterError, parse_fit_method("bobyqa"));
+        QCOMPARE(parse_fit_method("nlopt"), FitMethod::Nlopt);
         QVERIFY_THROWS_EXCEPTION(ParameterError, fit_fabric({}, FitOptions{}));
         MeasuredDrape empty;
         QVERIFY_THROWS_EXCEPTION(ParameterError, fit_fabric({empty}, FitOptions{}));

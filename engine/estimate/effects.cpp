@@ -1,0 +1,154 @@
+#include "engine/estimate/effects.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+
+#include <algorithm>
+#include <cmath>
+
+namespace drape::estimate {
+
+using cloth::Param;
+
+const std::vector<EffectSpec>& effect_library()
+{
+    static const std::vector<EffectSpec> lib = [] {
+        std::vector<EffectSpec> l;
+        auto param = [&](std::string name, std::string family, std::string doc, std::vector<Param> ps) {
+            EffectSpec e;
+            e.name = std::move(name);
+            e.family = std::move(family);
+            e.description = std::move(doc);
+            e.kind = EffectKind::Parameter;
+            e.params = std::move(ps);
+            e.amplitude_unit = "relative change";
+            l.push_back(std::move(e));
+        };
+        auto sw = [&](std::string name, std::string family, std::string doc, std::vector<Param> ps, double on, bool grip, bool vertex) {
+            EffectSpec e;
+            e.name = std::move(name);
+            e.family = std::move(family);
+            e.description = std::move(doc);
+            e.kind = EffectKind::Switch;
+            e.params = std::move(ps);
+            e.on_value = on;
+            e.disc_grip = grip;
+            e.vertex_contact = vertex;
+            e.amplitude_unit = "fraction of the switched-on effect";
+            l.push_back(std::move(e));
+        };
+        auto meas = [&](std::string name, std::string doc, EffectKind k, std::string unit) {
+            EffectSpec e;
+            e.name = std::move(name);
+            e.family = "measurement";
+            e.description = std::move(doc);
+            e.kind = k;
+            e.amplitude_unit = std::move(unit);
+            l.push_back(std::move(e));
+        };
+        meas("profiler_off_axis", "the laser profiler (or the specimen) off the pedestal axis: contours shifted sideways (2 parameters, x and y)",
+             EffectKind::ProfilerAxis, "m (x shift)");
+        meas("camera_scale", "the photos' scale off (calibration): the drape coefficient and the hem height scaled", EffectKind::CameraScale,
+             "fraction");
+        meas("profiler_scale", "the laser contours' scale off: every contour radius scaled", EffectKind::ProfilerScale, "fraction");
+        param("buckling", "membrane", "the membrane's compression limit (buckling_length_m): how easily the fabric buckles in its plane",
+              {Param::BucklingLength});
+        param("tensile_stiffness", "membrane", "the tensile stiffness warp and weft together (stretch_warp_N_m, stretch_weft_N_m)",
+              {Param::StretchWarp, Param::StretchWeft});
+        param("shear_stiffness", "membrane", "the in-plane shear stiffness (shear_N_m)", {Param::Shear});
+        sw("bending_stiffening", "bending", "bending that stiffens at small radii (bend_stiffening_radius_m switched on at 5 mm)",
+           {Param::BendStiffeningRadius}, 5e-3, false, false);
+        sw("bending_softening", "bending", "bending that yields at small radii (bend_softening_radius_m switched on at 5 mm)",
+           {Param::BendSofteningRadius}, 5e-3, false, false);
+        param("declared_weight", "declared", "the declared areal density wrong (areal_density_kg_m2)", {Param::AreaDensity});
+        param("declared_thickness", "declared", "the declared thickness wrong (thickness_m: the contact offset)", {Param::Thickness});
+        sw("disc_grip", "contact", "the specimen gripped by the pedestal top (static friction) instead of sliding", {}, 0, true, false);
+        sw("contact_resolution", "numerical", "the pedestal contact resolved at mesh vertices only (a coarse mesh cutting the rim)", {}, 0,
+           false, true);
+        return l;
+    }();
+    return lib;
+}
+
+std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                                             const std::vector<EffectSignature>& signatures, int terms)
+{
+    std::vector<EffectCandidate> out;
+    // Projector onto the complement of the fitted columns (the fit has already
+    // used what they can explain). Q of a rank-revealing QR spans J's range.
+    Eigen::MatrixXd Q;
+    if (J.cols() > 0) {
+        Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
+        const auto rank = qr.rank();
+        Q = Eigen::MatrixXd(qr.householderQ()).leftCols(rank);
+    }
+    auto project = [&](const Eigen::MatrixXd& S) -> Eigen::MatrixXd { return Q.size() ? Eigen::MatrixXd(S - Q * (Q.transpose() * S)) : S; };
+    const Eigen::VectorXd rp = project(r);
+    const double lnN = std::log(std::max(2, terms));
+    for (const auto& sig : signatures) {
+        EffectCandidate c;
+        c.name = sig.spec->name;
+        c.family = sig.spec->family;
+        c.description = sig.spec->description;
+        c.amplitude_unit = sig.spec->amplitude_unit;
+        c.parameters = static_cast<int>(sig.columns.cols());
+        if (!sig.available || sig.columns.cols() == 0 || !sig.columns.allFinite()) {
+            c.verdict = "not testable";
+            c.note = sig.why_not.empty() ? "no signature" : sig.why_not;
+            out.push_back(std::move(c));
+            continue;
+        }
+        const Eigen::MatrixXd S = project(sig.columns);
+        // Columns the fitted parameters can already mimic carry nothing new.
+        const double full = sig.columns.norm(), left = S.norm();
+        // Less than 5 % new: what is left is rounding and the fit's own noise.
+        if (!(left > 0.05 * std::max(full, 1e-300)) || !(left > 1e-9)) {
+            c.verdict = "not testable";
+            c.note = "its signature is what the fitted parameters already do (degenerate with them)";
+            out.push_back(std::move(c));
+            continue;
+        }
+        const Eigen::MatrixXd StS = S.transpose() * S;
+        const Eigen::VectorXd Str = S.transpose() * rp;
+        const Eigen::VectorXd a = StS.ldlt().solve(-Str); // amplitude that best removes the residual
+        c.delta_chi2 = std::max(0.0, -Str.dot(a));
+        c.z = c.parameters == 1 ? -Str[0] / std::sqrt(StS(0, 0)) : std::sqrt(c.delta_chi2);
+        c.amplitude = a[0];
+        c.information = c.delta_chi2 - c.parameters * lnN;
+        const double quantile = c.parameters == 1 ? 9.0 : 11.83; // 3 sigma (p = 0.0027) of chi2 with k dof
+        c.verdict = c.delta_chi2 > quantile && c.information > 0 ? "beyond noise" : "within noise";
+        // A first-order amplitude far outside the linear range (a parameter by more
+        // than a factor 10, a switched effect more than 3 times over) is not a
+        // refit the engine would make: the effect would have to be another one.
+        const double limit = sig.spec->kind == EffectKind::Parameter ? std::log(10.0) : sig.spec->kind == EffectKind::Switch ? 3.0 : HUGE_VAL;
+        if (std::abs(c.amplitude) > limit) {
+            if (c.verdict == "beyond noise") c.verdict = "within noise";
+            c.note = "the refit would need an amplitude of " + std::to_string(c.amplitude) + " " + c.amplitude_unit +
+                     ", beyond the linear range: not this effect";
+        }
+        if (left < 0.3 * full && c.note.empty())
+            c.note = "mostly degenerate with the fitted parameters (" + std::to_string(static_cast<int>(std::lround(100 * left / full))) +
+                     " % of its signature is new)";
+        out.push_back(std::move(c));
+    }
+    return out;
+}
+
+std::string name_effect(const std::vector<EffectCandidate>& c, double chi2, int dof)
+{
+    const EffectCandidate* best = nullptr;
+    for (const auto& e : c)
+        if (e.verdict == "beyond noise" && (!best || e.delta_chi2 > best->delta_chi2)) best = &e;
+    if (!best) return {};
+    for (const auto& e : c)
+        if (&e != best && e.verdict == "beyond noise" && e.delta_chi2 + 2.0 * (best->parameters - e.parameters) > best->delta_chi2 - 2.0)
+            return {}; // two explain it alike: a Bayes factor below e (2 ln B < 2, Kass & Raftery's "not worth more than a bare mention")
+    if (std::isfinite(best->verified_delta_chi2) && best->verified_delta_chi2 < 0.5 * best->delta_chi2) return {}; // not borne out by a drape
+    const double d = std::max(1, dof);
+    const double bound = d + 3 * std::sqrt(2 * d);
+    const double after = chi2 - best->delta_chi2;
+    const bool explains = after < bound || best->delta_chi2 >= 0.5 * std::max(0.0, chi2 - d);
+    return explains ? best->name : std::string();
+}
+
+} // namespace drape::estimate

@@ -1,0 +1,97 @@
+#pragma once
+// Candidate effects the model may lack, and the tests that decide whether the
+// residual of a fit shows one (issue 20). Each candidate's signature over every
+// fitted residual term is computed by the engine at the fitted preset - switch
+// the effect on by a small known amount at the fit's own rest states (exact
+// rest-state sensitivities for a parameter, a warm re-solve for a switch, a
+// re-measurement for the instruments), measure like the lab, difference,
+// whiten with the fit's noise - not written by hand. The library is open:
+// adding an effect is adding one entry to effect_library().
+#include "engine/estimate/objective.hpp"
+
+#include "engine/cloth/params.hpp"
+
+#include <Eigen/Core>
+
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace drape::estimate {
+
+/// How a candidate's signature is made.
+enum class EffectKind {
+    Parameter,     ///< a parameter of the table the model holds fixed: dx/d(ln p) from the rest-state sensitivities
+    Switch,        ///< an effect switched on at a typical value (a parameter at 0, a contact option): warm re-solve, finite difference
+    CameraScale,   ///< the top/side photos' scale off by a fraction: positions scaled, photo channels (D, hem) re-measured
+    ProfilerScale, ///< the laser profiler's scale off: contour channels re-measured at scaled positions
+    ProfilerAxis,  ///< the profiler (or the specimen) off the pedestal axis: contour channels re-measured at shifted positions (x and y: 2 columns)
+};
+
+/// One entry of the library.
+struct EffectSpec {
+    std::string name;        ///< e.g. "buckling"
+    std::string family;      ///< measurement | membrane | bending | contact | declared | numerical
+    std::string description; ///< one sentence for the report
+    EffectKind kind = EffectKind::Parameter;
+    std::vector<cloth::Param> params; ///< Parameter: moved together (relative change); Switch: set to `on_value`
+    double on_value = 0;     ///< Switch (parameter at 0): the typical value it is switched on at
+    bool disc_grip = false;  ///< Switch: the specimen held on the disc (grip, the limit of large static friction)
+    bool vertex_contact = false; ///< Switch: contact at mesh vertices only (the numerical contact resolution)
+    std::string amplitude_unit; ///< unit of the fitted amplitude ("relative", "m", "fraction of the switch")
+};
+
+/// The candidate effects, in report order.
+const std::vector<EffectSpec>& effect_library();
+
+/// A candidate's signature: whitened columns over the fit's residual terms
+/// (rows in the order of the terms; zero where the effect does not act or the
+/// term is not fitted / not smooth).
+struct EffectSignature {
+    const EffectSpec* spec = nullptr;
+    Eigen::MatrixXd columns; ///< rows x k (k = 1, or 2 for the profiler axis)
+    bool available = true;
+    std::string why_not;     ///< when not available (e.g. the model fits that parameter already)
+};
+
+/// The verdict on one candidate.
+struct EffectCandidate {
+    std::string name, family, description;
+    int parameters = 1;      ///< columns (degrees of freedom the effect adds)
+    /// Matched-filter statistic of the whitened residual on the signature after
+    /// the fitted parameters' columns are projected out: signed for one column,
+    /// sqrt(delta chi2) for two. Noise alone gives N(0, 1).
+    double z = 0;
+    /// Likelihood ratio of the refit with the effect freed (Gauss-Newton in the
+    /// joint space of the fitted coordinates and the effect: exact to first order).
+    double delta_chi2 = 0;
+    /// delta_chi2 - k ln(N): > 0 when the effect pays for its extra parameters
+    /// (Bayesian information criterion, N fitted smooth terms).
+    double information = 0;
+    double amplitude = 0;    ///< the refit's size of the effect (first column), in amplitude_unit
+    std::string amplitude_unit;
+    /// Delta chi2 of the refit verified by draping the preset with the effect
+    /// (parameter effects only; NaN otherwise).
+    double verified_delta_chi2 = std::numeric_limits<double>::quiet_NaN();
+    std::string verdict;     ///< "beyond noise" | "within noise" | "not testable"
+    std::string note;
+};
+
+/// The statistics of the candidates: `J` the fitted coordinates' whitened
+/// Jacobian, `r` the whitened residual (same rows; rows outside the test are
+/// zero in both), `terms` the number of rows in the test. Beyond noise: delta
+/// chi2 above the 3-sigma quantile of chi2 with k degrees of freedom (9.0 for
+/// one, 11.8 for two) and information > 0.
+std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                                             const std::vector<EffectSignature>& signatures, int terms);
+
+/// The named effect: the candidate beyond noise with the largest delta chi2,
+/// when its refit explains the residual - the refit's chi2 (chi2 - delta chi2)
+/// is within the noise (below dof + 3 sqrt(2 dof)) or the effect explains at
+/// least half of the excess - and no other candidate beyond noise comes within
+/// 2 of its delta chi2 (per extra parameter 2 more): 2 ln B >= 2 between the two
+/// (Kass & Raftery 1995, "positive" evidence). Empty when none does;
+/// `unexplained` then says where the residual is.
+std::string name_effect(const std::vector<EffectCandidate>& c, double chi2, int dof);
+
+} // namespace drape::estimate

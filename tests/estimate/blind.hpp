@@ -1,0 +1,65 @@
+#pragma once
+// The blind suite's records (issue 20): synthetic drapes made by the engine with
+// one undeclared effect switched on, measured like the lab, and the baseline fit
+// of them. Shared by tst_est_blind (unit) and tst_est_blind_slow.
+#include "engine/estimate/fit.hpp"
+#include "synthetic.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace drape::estimate::test::blind {
+
+using cloth::Param;
+
+
+inline constexpr int kGrid = 25;
+
+inline cloth::FabricParams truth()
+{
+    cloth::FabricParams p = default_fit_start(); // the fit's held compression limit (7.5 mm)
+    p[Param::BendWarp] = 1.5e-5;
+    p[Param::BendWeft] = 8.0e-6;
+    p[Param::Shear] = 20;
+    p[Param::AreaDensity] = 0.2;
+    return p;
+}
+
+/// A record of `p` with the effect `effect` at `strength` injected (the record
+/// does not declare it), noise seed from `seed`.
+inline MeasuredDrape injected(const std::string& effect, double strength, std::uint64_t seed)
+{
+    cloth::FabricParams p = truth();
+    cloth::DrapeSetup s = drape_setup(0.30, 0.15, kGrid, seed);
+    cloth::ModelOptions mo;
+    if (effect == "buckling") p[Param::BucklingLength] = strength;               // [m]
+    if (effect == "bending_stiffening") p[Param::BendStiffeningRadius] = strength; // [m]
+    if (effect == "disc_grip") s.disc_grip = true;
+    if (effect == "contact_resolution") mo.edge_contact = false;
+    MeasuredDrape rec = synthesize_record(cloth::simulate_drape(p, s, {}, mo), s, p, 0.3e-3, seed + 100, effect);
+    if (effect == "profiler_off_axis") {
+        // The profiler's axis `strength` metres off the pedestal's:
+        // every contour's r(theta) gains strength cos(theta - 30 deg) (first order).
+        const double phase = 1.3 * static_cast<double>(seed); // a phase per record
+        for (auto& c : rec.contours)
+            for (int k = 0; k < c.profile.size(); ++k) c.profile.r[static_cast<std::size_t>(k)] += strength * std::cos(c.profile.theta(k) - phase);
+    }
+    if (effect == "camera_scale") {
+        // The top photo's scale off by `strength`: the shadow's area by (1 + s)^2.
+        const double a0 = std::pow(rec.sample_diameter / 2, 2), ad = std::pow(rec.disc_diameter / 2, 2);
+        const double as = ad + rec.drape_coefficient_percent / 100 * (a0 - ad);
+        rec.drape_coefficient_percent = 100 * (as * (1 + strength) * (1 + strength) - ad) / (a0 - ad);
+    }
+    if (effect == "declared_weight") rec.areal_density *= 1 + strength; // the lab declares a wrong weight
+    return rec;
+}
+
+inline FitResult fit(const MeasuredDrape& rec)
+{
+    FitOptions o;
+    o.grid = kGrid;
+    o.start = default_fit_start();
+    return fit_fabric({rec}, o);
+}
+
+} // namespace drape::estimate::test::blind

@@ -418,6 +418,9 @@ void MainWindow::fitFromRecord()
     m_cancel->setEnabled(true);
     const bool started = m_fitJob.start(tr("fit"), [records, result, where](widget::JobContext& ctx) {
         estimate::FitOptions o;
+        // `drape fit`'s defaults: grid 41 and the typical compression limit held.
+        o.grid = 41;
+        o.start = estimate::default_fit_start();
         o.cancel = ctx.cancelFlag();
         o.progress = [&ctx](const estimate::FitProgress& p) {
             ctx.report(p.planned > 0 ? std::min(1.0, double(p.evaluation) / p.planned) : -1.0,

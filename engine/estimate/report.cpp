@@ -309,7 +309,7 @@ void convergence_plot(const FitResult& fr, const std::string& path)
     for (std::size_t i = 0; i < ev.size(); ++i)
         if (std::isfinite(best[i])) bx.push_back(ev[i]), by.push_back(best[i]);
     pl.line(bx, by, {0, 0, 0}, "best so far", 2);
-    if (top > 0) pl.set_yrange(0, top * 1.05);
+    if (top > 0) pl.set_yrange(0, top * 1.8); // room above the points for the legend
     pl.set_caption("values above 4x the final best are drawn at that height; the spread stage re-scores with the measured drape-to-drape noise");
     pl.save(path);
 }

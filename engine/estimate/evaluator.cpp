@@ -27,6 +27,12 @@ Evaluator::Evaluator(const std::vector<MeasuredDrape>& recs, const FitOptions& o
     m_noise.fold_seed_m *= f;
     m_noise.axis_seed_m *= f;
     for (const auto& r : recs) m_meas.push_back(drape_features(r));
+    // Record r's residual terms are rows [m_first_term[r], m_first_term[r + 1]):
+    // how many a record has depends on its measured features only.
+    m_first_term.assign(m_meas.size() + 1, 0);
+    for (std::size_t r = 0; r < m_meas.size(); ++r)
+        m_first_term[r + 1] = m_first_term[r] + residual_terms(static_cast<int>(r), m_meas[r], m_meas[r],
+                                                               std::vector<double>(m_meas[r].contours.size(), 1.0), m_noise).size();
 }
 
 cloth::DrapeSetup Evaluator::setup_for(int r, std::uint64_t seed, bool on_branch) const
@@ -151,12 +157,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
             m_cold[static_cast<std::size_t>(r)] = average_features(cold, &closed);
             m_cold_seeds[static_cast<std::size_t>(r)] = static_cast<int>(cold.size());
         }
-        // Index of record r's first residual term.
-        std::size_t base = 0;
-        for (int q = 0; q < r; ++q) {
-            const auto& mq = m_meas[static_cast<std::size_t>(q)];
-            base += residual_terms(q, mq, mq, std::vector<double>(mq.contours.size(), 1.0), m_noise).size();
-        }
+        const std::size_t base = m_first_term[static_cast<std::size_t>(r)];
         for (const auto& d : draws) {
             std::vector<double> closed;
             for (const auto& c : d.contours) closed.push_back(c.closed ? 1.0 : 0.0);
@@ -288,12 +289,7 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
             m_back_substitutions += static_cast<long>(R * S) * static_cast<long>(qs.size());
         }
     }
-    std::vector<std::size_t> first(static_cast<std::size_t>(R) + 1, 0); // record r's terms: [first[r], first[r + 1])
-    for (int r = 0; r < R; ++r) {
-        const auto& mr = m_meas[static_cast<std::size_t>(r)];
-        first[static_cast<std::size_t>(r) + 1] =
-            first[static_cast<std::size_t>(r)] + residual_terms(r, mr, mr, std::vector<double>(mr.contours.size(), 1.0), m_noise).size();
-    }
+    const std::vector<std::size_t>& first = m_first_term;
     if (first.back() != e.terms.size()) return J; // not this evaluator's terms
     // The closure rows count seeds whose slice closed: no derivative (a flip
     // between x + d and x - d would read as a slope of thousands).
@@ -507,12 +503,7 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
         }
     }
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
-    std::vector<std::size_t> first(static_cast<std::size_t>(R) + 1, 0);
-    for (int r = 0; r < R; ++r) {
-        const auto& mr = m_meas[static_cast<std::size_t>(r)];
-        first[static_cast<std::size_t>(r) + 1] =
-            first[static_cast<std::size_t>(r)] + residual_terms(r, mr, mr, std::vector<double>(mr.contours.size(), 1.0), m_noise).size();
-    }
+    const std::vector<std::size_t>& first = m_first_term;
     if (first.back() != e.terms.size()) return out;
     auto photo_row = [](const std::string& kind) { return kind == "dc" || kind == "hem"; };
     for (std::size_t k = 0; k < lib.size() && all_at_rest; ++k) {

@@ -107,6 +107,7 @@ private:
     std::vector<FitVariable> m_vars;
     cloth::FabricParams m_base;
     std::vector<DrapeFeatures> m_meas;
+    std::vector<std::size_t> m_first_term; ///< record r's residual terms: [m_first_term[r], m_first_term[r + 1])
     NoiseModel m_noise;
     std::vector<double> m_sigma_floor; ///< per residual term, from calibrate_spread
     bool m_spread_calibrated = false;

@@ -7,6 +7,10 @@
 //
 //   build/bin/bench_garment [--fabrics silk,denim] [--dt S] [--duration S] [--damping 1/S]
 //                           [--iterations N] [--body FILE] [--segments N] [--max-newton N] [--trace]
+//                           [--self-collision on,off]
+//
+// --self-collision on,off drapes every fabric both ways in the same run and
+// prints the ratio of wall times (on / off): the cost of the self-contact.
 #include "engine/cloth/blas_threads.hpp"
 #include "engine/library/starter.hpp"
 #include "importers/garment_metrics.hpp"
@@ -50,6 +54,7 @@ int main(int argc, char** argv)
         importers::SkirtOptions so;
         bool trace = false;
         long max_newton = 0;
+        std::vector<std::string> self_modes = {"on"};
         for (int i = 1; i < argc; ++i) {
             const std::string k = argv[i];
             auto next = [&]() -> std::string {
@@ -68,26 +73,39 @@ int main(int argc, char** argv)
             else if (k == "--segments") so.segments = std::stoi(next());
             else if (k == "--trace") trace = true;
             else if (k == "--max-newton") max_newton = std::stol(next());
+            else if (k == "--self-collision") {
+                self_modes.clear();
+                std::stringstream ss(next());
+                for (std::string f; std::getline(ss, f, ',');) {
+                    if (f != "on" && f != "off") throw std::runtime_error("--self-collision: " + f + " is not on or off");
+                    self_modes.push_back(f);
+                }
+            }
             else throw std::runtime_error("unknown flag " + k);
         }
         std::printf("circle skirt on %s; settling dt %.4g s, %.3g s, damping %.3g 1/s, %d iterations per step\n", body.c_str(),
                     settle.dt, settle.duration, settle.damping_rate, settle.iterations);
         cloth::single_threaded_blas(); // as the drape command runs
         auto m = std::make_shared<importers::Mannequin>(importers::load_mannequin(body));
-        std::printf("%-28s %8s %8s %10s %8s %6s %9s %7s %8s %6s\n", "fabric", "wall_s", "newton", "status", "hem_mm", "folds",
+        std::printf("%-28s %4s %8s %8s %10s %8s %6s %9s %7s %8s %6s\n", "fabric", "self", "wall_s", "newton", "status", "hem_mm", "folds",
                     "self_int", "inside", "peak_MB", "load");
         double rmin = 1e9, rmax = 0;
         for (const auto& name : fabrics) {
+          double wall[2] = {0, 0};
+          for (const auto& mode : self_modes) {
+            const bool self_on = mode == "on";
             const auto starter = library::find_starter(name);
             const fabric::FabricPreset preset = starter ? *starter : fabric::load_fabric(name);
             importers::Scene scene = importers::make_skirt_scene(m, preset, so);
+            if (!self_on) scene.system->model().self_contact_distance = 0;
             cloth::RestOptions ro = importers::garment_rest_options();
             ro.trace = trace;
             if (max_newton > 0) ro.max_newton = max_newton;
             const cloth::SolverStatus st = importers::drape_to_rest(scene, ro, settle);
             const auto& sys = *scene.system;
             const auto gm = importers::garment_metrics(sys.x, sys.mesh().F, sys.model().pinned, m.get(), scene.waist.centre);
-            std::printf("%-28s %8.1f %8ld %10s %8.1f %6d %9ld %7d %8ld %6.2f\n", preset.name.c_str(), st.wall_seconds, st.newton_iterations,
+            wall[self_on ? 0 : 1] = st.wall_seconds;
+            std::printf("%-28s %4s %8.1f %8ld %10s %8.1f %6d %9ld %7d %8ld %6.2f\n", preset.name.c_str(), mode.c_str(), st.wall_seconds, st.newton_iterations,
                         cloth::to_string(st.outcome).c_str(), gm.hem_mean_radius_m * 1e3, gm.hem_fold_count, gm.self_intersections,
                         gm.vertices_inside_body, peak_mb(), load_average());
             if (st.converged()) {
@@ -98,9 +116,10 @@ int main(int argc, char** argv)
                 p[cloth::Param::BendWeft] *= 1.1;
                 stiffer.set_params(p);
                 importers::Scene warm = importers::make_skirt_scene(m, stiffer, so);
+                if (!self_on) warm.system->model().self_contact_distance = 0;
                 warm.system->x = sys.x;
                 const cloth::SolverStatus ws = cloth::run_to_rest(*warm.system, ro);
-                std::printf("%-28s %8.1f %8ld %10s   (warm: +10 %% bending from the rest state)  %8ld %6.2f\n", "", ws.wall_seconds,
+                std::printf("%-28s %4s %8.1f %8ld %10s   (warm: +10 %% bending from the rest state)  %8ld %6.2f\n", "", mode.c_str(), ws.wall_seconds,
                             ws.newton_iterations, cloth::to_string(ws.outcome).c_str(), peak_mb(), load_average());
             }
             if (!st.converged()) {
@@ -125,6 +144,9 @@ int main(int argc, char** argv)
             std::fflush(stdout);
             rmin = std::min(rmin, gm.hem_mean_radius_m);
             rmax = std::max(rmax, gm.hem_mean_radius_m);
+          }
+          if (self_modes.size() == 2 && wall[1] > 0)
+              std::printf("%-28s wall time self-collision on / off: %.2f\n", name.c_str(), wall[0] / wall[1]);
         }
         if (fabrics.size() > 1) std::printf("widest / narrowest hem: %.3f\n", rmax / rmin);
         return 0;

@@ -35,6 +35,9 @@ from the body's axis and its folds, vertices inside the body, self-intersections
                         silk, cotton, wool, denim (default cotton)
   --set KEY=VALUE       override one parameter of the preset (repeatable)
   --length L            circle skirt: waistband to hem (default 500mm)
+  --self-collision on|off
+                        keep the cloth from passing through itself (default on: a barrier
+                        holds every two parts of the cloth one fabric thickness apart)
   --out DIR             write rest.obj, summary.json and garment.png (front and top views)
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr
@@ -43,7 +46,7 @@ Exit codes: 0 at rest, 1 bad input, 2 bad command line, 4 the solver did not rea
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, fabric_flags() + std::set<std::string>{"--body", "--garment", "--unit", "--up", "--out", "--length"},
+    Args a(argv, fabric_flags() + std::set<std::string>{"--body", "--garment", "--unit", "--up", "--out", "--length", "--self-collision"},
            {"--json", "--quiet"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     const auto body = a.get("--body");
@@ -58,6 +61,9 @@ int run(const std::vector<std::string>& argv)
     } catch (const Error& e) {
         throw UsageError(e.what());
     }
+    const std::string self_collision = a.get_or("--self-collision", "on");
+    if (self_collision != "on" && self_collision != "off")
+        throw UsageError("--self-collision: '" + self_collision + "' must be on or off");
     fabric::FabricPreset preset = load_fabric_flags(a, "cotton");
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     cloth::single_threaded_blas();
@@ -76,6 +82,7 @@ int run(const std::vector<std::string>& argv)
         scene = importers::make_garment_scene(mannequin, garment, preset);
     }
     cloth::ClothSystem& sys = *scene.system;
+    if (self_collision == "off") sys.model().self_contact_distance = 0;
     cloth::RestOptions ro = importers::garment_rest_options();
     const bool tty = ::isatty(STDERR_FILENO);
     if (!quiet)
@@ -111,6 +118,9 @@ int run(const std::vector<std::string>& argv)
     j["vertices_inside_body"] = gm.vertices_inside_body;
     j["min_body_distance_m"] = gm.min_body_distance_m;
     j["self_intersections"] = gm.self_intersections;
+    j["self_collision"] = sys.self_contact_on();
+    j["self_contact_distance_m"] = sys.model().self_contact_distance;
+    j["self_contact_pairs"] = static_cast<long>(sys.self_contact_pairs(sys.x).size());
     if (out) {
         namespace fs = std::filesystem;
         const fs::path dir(*out);
@@ -132,7 +142,10 @@ int run(const std::vector<std::string>& argv)
         std::printf("hem                mean radius %.1f mm from the body's axis, %d folds, height %.0f .. %.0f mm\n",
                     gm.hem_mean_radius_m * 1e3, gm.hem_fold_count, gm.hem_min_z_m * 1e3, gm.hem_max_z_m * 1e3);
         std::printf("body               %d vertices inside, closest %.2f mm\n", gm.vertices_inside_body, gm.min_body_distance_m * 1e3);
-        std::printf("self-intersections %ld\n", gm.self_intersections);
+        std::printf("self-intersections %ld (self-collision %s", gm.self_intersections, sys.self_contact_on() ? "on" : "off");
+        if (sys.self_contact_on())
+            std::printf(", %.2f mm apart, %zu pairs in contact", sys.model().self_contact_distance * 1e3, sys.self_contact_pairs(sys.x).size());
+        std::printf(")\n");
         std::printf("solver             %s, %ld Newton iterations, residual %.1e, %.1f s\n", cloth::to_string(st.outcome).c_str(),
                     st.newton_iterations, st.residual, st.wall_seconds);
         if (!st.message.empty()) std::printf("                   %s\n", st.message.c_str());

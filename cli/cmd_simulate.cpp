@@ -7,7 +7,9 @@
 #include "engine/cloth/blas_threads.hpp"
 #include "engine/cloth/drape_io.hpp"
 #include "engine/cloth/rest_sensitivity.hpp"
+#include "engine/cloth/self_intersection.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/io.hpp"
 #include "engine/core/text.hpp"
 #include "engine/fabric/preset.hpp"
 #ifdef HAVE_DRAPE_CAPTURE
@@ -53,6 +55,9 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
                         a log or pipe plain lines)
   --disc-grip           the specimen cannot slide on the disc top (large static friction)
   --vertex-contact-only contact at mesh vertices only (the seed's): coarse elements cut the pedestal rim
+  --self-collision      keep the cloth from passing through itself (a barrier one fabric thickness
+                        wide; off by default: a drapemeter's folds stay open). The summary counts the
+                        rest state's self-intersections either way
   --trace               print every static-solver iteration on stderr
   --sensitivity KEYS    at the rest state, the exact derivative of D and of the mean hem height with
                         respect to each parameter (comma-separated keys of the parameter table, or
@@ -63,7 +68,7 @@ int run(const std::vector<std::string>& argv)
     Args a(argv,
            fabric_flags() + setup_value_flags(kAllSetup) +
                std::set<std::string>{"--integrator", "--dt", "--tolerance", "--max-time", "--out", "--max-iterations", "--sensitivity"},
-           setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet", "--trace", "--vertex-contact-only"});
+           setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet", "--trace", "--vertex-contact-only", "--self-collision"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     fabric::FabricPreset preset = load_fabric_flags(a);
     cloth::DrapeSetup defaults;
@@ -103,6 +108,7 @@ int run(const std::vector<std::string>& argv)
     }
     ro.trace = a.has("--trace");
     preset.model.edge_contact = !a.has("--vertex-contact-only");
+    preset.model.self_collision = a.has("--self-collision");
     Progress progress("simulate", quiet);
     if (!quiet) ro.progress = progress.solver_callback(ro);
     cloth::single_threaded_blas(); // the same rounding as the widget, predict and garment: the same rest state
@@ -110,6 +116,9 @@ int run(const std::vector<std::string>& argv)
     progress.finish(to_string(r.status.outcome), r.status.converged());
     if (!check_drape_result(r, setup)) return 4;
     auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
+    const auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // the mesh topology
+    summary["self_collision"] = preset.model.self_collision;
+    summary["self_intersections"] = cloth::self_intersections(r.x, sys->mesh().F).pairs;
     std::vector<cloth::DrapeMetricSensitivity> sens;
     if (!sens_params.empty() && r.status.converged()) {
         sens = cloth::drape_metric_sensitivities(preset.material(), setup, r.x, sens_params, preset.model);
@@ -124,8 +133,9 @@ int run(const std::vector<std::string>& argv)
         summary["sensitivities"] = arr;
     }
     if (const auto out = a.get("--out")) {
-        auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // for the mesh topology
         cloth::write_drape_outputs(*out, r, setup, ro.integrator, sys->mesh());
+        // The summary as printed (with the self-intersection count and any sensitivities).
+        write_file_atomic(*out + "/summary.json", summary.dump(2) + "\n");
 #ifdef HAVE_DRAPE_CAPTURE
         // A picture of the rest state for a person: the cloth and the pedestal.
         // The pedestal: a cylinder (top cap and side) 1 mm below the cloth it carries.
@@ -160,6 +170,8 @@ int run(const std::vector<std::string>& argv)
         std::printf("drape coefficient  %.1f %%\n", r.metrics.drape_coefficient_percent);
         std::printf("nodes              %d\n", r.metrics.node_count);
         std::printf("hem height         %.1f .. %.1f mm (below the pedestal top)\n", r.hem.min_z * 1e3, r.hem.max_z * 1e3);
+        std::printf("self-intersections %ld (self-collision %s)\n", summary["self_intersections"].get<long>(),
+                    preset.model.self_collision ? "on" : "off");
         std::printf("solver             %s: %s, %ld steps, %ld force evaluations, %.2f s\n", to_string(ro.integrator).c_str(),
                     to_string(r.status.outcome).c_str(), r.status.steps, r.status.force_evaluations, r.status.wall_seconds);
         if (!r.status.message.empty()) std::printf("                   %s\n", r.status.message.c_str());

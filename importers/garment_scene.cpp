@@ -19,6 +19,15 @@ namespace drape::importers {
 
 namespace {
 
+/// A garment's model: the preset's options with self-contact on (folds of a
+/// skirt and a tablecloth's overhang lie on each other; a drapemeter's do not).
+cloth::ModelOptions garment_model_options(const fabric::FabricPreset& fabric)
+{
+    cloth::ModelOptions o = fabric.model;
+    o.self_collision = true;
+    return o;
+}
+
 constexpr double kPi = std::numbers::pi;
 
 /// Length of the closed curve r(theta) = rc + a (1 + sin(k theta)) [m].
@@ -135,7 +144,7 @@ Scene make_garment_scene(std::shared_ptr<const Mannequin> m, const std::string& 
     s.fabric_name = fabric.name;
     s.garment_name = path;
     cloth::ClothMesh mesh = cloth::make_triangle_mesh(all.X, all.F, Eigen::Vector3d::UnitX());
-    cloth::ClothModel model = cloth::make_model(mesh, fabric.params, fabric.model);
+    cloth::ClothModel model = cloth::make_model(mesh, fabric.params, garment_model_options(fabric));
     s.system = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
     int pinned = 0;
     for (int i = 0; i < s.system->vertex_count(); ++i) {
@@ -254,7 +263,7 @@ Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const fabric::FabricP
     s.fabric_name = fabric.name;
     s.garment_name = "circle skirt";
     cloth::ClothMesh mesh = cloth::make_triangle_mesh(p.X, p.F, Eigen::Vector3d::UnitX());
-    cloth::ClothModel model = cloth::make_model(mesh, fp, fabric.model);
+    cloth::ClothModel model = cloth::make_model(mesh, fp, garment_model_options(fabric));
     s.system = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
     for (int v : p.waistband) s.system->set_pinned(v, true);
     if (opt.start == SkirtOptions::Start::Gathered) s.system->x = hang_skirt(*m, p, s.waist.centre, zband, r_in, opt);
@@ -276,7 +285,7 @@ Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& tab
     s.fabric_name = fabric.name;
     s.garment_name = "tablecloth";
     cloth::ClothMesh mesh = cloth::make_disc(table.cloth_diameter, grid, 0.0);
-    cloth::ClothModel model = cloth::make_model(mesh, fp, fabric.model);
+    cloth::ClothModel model = cloth::make_model(mesh, fp, garment_model_options(fabric));
     s.system = std::make_unique<cloth::ClothSystem>(std::move(mesh), std::move(model));
     // Start flat just above the top; a small random lift of the overhang
     // (modes k = 2..8) breaks the symmetry so the folds can choose where to form.

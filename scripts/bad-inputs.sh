@@ -283,6 +283,7 @@ body=/usr/share/assimp/models/Collada/human.zae
 case_ "garment: body that does not exist" 1 "nobody.obj" -- "$drape" garment --body "$tmp/nobody.obj" --quiet
 case_ "garment: body with a NaN vertex" 1 "nan.obj" -- "$drape" garment --body "$tmp/nan.obj" --quiet
 case_ "garment: no --body" 2 "--body" -- "$drape" garment --quiet
+case_ "garment: --self-collision maybe" 2 "--self-collision" -- "$drape" garment --body "$tmp/nobody.obj" --self-collision maybe --quiet
 if [ -f "$body" ]; then
   case_ "garment: unknown fabric" 1 "velvet-nowhere" -- "$drape" garment --body "$body" --fabric velvet-nowhere --quiet
   printf 'v 0 1 0\nv 0.1 1 0\nv 0 1 0.1\nf 1 2 3\n' >"$tmp/nowaist.obj"

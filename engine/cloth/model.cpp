@@ -1,5 +1,7 @@
 #include "engine/cloth/model.hpp"
 
+#include "engine/cloth/self_contact.hpp"
+
 #include "engine/core/error.hpp"
 #include "engine/core/units.hpp"
 
@@ -207,6 +209,7 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
     m.bend_softening = p[Param::BendSofteningRadius] * p[Param::BendSofteningRadius];
     add_common(m, mesh, opt.contact_depth);
     m.edge_contact = opt.edge_contact;
+    m.self_contact_distance = opt.self_collision ? std::max(p[Param::Thickness], kMinSelfContactDistance) : 0.0;
     const double Eu = p[Param::StretchWarp], Ev = p[Param::StretchWeft], G = p[Param::Shear];
     const double Bu = p[Param::BendWarp], Bv = p[Param::BendWeft];
     const double cs = p[Param::DampStretch], csh = p[Param::DampShear], cb = p[Param::DampBend];
@@ -352,6 +355,7 @@ ClothModel make_grid_spring_model(const ClothMesh& mesh, const GridSprings& s, c
     m.friction = 0;
     add_common(m, mesh, opt.contact_depth);
     m.edge_contact = opt.edge_contact;
+    m.self_contact_distance = opt.self_collision ? kMinSelfContactDistance : 0.0;
     const auto& g = mesh.grid;
     for (int j = 0; j < g.nv; ++j)
         for (int i = 0; i < g.nu; ++i) {

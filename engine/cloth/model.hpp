@@ -86,6 +86,13 @@ struct ModelOptions {
     /// hanging below it cuts the corner of the pedestal (3.9 mm deep at grid 25), and
     /// the laser slices next to the disc come out too narrow. See docs/model-discrepancy.md.
     bool edge_contact = true;
+    /// Self-contact (engine/cloth/self_contact.hpp): a barrier keeps every point and
+    /// triangle and every two edges of the cloth at least its thickness apart
+    /// (kMinSelfContactDistance at the least), in the static solver and the
+    /// implicit integrator. Off by default: a drapemeter's folds stay open, and
+    /// the search costs a broad phase per energy evaluation; the garment scenes
+    /// switch it on. Explicit integrators ignore it (a barrier needs the step filter).
+    bool self_collision = false;
 };
 
 /// A horizontal tether of a material point to a place: energy 1/2 k |P (x - target)|^2
@@ -141,6 +148,8 @@ struct ClothModel {
     /// B kappa / sqrt(1 + rho^2 kappa^2) that saturates at B / rho. 0 = linear.
     double bend_softening = 0;
     bool edge_contact = true;         ///< see ModelOptions::edge_contact
+    /// Self-contact distance d_hat [m] (ModelOptions::self_collision): 0 = off.
+    double self_contact_distance = 0;
     Eigen::VectorXd contact_stiffness;///< [N/m] per vertex
     std::string description;
 

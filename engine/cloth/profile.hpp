@@ -20,6 +20,7 @@ struct SolveProfile {
     Part assemble;        ///< HessianAssembler::assemble (includes the contact parts below)
     Part vertex_contact;  ///< vertex-collider queries inside the three above
     Part edge_contact;    ///< edge-collider tests inside the three above
+    Part self_contact;    ///< self-contact proximity searches and step bounds
     Part analyse;         ///< CHOLMOD symbolic analysis
     Part factorize;       ///< CHOLMOD numeric factorisation (calls include failed ones)
     Part solve;           ///< triangular solves
@@ -44,6 +45,7 @@ struct SolveProfile {
         row("Hessian assembly", assemble);
         row("  of which vertex contact", vertex_contact);
         row("  of which edge contact", edge_contact);
+        row("self-contact search and step bound", self_contact);
         row("CHOLMOD analyse", analyse);
         row("CHOLMOD factorise", factorize);
         row("CHOLMOD solve", solve);

@@ -1,5 +1,7 @@
 #include "engine/cloth/self_intersection.hpp"
 
+#include "engine/cloth/bvh.hpp"
+
 #include "engine/core/error.hpp"
 #include "engine/core/units.hpp"
 
@@ -152,106 +154,6 @@ bool tri_tri(const std::array<P, 3>& A, const std::array<P, 3>& B)
     return da ? edges_meet_triangle(A, B) : edges_meet_triangle(B, A);
 }
 
-struct Box {
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
-    void add(const Box& b)
-    {
-        lo = lo.cwiseMin(b.lo);
-        hi = hi.cwiseMax(b.hi);
-    }
-    bool overlaps(const Box& b) const { return (lo.array() <= b.hi.array()).all() && (b.lo.array() <= hi.array()).all(); }
-};
-
-/// A bounding-volume hierarchy over triangles (median split on the longest axis).
-class Bvh {
-public:
-    Bvh(const std::vector<Box>& boxes) : m_boxes(boxes), m_order(boxes.size())
-    {
-        std::iota(m_order.begin(), m_order.end(), 0);
-        if (!boxes.empty()) build(0, static_cast<int>(boxes.size()));
-    }
-    template <class F>
-    void self_pairs(F&& f) const
-    {
-        if (!m_nodes.empty()) self(0, f);
-    }
-
-private:
-    struct Node {
-        Box box;
-        int first = 0, count = 0; ///< leaf: range in m_order
-        int left = -1, right = -1;
-    };
-    int build(int first, int count)
-    {
-        const int id = static_cast<int>(m_nodes.size());
-        m_nodes.push_back({});
-        Box b;
-        for (int i = first; i < first + count; ++i) b.add(m_boxes[static_cast<std::size_t>(m_order[static_cast<std::size_t>(i)])]);
-        m_nodes[static_cast<std::size_t>(id)].box = b;
-        if (count <= 4) {
-            m_nodes[static_cast<std::size_t>(id)].first = first;
-            m_nodes[static_cast<std::size_t>(id)].count = count;
-            return id;
-        }
-        int axis = 0;
-        (b.hi - b.lo).maxCoeff(&axis);
-        const int mid = first + count / 2;
-        std::nth_element(m_order.begin() + first, m_order.begin() + mid, m_order.begin() + first + count, [&](int x, int y) {
-            const auto& bx = m_boxes[static_cast<std::size_t>(x)];
-            const auto& by = m_boxes[static_cast<std::size_t>(y)];
-            return bx.lo[axis] + bx.hi[axis] < by.lo[axis] + by.hi[axis];
-        });
-        const int l = build(first, mid - first);
-        const int r = build(mid, first + count - mid);
-        m_nodes[static_cast<std::size_t>(id)].left = l;
-        m_nodes[static_cast<std::size_t>(id)].right = r;
-        return id;
-    }
-    template <class F>
-    void self(int n, F& f) const
-    {
-        const Node& a = m_nodes[static_cast<std::size_t>(n)];
-        if (a.left < 0) {
-            for (int i = a.first; i < a.first + a.count; ++i)
-                for (int j = i + 1; j < a.first + a.count; ++j) leaf_pair(m_order[static_cast<std::size_t>(i)], m_order[static_cast<std::size_t>(j)], f);
-            return;
-        }
-        self(a.left, f);
-        self(a.right, f);
-        cross(a.left, a.right, f);
-    }
-    template <class F>
-    void cross(int na, int nb, F& f) const
-    {
-        const Node& a = m_nodes[static_cast<std::size_t>(na)];
-        const Node& b = m_nodes[static_cast<std::size_t>(nb)];
-        if (!a.box.overlaps(b.box)) return;
-        if (a.left < 0 && b.left < 0) {
-            for (int i = a.first; i < a.first + a.count; ++i)
-                for (int j = b.first; j < b.first + b.count; ++j) leaf_pair(m_order[static_cast<std::size_t>(i)], m_order[static_cast<std::size_t>(j)], f);
-            return;
-        }
-        // Split the larger node (or the one that can be split).
-        const bool split_a = b.left < 0 || (a.left >= 0 && (a.box.hi - a.box.lo).squaredNorm() >= (b.box.hi - b.box.lo).squaredNorm());
-        if (split_a) {
-            cross(a.left, nb, f);
-            cross(a.right, nb, f);
-        } else {
-            cross(na, b.left, f);
-            cross(na, b.right, f);
-        }
-    }
-    template <class F>
-    void leaf_pair(int i, int j, F& f) const
-    {
-        if (m_boxes[static_cast<std::size_t>(i)].overlaps(m_boxes[static_cast<std::size_t>(j)])) f(i, j);
-    }
-    const std::vector<Box>& m_boxes;
-    std::vector<int> m_order;
-    std::vector<Node> m_nodes;
-};
-
 } // namespace
 
 bool triangles_intersect(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1, const Eigen::Vector3d& a2,
@@ -277,15 +179,13 @@ SelfIntersections self_intersections(const Positions& X, const Triangles& F)
                                      std::to_string(F(t, k)) + " outside [0, " + std::to_string(n) + ")");
     std::vector<P> lattice(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) lattice[static_cast<std::size_t>(i)] = snap(X.row(i).transpose());
-    std::vector<Box> boxes(static_cast<std::size_t>(F.rows()));
+    std::vector<detail::Box> boxes(static_cast<std::size_t>(F.rows()));
     for (Eigen::Index t = 0; t < F.rows(); ++t)
         for (int k = 0; k < 3; ++k) {
-            Box b;
-            b.lo = b.hi = X.row(F(t, k)).transpose();
-            boxes[static_cast<std::size_t>(t)].add(b);
+            boxes[static_cast<std::size_t>(t)].add(Eigen::Vector3d(X.row(F(t, k)).transpose()));
         }
     SelfIntersections out;
-    const Bvh bvh(boxes);
+    const detail::Bvh bvh(std::move(boxes));
     bvh.self_pairs([&](int a, int b) {
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j)

@@ -76,6 +76,7 @@ struct Stepper::Impl {
     explicit Impl(const ClothSystem& s) : H(s) {}
     HessianAssembler H;
     std::unique_ptr<Cholmod> llt; ///< analysed on the first implicit step
+    int analysed_revision = -1;   ///< H's pattern revision llt was analysed for
     long solves = 0;
     Positions f, k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v, xt, vt;
 };
@@ -130,10 +131,33 @@ double Stepper::explicit_dt_limit() const
     return 0.9 * dt;
 }
 
+namespace {
+
+/// Explicit integrators step without the self-contact barrier: it is infinite
+/// at touching, and only a step filter (the implicit and static paths have
+/// one) keeps a step from jumping over it (ModelOptions::self_collision).
+class SelfContactOff {
+public:
+    SelfContactOff(ClothSystem& s, bool off) : m_s(s), m_d(s.model().self_contact_distance)
+    {
+        if (off) m_s.model().self_contact_distance = 0;
+    }
+    ~SelfContactOff() { m_s.model().self_contact_distance = m_d; }
+    SelfContactOff(const SelfContactOff&) = delete;
+    SelfContactOff& operator=(const SelfContactOff&) = delete;
+
+private:
+    ClothSystem& m_s;
+    double m_d;
+};
+
+} // namespace
+
 bool Stepper::step(double dt)
 {
     auto& s = m_s;
     auto& I = *m_impl;
+    const SelfContactOff explicit_step(s, m_integ != Integrator::ImplicitEuler);
     const int n = s.vertex_count();
     const auto& mass = s.model().mass;
     auto accel = [&](const Positions& X, const Positions& V, Positions& A) {
@@ -209,6 +233,9 @@ bool Stepper::step(double dt)
         Positions y = pred;
         for (int i = 0; i < n; ++i)
             if (s.pinned(i)) y.row(i) = xn.row(i);
+        // The prediction is a step too: cut it where it would carry one part of
+        // the cloth through another (the barrier would then hold the crossing).
+        if (s.self_contact_on()) y = xn + s.self_contact_step_bound(xn, Positions(y - xn)) * (y - xn);
         const double wn = weight_norm(s);
         for (int it = 0; it < m_implicit_iterations; ++it) {
             // Gradient of phi (negated: the force).
@@ -222,7 +249,8 @@ bool Stepper::step(double dt)
             mask_pinned(s, g);
             if (flat(g).norm() < 1e-9 * wn) break;
             I.H.assemble(y, md, 1.0 / dt);
-            if (!I.llt) {
+            if (!I.llt || I.H.revision() != I.analysed_revision) {
+                I.analysed_revision = I.H.revision();
                 bool reused = false;
                 I.llt = take_analysed(I.H.matrix(), reused);
             }
@@ -233,7 +261,7 @@ bool Stepper::step(double dt)
             Positions D = Eigen::Map<Positions>(dx.data(), n, 3);
             const double p0 = phi(y);
             const double slope = -flat(g).dot(dx);
-            double alpha = 1;
+            double alpha = s.self_contact_step_bound(y, D);
             Positions trial;
             for (int ls = 0; ls < 30; ++ls) {
                 trial = y + alpha * D;
@@ -334,6 +362,10 @@ SolverStatus run_dynamic(ClothSystem& s, const RestOptions& opt)
 SolverStatus run_to_rest(ClothSystem& s, const RestOptions& opt)
 {
     if (opt.integrator == Integrator::Static) return detail::run_static(s, opt);
+    // Explicit integrators run without the barrier (Stepper::step), and so does
+    // their rest test (the residual would otherwise count barrier forces of
+    // layers the explicit steps let come closer than the contact distance).
+    const SelfContactOff explicit_run(s, opt.integrator != Integrator::ImplicitEuler);
     return run_dynamic(s, opt);
 }
 

@@ -42,6 +42,7 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
     const int n = s.vertex_count();
     HessianAssembler H(s);
     std::unique_ptr<Cholmod> llt_p;
+    int analysed_revision = -1;
     const auto& mass = s.model().mass;
     const double wn = weight_norm(s);
     double h = opt.dt > 0 ? opt.dt : 0.02;
@@ -53,7 +54,19 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
     auto last_report = t0;
     // Energy scale for rounding: the whole cloth lowered by 1 m [J].
     const double e_scale = s.model().total_mass() * 9.81;
+    // Friction against the colliders, lagged: every iteration takes the
+    // contacts' normal forces and normals at its start (and anchors new
+    // contacts there); within the iteration the friction potential is fixed,
+    // so the line search sees one energy.
+    StaticFriction friction;
+    StaticFriction* const outer_friction = s.static_friction;
+    const bool frictional = s.model().friction > 0 && !s.colliders().empty();
+    if (frictional) s.static_friction = &friction;
     while (true) {
+        if (frictional) {
+            s.update_static_friction(friction, s.x);
+            e_x = std::numeric_limits<double>::quiet_NaN(); // the potential changed with the lag
+        }
         s.conservative_forces(s.x, f);
         ++s.force_evaluations;
         mask_pinned(s, f);
@@ -90,7 +103,9 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
         // iterations after a failed factorisation.
         const bool exact = exact_ok > 0;
         H.assemble(s.x, md, 0.0, exact ? HessianAssembler::Projection::None : HessianAssembler::Projection::All);
-        if (!llt_p) {
+        if (!llt_p || H.revision() != analysed_revision) {
+            // First iteration, or self-contact coupled new vertices: analyse the pattern.
+            analysed_revision = H.revision();
             bool reused = false;
             {
                 ProfileScope timer(profiling ? &prof.analyse : nullptr);
@@ -135,7 +150,10 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
             for (int i = 0; i < n; ++i) q += md(i) * D.row(i).squaredNorm();
             return q;
         }();
-        double alpha = 1;
+        // Self-contact: the longest part of the step along which no two parts of
+        // the cloth can pass through each other (the barrier is infinite at touching).
+        const double alpha_full = s.self_contact_step_bound(s.x, D);
+        double alpha = alpha_full;
         bool accepted = false;
         // Near rest the predicted energy decrease falls below the rounding error
         // of the energy sum; there the step is judged by the force residual instead.
@@ -181,14 +199,13 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
                          f.row(imax).norm() / (mass(imax) * 9.81), exact ? "exact" : "projected", s.vertex_contact_count(s.x),
                          s.edges_in_contact(s.x).size());
         }
-        if (alpha == 1.0) h = std::min(h * 2.0, h_max);
-        else if (alpha < 0.25) h = std::max(h * 0.5, h_min);
+        // A step the line search took whole (as far as the self-contact filter
+        // let it go) lets the pseudo-time grow.
+        if (alpha == alpha_full) h = std::min(h * 2.0, h_max);
+        else if (alpha < 0.25 * alpha_full) h = std::max(h * 0.5, h_min);
     }
     st.max_speed = 0;
-    if (s.model().friction > 0)
-        st.message += std::string(st.message.empty() ? "" : "; ") +
-                      "the static solver treats contact as frictionless (a rest state with friction depends on the path: use "
-                      "the implicit or an explicit integrator)";
+    s.static_friction = outer_friction;
     keep_analysed(std::move(llt_p), H.matrix());
     st.force_evaluations = s.force_evaluations - f0;
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();

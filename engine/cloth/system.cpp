@@ -2,6 +2,8 @@
 
 #include "engine/core/error.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -25,6 +27,37 @@ ClothSystem::ClothSystem(ClothMesh mesh, ClothModel model) : m_mesh(std::move(me
         }
     std::sort(m_edges.begin(), m_edges.end());
     m_edges.erase(std::unique(m_edges.begin(), m_edges.end()), m_edges.end());
+    m_self = SelfContact(m_mesh.F, m_edges, m_mesh.X);
+}
+
+const std::vector<ProximityPair>& ClothSystem::self_contact_pairs(const Positions& X) const
+{
+    static const std::vector<ProximityPair> none;
+    if (!self_contact_on()) return none;
+    ProfileScope timer(profile ? &profile->self_contact : nullptr);
+    return m_self.pairs(X, m_model.self_contact_distance, m_model.pinned);
+}
+
+double ClothSystem::self_contact_pair_energy(const ProximityPair& p, const Positions& X, Vec12* grad, Mat12* hess) const
+{
+    // Stiffness: a quarter of the pair's vertices' weight over a quarter of the
+    // contact distance, so one layer's weight rests on another about 0.8 d_hat
+    // apart (the fabric's thickness squeezed a little), not the collider
+    // penalty's micrometres: a barrier that stiff turned a Newton step that
+    // brings two folds into range into a line search of tiny steps.
+    const double g = std::max(m_model.gravity.norm(), 1.0), d_hat = m_model.self_contact_distance;
+    double k = 0;
+    for (int vi : p.v) k += 0.25 * m_model.mass(vi) * g / (kSelfContactSqueeze * d_hat);
+    const std::array<Vec3, 4> xp = {X.row(p.v[0]).transpose(), X.row(p.v[1]).transpose(), X.row(p.v[2]).transpose(),
+                                    X.row(p.v[3]).transpose()};
+    return pair_energy(p.kind, xp, k, m_model.self_contact_distance, m_self.eps_cross(p), grad, hess);
+}
+
+double ClothSystem::self_contact_step_bound(const Positions& X, const Positions& D) const
+{
+    if (!self_contact_on()) return 1.0;
+    ProfileScope timer(profile ? &profile->self_contact : nullptr);
+    return m_self.step_bound(X, D, m_model.self_contact_distance, m_model.pinned);
 }
 
 void ClothSystem::set_pinned(int vertex, bool p)
@@ -392,6 +425,54 @@ int ClothSystem::vertex_contact_count(const Positions& X) const
     return k;
 }
 
+void ClothSystem::update_static_friction(StaticFriction& sf, const Positions& X) const
+{
+    const int n = static_cast<int>(X.rows());
+    if (static_cast<int>(sf.active.size()) != n) {
+        sf.active.assign(static_cast<std::size_t>(n), 0);
+        sf.anchor = Positions::Zero(n, 3);
+        sf.lambda = Eigen::VectorXd::Zero(n);
+        sf.normal = Positions::Zero(n, 3);
+    }
+    std::vector<char> touching(static_cast<std::size_t>(n), 0);
+    for_each_contact(*this, X, [&](int i, double phi, const Vec3& nrm, const Collider&) {
+        const auto k = static_cast<std::size_t>(i);
+        if (!sf.active[k]) sf.anchor.row(i) = X.row(i);
+        sf.active[k] = 1;
+        touching[k] = 1;
+        sf.lambda(i) = m_model.contact_stiffness(i) * (-phi);
+        sf.normal.row(i) = nrm.transpose();
+    });
+    sf.contacts = 0;
+    for (int i = 0; i < n; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        if (!touching[k]) sf.active[k] = 0;
+        sf.contacts += sf.active[k];
+    }
+}
+
+double ClothSystem::static_friction_term(int i, const Positions& X, Vec3* grad, Eigen::Matrix3d* hess) const
+{
+    const StaticFriction* sf = static_friction;
+    if (!sf || !sf->active[static_cast<std::size_t>(i)] || m_model.friction <= 0) return 0;
+    const double c = m_model.friction * sf->lambda(i), eps = sf->eps;
+    const Vec3 nrm = sf->normal.row(i).transpose();
+    const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - nrm * nrm.transpose();
+    const Vec3 pu = P * (X.row(i) - sf->anchor.row(i)).transpose();
+    const double y = pu.norm();
+    const double e = y >= eps ? y : -y * y * y / (3 * eps * eps) + y * y / eps + eps / 3;
+    // f1(y) / y, f1 = f0': 1/y beyond eps, 2/eps - y/eps^2 below (finite at 0).
+    const double f1y = y >= eps ? 1 / y : 2 / eps - y / (eps * eps);
+    if (grad) *grad = c * f1y * pu;
+    if (hess) {
+        // d/dx (f1/y P u) = f1/y P + (f1' y - f1)/y^3 (P u)(P u)^T, where
+        // (f1' y - f1)/y^3 = -1/y^3 beyond eps and -1/(eps^2 y) below.
+        *hess = c * f1y * P;
+        if (y > 0) *hess -= c * (y >= eps ? 1 / (y * y * y) : 1 / (eps * eps * y)) * pu * pu.transpose();
+    }
+    return c * e;
+}
+
 double ClothSystem::potential_energy(const Positions& X) const
 {
     ProfileScope timer(profile ? &profile->energy : nullptr);
@@ -417,6 +498,9 @@ double ClothSystem::potential_energy(const Positions& X) const
     }
     for_each_contact(*this, X, [&](int i, double phi, const Vec3&, const Collider&) { e += 0.5 * m_model.contact_stiffness(i) * phi * phi; });
     for_each_edge_contact(*this, X, [&](const EdgeContact& c) { e += 0.5 * c.k * c.phi * c.phi * c.w(); });
+    for (const auto& p : self_contact_pairs(X)) e += self_contact_pair_energy(p, X);
+    if (static_friction)
+        for (int i = 0; i < X.rows(); ++i) e += static_friction_term(i, X);
     return e;
 }
 
@@ -477,6 +561,16 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         f.row(ed[0]) -= (c.k * grad.head<3>()).transpose();
         f.row(ed[1]) -= (c.k * grad.tail<3>()).transpose();
     });
+    for (const auto& p : self_contact_pairs(X)) {
+        Vec12 g;
+        self_contact_pair_energy(p, X, &g);
+        for (int a = 0; a < 4; ++a) f.row(p.v[static_cast<std::size_t>(a)]) -= g.segment<3>(3 * a).transpose();
+    }
+    if (static_friction)
+        for (int i = 0; i < X.rows(); ++i) {
+            Vec3 g;
+            if (static_friction_term(i, X, &g) != 0) f.row(i) -= g.transpose();
+        }
 }
 
 void ClothSystem::add_damping_forces(const Positions& X, const Positions& V, Positions& f) const
@@ -527,8 +621,11 @@ void ClothSystem::total_forces(const Positions& X, const Positions& V, Positions
 
 // ---- Hessian ----------------------------------------------------------------
 
-HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
+HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s) { build_pattern(); }
+
+void HessianAssembler::build_pattern()
 {
+    const ClothSystem& s = m_s;
     const int n = s.vertex_count();
     const auto& m = s.model();
     m_nbr.assign(static_cast<std::size_t>(n), {});
@@ -545,6 +642,7 @@ HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
     for (const auto& a : m.anchors)
         for (int p = 0; p < a.n; ++p)
             for (int q = p + 1; q < a.n; ++q) link(a.v[static_cast<std::size_t>(p)], a.v[static_cast<std::size_t>(q)]);
+    for (const auto& e : m_extra) link(e.first, e.second);
     std::vector<int> colptr(static_cast<std::size_t>(3 * n + 1), 0);
     long nnz = 0;
     for (int j = 0; j < n; ++j) {
@@ -573,6 +671,11 @@ HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
         }
     }
     m_H.valuePtr()[0] = 0; // pattern is final; values are written by assemble()
+    m_spring_blocks.clear();
+    m_diag_blocks.clear();
+    m_bend_blocks.clear();
+    m_bend_offset.clear();
+    m_edge_blocks.clear();
     m_spring_blocks.reserve(m.springs.size());
     for (const auto& sp : m.springs) m_spring_blocks.push_back(block(std::min(sp.i, sp.j), std::max(sp.i, sp.j)));
     m_diag_blocks.reserve(static_cast<std::size_t>(n));
@@ -587,6 +690,12 @@ HessianAssembler::HessianAssembler(const ClothSystem& s) : m_s(s)
     for (const auto& e : s.edges()) m_edge_blocks.push_back(block(e[0], e[1]));
 }
 
+bool HessianAssembler::has_block(int i, int j) const
+{
+    const auto& nb = m_nbr[static_cast<std::size_t>(j)];
+    return std::binary_search(nb.begin(), nb.end(), i);
+}
+
 HessianAssembler::Block HessianAssembler::block(int i, int j) const
 {
     const auto& nb = m_nbr[static_cast<std::size_t>(j)];
@@ -599,6 +708,26 @@ HessianAssembler::Block HessianAssembler::block(int i, int j) const
 void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, Projection projection)
 {
     const bool project_springs = projection == Projection::All, project_contacts = project_springs;
+    // Self-contact pairs couple vertices the mesh does not: grow the pattern
+    // first (outside the timer: the search is timed as self-contact).
+    const auto& self_pairs = m_s.self_contact_pairs(X);
+    {
+        std::vector<std::pair<int, int>> missing;
+        for (const auto& p : self_pairs)
+            for (int a = 0; a < 4; ++a)
+                for (int b = a + 1; b < 4; ++b) {
+                    const int i = std::min(p.v[static_cast<std::size_t>(a)], p.v[static_cast<std::size_t>(b)]);
+                    const int j = std::max(p.v[static_cast<std::size_t>(a)], p.v[static_cast<std::size_t>(b)]);
+                    if (!has_block(i, j)) missing.emplace_back(i, j);
+                }
+        if (!missing.empty()) {
+            m_extra.insert(m_extra.end(), missing.begin(), missing.end());
+            std::sort(m_extra.begin(), m_extra.end());
+            m_extra.erase(std::unique(m_extra.begin(), m_extra.end()), m_extra.end());
+            build_pattern();
+            ++m_revision;
+        }
+    }
     ProfileScope timer(m_s.profile ? &m_s.profile->assemble : nullptr);
     const auto& m = m_s.model();
     double* val = m_H.valuePtr();
@@ -691,6 +820,28 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         add_diag(m_diag_blocks[static_cast<std::size_t>(ed[1])], K.block<3, 3>(3, 3));
         add_off(m_edge_blocks[static_cast<std::size_t>(c.edge)], K.block<3, 3>(0, 3));
     });
+    for (const auto& p : self_pairs) {
+        Mat12 K;
+        m_s.self_contact_pair_energy(p, X, nullptr, &K);
+        if (project_contacts) {
+            // The barrier's own Hessian, projected to positive semidefinite as IPC does.
+            Eigen::SelfAdjointEigenSolver<Mat12> es(K);
+            K = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
+        }
+        for (int a = 0; a < 4; ++a)
+            for (int b = a; b < 4; ++b) {
+                const int i = p.v[static_cast<std::size_t>(a)], j = p.v[static_cast<std::size_t>(b)];
+                const Eigen::Matrix3d Kab = K.block<3, 3>(3 * a, 3 * b);
+                if (a == b) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], Kab);
+                else if (i < j) add_off(block(i, j), Kab);
+                else add_off(block(j, i), Kab.transpose());
+            }
+    }
+    if (m_s.static_friction)
+        for (int i = 0; i < n; ++i) {
+            Eigen::Matrix3d K;
+            if (m_s.static_friction_term(i, X, nullptr, &K) != 0) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], K);
+        }
     // Pinned vertices: identity rows and columns (their update is zero).
     bool any_pinned = false;
     for (char p : m.pinned) any_pinned |= p != 0;

@@ -6,6 +6,7 @@
 #include "engine/cloth/mesh.hpp"
 #include "engine/cloth/model.hpp"
 #include "engine/cloth/profile.hpp"
+#include "engine/cloth/self_contact.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -30,6 +31,26 @@ public:
 
 private:
     std::unique_ptr<ContactCache> m_p;
+};
+
+/// Coulomb friction against colliders for the static solver, lagged as in IPC
+/// (Li et al. 2020, section 5): each vertex in contact has an anchor (where it
+/// came into contact), the normal force lambda and normal n of the last lag
+/// point (the static solver updates them every Newton iteration), and the
+/// friction potential mu lambda f0(|P (x - anchor)|), P = I - n n^T, with
+/// f0(y) = y beyond `eps` and -y^3/(3 eps^2) + y^2/eps + eps/3 below it: a
+/// contact moved less than eps from its anchor sticks (a stiff tangential
+/// spring), one moved farther slides against a force of mu lambda. At rest
+/// every contact then carries a tangential force of at most mu lambda, the
+/// Coulomb condition, reached along the solver's path from where the contacts
+/// began (friction makes the rest state depend on the path).
+struct StaticFriction {
+    double eps = 1e-5;         ///< [m] sticking displacement (f0's smoothing)
+    std::vector<char> active;  ///< per vertex: in contact at the lag point
+    Positions anchor;          ///< [m]
+    Eigen::VectorXd lambda;    ///< [N] normal force at the lag point
+    Positions normal;          ///< unit collider normals at the lag point
+    int contacts = 0;          ///< active vertices
 };
 
 /// Not safe for concurrent use from several threads, not even through const
@@ -92,8 +113,31 @@ public:
     /// Free vertices in contact with any collider at X (a vertex in two counts once per collider).
     int vertex_contact_count(const Positions& X) const;
 
+    /// When set (the static solver does, for ClothModel::friction > 0), the
+    /// friction potential of `static_friction` is part of the potential energy,
+    /// the conservative forces and the Hessian. Not owned.
+    StaticFriction* static_friction = nullptr;
+    /// Lag point of the static friction at X: vertices that came into contact
+    /// are anchored where they are, vertices that left lose their anchor, and
+    /// every contact's normal force and normal are taken at X.
+    void update_static_friction(StaticFriction& sf, const Positions& X) const;
+    /// Friction potential of vertex i at X with its gradient and Hessian (when
+    /// asked); 0 when the vertex has no anchor.
+    double static_friction_term(int i, const Positions& X, Eigen::Vector3d* grad = nullptr, Eigen::Matrix3d* hess = nullptr) const;
+
     /// Internal (system.cpp): the contacts found at the last positions asked about.
     ContactCache& contact_cache() const { return m_contact_cache.get(); }
+
+    /// Self-contact on (ClothModel::self_contact_distance > 0).
+    bool self_contact_on() const { return m_model.self_contact_distance > 0; }
+    /// The self-contact pairs closer than the contact distance at X (empty when off).
+    const std::vector<ProximityPair>& self_contact_pairs(const Positions& X) const;
+    /// Energy, gradient and Hessian (when asked) of one self-contact pair at X.
+    double self_contact_pair_energy(const ProximityPair& p, const Positions& X, Vec12* grad = nullptr, Mat12* hess = nullptr) const;
+    /// Largest step fraction in (0, 1] along D from X that lets no two parts of
+    /// the cloth pass through each other (1 when self-contact is off).
+    double self_contact_step_bound(const Positions& X, const Positions& D) const;
+    const SelfContact& self_contact() const { return m_self; }
 
 private:
     friend class HessianAssembler;
@@ -102,6 +146,7 @@ private:
     std::vector<std::shared_ptr<const Collider>> m_colliders;
     std::vector<std::array<int, 2>> m_edges;
     ContactCacheHolder m_contact_cache;
+    SelfContact m_self;
 };
 
 /// Sparse symmetric Hessian of the potential energy with a fixed sparsity
@@ -127,12 +172,20 @@ public:
         assemble(X, extra_diag, damping_scale, project ? Projection::All : Projection::None);
     }
     const Eigen::SparseMatrix<double>& matrix() const { return m_H; }
+    /// Counts changes of the sparsity pattern: self-contact pairs between vertices
+    /// the pattern did not couple yet add their blocks (the pattern only grows).
+    /// A factorisation analysed for an older revision must be analysed again.
+    int revision() const { return m_revision; }
 
 private:
     struct Block {
         int col[3]; ///< value index of entry (0, b) of the block in column b; entry (a, b) is col[b] + a
     };
     Block block(int i, int j) const; ///< i <= j
+    bool has_block(int i, int j) const; ///< i <= j
+    void build_pattern();
+    int m_revision = 0;
+    std::vector<std::pair<int, int>> m_extra; ///< coupled by self-contact (i < j)
     const ClothSystem& m_s;
     Eigen::SparseMatrix<double> m_H; // 3n x 3n, upper triangle
     std::vector<std::vector<int>> m_nbr; // per column vertex j: sorted row vertices i <= j

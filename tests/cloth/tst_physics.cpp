@@ -4,6 +4,7 @@
 #include "engine/cloth/drape.hpp"
 #include "engine/cloth/solver.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <QtTest>
 
 #include <numbers>
@@ -191,6 +192,100 @@ private slots:
                          qPrintable(QString("slid %1 m, expected %2 m").arg(moved).arg(0.5 * a * t * t)));
             }
         }
+    }
+
+    /// The static solver's lagged Coulomb friction (StaticFriction): the same
+    /// sheet on the same 20-degree incline (tan = 0.364). With mu = 0.6 it comes
+    /// to rest where it was laid (sticking: moved less than the 10 um sticking
+    /// displacement plus the contact's sink), and the friction carries exactly
+    /// the weight's component along the slope, within mu times the normal force;
+    /// with mu = 0.1 or frictionless there is no rest on the slope, and the
+    /// solver's path slides the sheet downhill.
+    void static_friction_on_an_incline()
+    {
+        const double th = 20.0 * std::numbers::pi / 180.0;
+        const Eigen::Vector3d n(-std::sin(th), 0, std::cos(th)), down(std::cos(th), 0, std::sin(th));
+        for (double mu : {0.6, 0.1, 0.0}) {
+            FabricParams p;
+            p[Param::Friction] = mu;
+            p[Param::Thickness] = 0;
+            ClothMesh m = make_rectangle(0.02, 0.02, 3, 3);
+            ClothSystem s(m, make_model(m, p));
+            for (int i = 0; i < s.vertex_count(); ++i)
+                s.x.row(i) = (m.X(i, 0) * down + m.X(i, 1) * Eigen::Vector3d::UnitY()).transpose();
+            s.add_collider(std::make_shared<PlaneCollider>(Eigen::Vector3d::Zero(), n));
+            const Positions x0 = s.x;
+            RestOptions opt;
+            opt.max_newton = 300;
+            const SolverStatus st = run_to_rest(s, opt);
+            const double moved = (s.x.row(4) - x0.row(4)).dot(-down.transpose()); // downhill
+            if (mu > 0.5) {
+                QVERIFY2(st.converged(), qPrintable(QString::fromStdString(st.message)));
+                QVERIFY2(std::abs(moved) < 2e-5, qPrintable(QString("stuck sheet moved %1 m").arg(moved)));
+                // At rest, without friction the forces on the sheet (weight, the
+                // plane's normal push, the springs) leave the weight's component
+                // along the slope unbalanced: that is what friction carries, and
+                // it is within mu times the normal force.
+                StaticFriction sf;
+                s.update_static_friction(sf, s.x);
+                Positions f;
+                s.conservative_forces(s.x, f); // s.static_friction is unset after the solve: no friction in f
+                const Eigen::Vector3d net = f.colwise().sum().transpose();
+                const double W = s.model().total_mass() * 9.81, normal = sf.lambda.sum();
+                QVERIFY2(std::abs(net.norm() - W * std::sin(th)) < 1e-3 * W,
+                         qPrintable(QString("unbalanced %1 N, weight along the slope %2 N").arg(net.norm()).arg(W * std::sin(th))));
+                QVERIFY2(std::abs(net.dot(n)) < 1e-3 * W, "the plane balances the weight's normal component");
+                QVERIFY2(std::abs(normal - W * std::cos(th)) < 1e-3 * W, qPrintable(QString("normal %1 N").arg(normal)));
+                QVERIFY(net.norm() <= mu * normal);
+            } else {
+                QVERIFY2(!st.converged() && std::abs(moved) > 5e-3,
+                         qPrintable(QString("mu %1: %2, moved %3 m downhill").arg(mu).arg(QString::fromStdString(to_string(st.outcome))).arg(moved)));
+            }
+        }
+    }
+
+    /// The friction potential's force is minus its gradient and its Hessian the
+    /// force's Jacobian, for contacts sticking (within eps of the anchor) and
+    /// sliding (beyond it), by central differences.
+    void static_friction_derivatives()
+    {
+        FabricParams p;
+        p[Param::Friction] = 0.4;
+        p[Param::Thickness] = 1e-3;
+        ClothMesh m = make_rectangle(0.02, 0.02, 4, 4);
+        ClothSystem s(m, make_model(m, p));
+        s.x.col(2).array() = 0.2e-3; // inside the contact offset (0.5 mm) of the floor
+        s.add_collider(std::make_shared<PlaneCollider>(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()));
+        StaticFriction sf;
+        s.static_friction = &sf;
+        s.update_static_friction(sf, s.x);
+        QCOMPARE(sf.contacts, s.vertex_count());
+        // Move every vertex from its anchor: even vertices by 3 um (sticking), odd ones by 40 um (sliding).
+        for (int i = 0; i < s.vertex_count(); ++i) {
+            const double r = (i % 2 ? 40e-6 : 3e-6);
+            s.x(i, 0) += r * std::cos(0.7 * i);
+            s.x(i, 1) += r * std::sin(0.7 * i);
+            s.x(i, 2) += 0.1e-3 * std::sin(1.3 * i);
+        }
+        for (int i = 0; i < s.vertex_count(); ++i) {
+            Eigen::Vector3d g;
+            Eigen::Matrix3d H;
+            const double e0 = s.static_friction_term(i, s.x, &g, &H);
+            QVERIFY(e0 > 0);
+            const double h = 1e-9;
+            for (int c = 0; c < 3; ++c) {
+                Positions xp = s.x, xm = s.x;
+                xp(i, c) += h;
+                xm(i, c) -= h;
+                Eigen::Vector3d gp, gm;
+                const double fd = (s.static_friction_term(i, xp, &gp) - s.static_friction_term(i, xm, &gm)) / (2 * h);
+                QVERIFY2(std::abs(fd - g(c)) < 1e-6 * g.norm() + 1e-12, qPrintable(QString("vertex %1 gradient %2 vs %3").arg(i).arg(g(c)).arg(fd)));
+                const Eigen::Vector3d col = (gp - gm) / (2 * h);
+                QVERIFY2((col - H.col(c)).norm() < 1e-5 * H.norm(), qPrintable(QString("vertex %1 Hessian column %2").arg(i).arg(c)));
+            }
+            QVERIFY(H.selfadjointView<Eigen::Upper>().eigenvalues().minCoeff() > -1e-9 * H.norm()); // positive semidefinite
+        }
+        s.static_friction = nullptr;
     }
 
     /// Nonlinear bending. Stiffening (Param::BendStiffeningRadius r): a sheet rolled

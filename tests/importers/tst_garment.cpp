@@ -57,6 +57,8 @@ private slots:
         for (const Drape* d : {&silk, &denim}) {
             QVERIFY2(d->status.converged(), d->status.message.c_str());
             QCOMPARE(d->metrics.vertices_inside_body, 0);
+            // Self-collision (on in every garment scene): no fold passes through another.
+            QCOMPARE(d->metrics.self_intersections, 0L);
             QVERIFY(d->metrics.hem_mean_radius_m > 0.1 && d->metrics.hem_mean_radius_m < 0.6);
         }
         // The bending rigidity of denim is ~100x silk's: the skirt flares out.

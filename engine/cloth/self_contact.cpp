@@ -309,7 +309,7 @@ bool shares_vertex(const std::array<int, 2>& a, const std::array<int, 2>& b)
 /// boxes (`vbox`, `tbox`) overlap, and ee(e, f) for every two edges sharing no
 /// vertex whose boxes overlap.
 template <class PT, class EE>
-void candidates(const Triangles& F, const std::vector<std::array<int, 2>>& edges, const std::vector<detail::Box>& vbox,
+void broad_phase(const Triangles& F, const std::vector<std::array<int, 2>>& edges, const std::vector<detail::Box>& vbox,
                 const detail::Bvh& tb, const detail::Bvh& eb, PT&& pt, EE&& ee)
 {
     for (int i = 0; i < static_cast<int>(vbox.size()); ++i)
@@ -389,7 +389,7 @@ void SelfContact::rebuild(const Positions& X, double d_hat, const std::vector<ch
         ebox[e].add(Vec3(X.row(m_edges[e][1]).transpose()));
         ebox[e].inflate(0.5 * reach);
     }
-    candidates(
+    broad_phase(
         m_F, m_edges, vbox, refit(m_tri_bvh, std::move(tbox)), refit(m_edge_bvh, std::move(ebox)),
         [&](int i, int t) {
             const ProximityPair p{ProximityPair::PointTriangle, {i, m_F(t, 0), m_F(t, 1), m_F(t, 2)}};
@@ -488,7 +488,7 @@ double SelfContact::step_bound(const Positions& X, const Positions& D, double d_
         for (int k = 0; k < 2; ++k) ebox[e].add(vbox[static_cast<std::size_t>(m_edges[e][static_cast<std::size_t>(k)])]);
         ebox[e].inflate(0.5 * std::max(d_hat, 0.0));
     }
-    candidates(
+    broad_phase(
         m_F, m_edges, vbox, refit(m_tri_bvh, std::move(tbox)), refit(m_edge_bvh, std::move(ebox)),
         [&](int i, int t) { limit(ProximityPair::PointTriangle, {i, m_F(t, 0), m_F(t, 1), m_F(t, 2)}); },
         [&](int a, int b) {

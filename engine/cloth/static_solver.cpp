@@ -62,6 +62,25 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
     StaticFriction* const outer_friction = s.static_friction;
     const bool frictional = s.model().friction > 0 && !s.colliders().empty();
     if (frictional) s.static_friction = &friction;
+    // A start where two parts of the cloth touch (or one passes through the
+    // other: a garment file made that way) has no finite barrier energy to
+    // descend from; say so instead of stepping on infinities.
+    if (s.self_contact_on()) {
+        const double close = 1e-3 * s.model().self_contact_distance;
+        for (const auto& p : s.self_contact_pairs(s.x)) {
+            std::array<Eigen::Vector3d, 4> y;
+            for (std::size_t k = 0; k < 4; ++k) y[k] = s.x.row(p.v[k]).transpose();
+            if (!(pair_squared_distance(p.kind, y) > close * close)) {
+                st.outcome = SolverStatus::Outcome::Diverged;
+                st.message = "the cloth touches or passes through itself at the start (vertices " + std::to_string(p.v[0]) + ", " +
+                             std::to_string(p.v[1]) + ", " + std::to_string(p.v[2]) + ", " + std::to_string(p.v[3]) +
+                             "); give it a start without self-intersections, or turn self-collision off";
+                s.profile = outer_profile;
+                s.static_friction = outer_friction;
+                return st;
+            }
+        }
+    }
     while (true) {
         if (frictional) {
             s.update_static_friction(friction, s.x);

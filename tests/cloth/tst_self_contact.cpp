@@ -231,6 +231,25 @@ private slots:
         QCOMPARE(s.potential_energy(s.x), off.potential_energy(off.x));
     }
 
+    /// A start where the cloth passes through itself is refused with a message,
+    /// not "solved" with an infinite energy that accepts every step.
+    void startThroughItselfIsReported()
+    {
+        auto s = sheets_system(3e-3, true);
+        const int n = s->vertex_count(), half = n / 2;
+        // Put one upper vertex exactly onto the lower sheet's plane, inside it.
+        int inside = -1;
+        for (int i = half; i < n && inside < 0; ++i)
+            if (std::abs(s->x(i, 0)) < 0.02 && std::abs(s->x(i, 1)) < 0.02) inside = i;
+        QVERIFY(inside >= 0);
+        s->x(inside, 2) = s->x(0, 2);
+        RestOptions opt;
+        opt.max_newton = 50;
+        const SolverStatus st = run_to_rest(*s, opt);
+        QCOMPARE(st.outcome, SolverStatus::Outcome::Diverged);
+        QVERIFY2(QString::fromStdString(st.message).contains("passes through itself"), st.message.c_str());
+    }
+
     /// Two sheets dropped onto each other onto the floor: with self-contact the
     /// upper one comes to rest on the lower one, one thickness above it, with no
     /// intersecting triangles; without, it falls through it onto the floor.

@@ -41,7 +41,8 @@ QString saveDrapeResults(const QString& jsonPath, const cloth::ClothSystem& sys,
                   {"vertices", sys.vertex_count()},
                   {"triangles", mesh.F.rows()},
                   {"max_speed_m_s", maxFreeSpeed(sys)},
-                  {"relative_residual", cloth::relative_residual(sys)},
+                  {"relative_residual", cloth::relative_residual(sys, solver.integrator == QLatin1String("implicit") ||
+                                                                              solver.integrator == QLatin1String("static"))},
                   {"obj", QFileInfo(objPath).fileName().toStdString()}};
     std::vector<int> pinned;
     for (int i = 0; i < sys.vertex_count(); ++i)

@@ -62,10 +62,16 @@ double damping_quadratic(const ClothSystem& s, const Positions& X, const Positio
 
 } // namespace
 
-double relative_residual(const ClothSystem& s)
+double relative_residual(const ClothSystem& s, bool self_contact)
 {
     Positions f;
     s.conservative_forces(s.x, f);
+    if (!self_contact)
+        for (const auto& p : s.self_contact_pairs(s.x)) {
+            Vec12 g;
+            s.self_contact_pair_energy(p, s.x, &g);
+            for (int a = 0; a < 4; ++a) f.row(p.v[static_cast<std::size_t>(a)]) += g.segment<3>(3 * a).transpose();
+        }
     mask_pinned(s, f);
     return flat(f).norm() / weight_norm(s);
 }

@@ -86,11 +86,12 @@ struct ModelOptions {
     /// hanging below it cuts the corner of the pedestal (3.9 mm deep at grid 25), and
     /// the laser slices next to the disc come out too narrow. See docs/model-discrepancy.md.
     bool edge_contact = true;
-    /// Self-contact (engine/cloth/self_contact.hpp): a barrier keeps every point and
-    /// triangle and every two edges of the cloth at least its thickness apart
-    /// (kMinSelfContactDistance at the least), in the static solver and the
-    /// implicit integrator. Off by default: a drapemeter's folds stay open, and
-    /// the search costs a broad phase per energy evaluation; the garment scenes
+    /// Self-contact (engine/cloth/self_contact.hpp): a barrier pushes apart every
+    /// point and triangle and every two edges of the cloth that come closer than
+    /// its thickness (kMinSelfContactDistance at the least; a layer resting on
+    /// another sits about 0.8 of it above), and no step of the static solver or
+    /// the implicit integrator lets them pass through each other. Off by default: a drapemeter's folds stay open, and
+    /// the proximity search costs time (docs/performance.md); the garment scenes
     /// switch it on. Explicit integrators ignore it (a barrier needs the step filter).
     bool self_collision = false;
 };

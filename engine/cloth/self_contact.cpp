@@ -305,27 +305,6 @@ bool shares_vertex(const std::array<int, 2>& a, const std::array<int, 2>& b)
     return a[0] == b[0] || a[0] == b[1] || a[1] == b[0] || a[1] == b[1];
 }
 
-/// Calls pt(i, t) for every vertex i and triangle t not incident to it whose
-/// boxes (`vbox`, `tbox`) overlap, and ee(e, f) for every two edges sharing no
-/// vertex whose boxes overlap.
-template <class PT, class EE>
-void broad_phase(const Triangles& F, const std::vector<std::array<int, 2>>& edges, const std::vector<detail::Box>& vbox,
-                const detail::Bvh& tb, const detail::Bvh& eb, PT&& pt, EE&& ee)
-{
-    for (int i = 0; i < static_cast<int>(vbox.size()); ++i)
-        tb.query(vbox[static_cast<std::size_t>(i)], [&](int t) {
-            if (F(t, 0) == i || F(t, 1) == i || F(t, 2) == i) return;
-            pt(i, t);
-        });
-    eb.self_pairs([&](int a, int b) {
-        if (shares_vertex(edges[static_cast<std::size_t>(a)], edges[static_cast<std::size_t>(b)])) return;
-        ee(std::min(a, b), std::max(a, b));
-    });
-}
-
-} // namespace
-
-namespace {
 
 /// The skin of the candidate list [m]: large enough that a Newton iteration
 /// near rest (micrometres) never rebuilds it, small enough that a flat mesh's
@@ -341,6 +320,33 @@ bool all_pinned(const std::vector<char>& pinned, const std::array<int, 4>& v)
 }
 
 } // namespace
+
+template <class F>
+void SelfContact::search(const std::vector<detail::Box>& vbox, double pad, F&& f) const
+{
+    std::vector<detail::Box> tbox(static_cast<std::size_t>(m_F.rows())), ebox(m_edges.size());
+    for (Eigen::Index t = 0; t < m_F.rows(); ++t) {
+        for (int k = 0; k < 3; ++k) tbox[static_cast<std::size_t>(t)].add(vbox[static_cast<std::size_t>(m_F(t, k))]);
+        tbox[static_cast<std::size_t>(t)].inflate(pad);
+    }
+    for (std::size_t e = 0; e < m_edges.size(); ++e) {
+        for (int k = 0; k < 2; ++k) ebox[e].add(vbox[static_cast<std::size_t>(m_edges[e][static_cast<std::size_t>(k)])]);
+        ebox[e].inflate(0.5 * pad);
+    }
+    const detail::Bvh& tb = refit(m_tri_bvh, std::move(tbox));
+    const detail::Bvh& eb = refit(m_edge_bvh, std::move(ebox));
+    for (int i = 0; i < static_cast<int>(vbox.size()); ++i)
+        tb.query(vbox[static_cast<std::size_t>(i)], [&](int t) {
+            if (m_F(t, 0) == i || m_F(t, 1) == i || m_F(t, 2) == i) return;
+            f(ProximityPair{ProximityPair::PointTriangle, {i, m_F(t, 0), m_F(t, 1), m_F(t, 2)}});
+        });
+    eb.self_pairs([&](int a, int b) {
+        const auto& ea = m_edges[static_cast<std::size_t>(std::min(a, b))];
+        const auto& eb2 = m_edges[static_cast<std::size_t>(std::max(a, b))];
+        if (shares_vertex(ea, eb2)) return;
+        f(ProximityPair{ProximityPair::EdgeEdge, {ea[0], ea[1], eb2[0], eb2[1]}});
+    });
+}
 
 const detail::Bvh& SelfContact::refit(std::unique_ptr<detail::Bvh>& bvh, std::vector<detail::Box> boxes) const
 {
@@ -376,33 +382,12 @@ void SelfContact::rebuild(const Positions& X, double d_hat, const std::vector<ch
     l.candidates.clear();
     l.valid = true;
     const double reach = d_hat + l.skin, reach2 = reach * reach;
-    const int n = static_cast<int>(X.rows());
-    std::vector<detail::Box> vbox(static_cast<std::size_t>(n)), tbox(static_cast<std::size_t>(m_F.rows())), ebox(m_edges.size());
-    for (int i = 0; i < n; ++i) vbox[static_cast<std::size_t>(i)].add(Vec3(X.row(i).transpose()));
-    for (Eigen::Index t = 0; t < m_F.rows(); ++t) {
-        auto& b = tbox[static_cast<std::size_t>(t)];
-        for (int k = 0; k < 3; ++k) b.add(Vec3(X.row(m_F(t, k)).transpose()));
-        b.inflate(reach);
-    }
-    for (std::size_t e = 0; e < m_edges.size(); ++e) {
-        ebox[e].add(Vec3(X.row(m_edges[e][0]).transpose()));
-        ebox[e].add(Vec3(X.row(m_edges[e][1]).transpose()));
-        ebox[e].inflate(0.5 * reach);
-    }
-    broad_phase(
-        m_F, m_edges, vbox, refit(m_tri_bvh, std::move(tbox)), refit(m_edge_bvh, std::move(ebox)),
-        [&](int i, int t) {
-            const ProximityPair p{ProximityPair::PointTriangle, {i, m_F(t, 0), m_F(t, 1), m_F(t, 2)}};
-            if (!all_pinned(pinned, p.v) && pair_squared_distance(p.kind, gather(X, p.v)) < reach2 && apart_at_rest(p, d_hat))
-                l.candidates.push_back(p);
-        },
-        [&](int a, int b) {
-            const auto& ea = m_edges[static_cast<std::size_t>(a)];
-            const auto& eb = m_edges[static_cast<std::size_t>(b)];
-            const ProximityPair p{ProximityPair::EdgeEdge, {ea[0], ea[1], eb[0], eb[1]}};
-            if (!all_pinned(pinned, p.v) && pair_squared_distance(p.kind, gather(X, p.v)) < reach2 && apart_at_rest(p, d_hat))
-                l.candidates.push_back(p);
-        });
+    std::vector<detail::Box> vbox(static_cast<std::size_t>(X.rows()));
+    for (Eigen::Index i = 0; i < X.rows(); ++i) vbox[static_cast<std::size_t>(i)].add(Vec3(X.row(i).transpose()));
+    search(vbox, reach, [&](const ProximityPair& p) {
+        if (!all_pinned(pinned, p.v) && pair_squared_distance(p.kind, gather(X, p.v)) < reach2 && apart_at_rest(p, d_hat))
+            l.candidates.push_back(p);
+    });
     std::sort(l.candidates.begin(), l.candidates.end(), [](const ProximityPair& a, const ProximityPair& b) {
         return std::tie(a.kind, a.v) < std::tie(b.kind, b.v);
     });
@@ -472,30 +457,14 @@ double SelfContact::step_bound(const Positions& X, const Positions& D, double d_
         return alpha;
     }
     ++searches;
-    const int n = static_cast<int>(X.rows());
-    std::vector<detail::Box> vbox(static_cast<std::size_t>(n)), tbox(static_cast<std::size_t>(m_F.rows())), ebox(m_edges.size());
-    for (int i = 0; i < n; ++i) {
+    std::vector<detail::Box> vbox(static_cast<std::size_t>(X.rows()));
+    for (Eigen::Index i = 0; i < X.rows(); ++i) {
         vbox[static_cast<std::size_t>(i)].add(Vec3(X.row(i).transpose()));
         vbox[static_cast<std::size_t>(i)].add(Vec3((X.row(i) + D.row(i)).transpose()));
     }
     // Boxes padded by d_hat: pairs that end the step closer than d_hat are
     // bounded too (keeping 10 % of their distance), not only those that would touch.
-    for (Eigen::Index t = 0; t < m_F.rows(); ++t) {
-        for (int k = 0; k < 3; ++k) tbox[static_cast<std::size_t>(t)].add(vbox[static_cast<std::size_t>(m_F(t, k))]);
-        tbox[static_cast<std::size_t>(t)].inflate(std::max(d_hat, 0.0));
-    }
-    for (std::size_t e = 0; e < m_edges.size(); ++e) {
-        for (int k = 0; k < 2; ++k) ebox[e].add(vbox[static_cast<std::size_t>(m_edges[e][static_cast<std::size_t>(k)])]);
-        ebox[e].inflate(0.5 * std::max(d_hat, 0.0));
-    }
-    broad_phase(
-        m_F, m_edges, vbox, refit(m_tri_bvh, std::move(tbox)), refit(m_edge_bvh, std::move(ebox)),
-        [&](int i, int t) { limit(ProximityPair::PointTriangle, {i, m_F(t, 0), m_F(t, 1), m_F(t, 2)}); },
-        [&](int a, int b) {
-            const auto& ea = m_edges[static_cast<std::size_t>(a)];
-            const auto& eb = m_edges[static_cast<std::size_t>(b)];
-            limit(ProximityPair::EdgeEdge, {ea[0], ea[1], eb[0], eb[1]});
-        });
+    search(vbox, std::max(d_hat, 0.0), [&](const ProximityPair& p) { limit(p.kind, p.v); });
     return alpha;
 }
 

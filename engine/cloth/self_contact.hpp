@@ -126,6 +126,11 @@ private:
     /// refitted to the boxes of every later one (copies start without them).
     mutable std::unique_ptr<detail::Bvh> m_tri_bvh, m_edge_bvh;
     const detail::Bvh& refit(std::unique_ptr<detail::Bvh>& bvh, std::vector<detail::Box> boxes) const;
+    /// f(pair) for every point-triangle and edge-edge pair sharing no vertex whose
+    /// boxes overlap: the vertices' boxes `vbox` (points or swept), triangles' and
+    /// edges' boxes their vertices' boxes padded by `pad` and pad / 2.
+    template <class F>
+    void search(const std::vector<detail::Box>& vbox, double pad, F&& f) const;
 };
 
 } // namespace drape::cloth

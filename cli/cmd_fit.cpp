@@ -64,6 +64,10 @@ as not identifiable.
   --branch B          where cold drapes start: measured (default; on the record's measured fold
                       count, an n-fold lift of the flat sheet), random (the seeded mix of modes, as
                       the preset drapes from flat) or mixed (even seeds measured, odd seeds random)
+  --bending T         warp and weft bending: auto (default; fitted apart, and fitted again as one
+                      bending when their ratio is beyond 3 but the data do not separate them - the
+                      tied preset is kept unless chi2 rises by more than 9, the 3-sigma level), free (apart,
+                      no test) or tied (one bending for both: an isotropic fabric)
   --cold-global       global stage from flat starts (default: from the best point's rest
                       states, faster, but each seed keeps its fold pattern)
   --cold-local        local stage from flat starts too (every simulation is a fresh drop,
@@ -113,7 +117,7 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only", "--cold-global", "--cold-local"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
@@ -149,6 +153,7 @@ int run(const std::vector<std::string>& argv)
     fo.warm_global = !a.has("--cold-global");
     try {
         if (const auto b = a.get("--branch")) fo.branch = estimate::parse_fold_branch(*b);
+        if (const auto b = a.get("--bending")) fo.bending = estimate::parse_bending_tie(*b);
     } catch (const Error& e) {
         throw UsageError(std::string("--") + e.what());
     }
@@ -254,6 +259,7 @@ int run(const std::vector<std::string>& argv)
         if (!r.residual.named_effect.empty()) std::printf("named effect: %s (refit with it explains the residual)\n", r.residual.named_effect.c_str());
         else if (!r.residual.unexplained.empty()) std::printf("%s\n", r.residual.unexplained.c_str());
         if (r.refinement.from_grid > 0) std::printf("grid refinement: %s\n", r.refinement.reason.c_str());
+        if (r.anisotropy.assessed && !r.anisotropy.reason.empty()) std::printf("bending: %s\n", r.anisotropy.reason.c_str());
         if (r.grid_bound)
             std::printf("WARNING: grid-bound preset: a fitted bending length is below the mesh spacing of grid %d; "
                         "fit with a finer --grid for a preset that carries over to other grids\n",

@@ -110,6 +110,8 @@ Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
     }
     if (m_sigma_floor.size() == e.terms.size())
         for (std::size_t i = 0; i < e.terms.size(); ++i) e.terms[i].sigma = std::max(e.terms[i].sigma, m_sigma_floor[i]);
+    if (m_opt.term_sigmas.size() == e.terms.size())
+        for (std::size_t i = 0; i < e.terms.size(); ++i) e.terms[i].sigma = m_opt.term_sigmas[i];
     e.chi2 = chi_square(e.terms);
     ++m_evaluations;
     m_last = e;

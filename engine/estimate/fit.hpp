@@ -71,6 +71,25 @@ std::string to_string(FitMethod m);
 FitMethod parse_fit_method(const std::string& name); ///< "lm" | "nlopt"; ParameterError otherwise
 FoldBranch parse_fold_branch(const std::string& name); ///< "measured" | "random" | "mixed"; ParameterError otherwise
 
+/// Warp and weft bending: fitted apart, tied (one bending, isotropic), or apart
+/// and then tested (issue 15): when the free fit's warp/weft ratio is beyond the
+/// typical range of woven fabrics (kTypicalBendingAnisotropy) but its own 95 %
+/// interval of the ratio holds 1 (the data do not separate the two), the fit is
+/// repeated with the two tied (on the free fit's final sigmas), and the tied
+/// preset is kept unless the likelihood ratio says the data need the anisotropy:
+/// chi2 rises by more than 9, the 3-sigma quantile of chi2 with one degree of
+/// freedom (the effect tests' level), after scaling by the free fit's chi2 / dof
+/// when that exceeds 1.
+enum class BendingTie { Auto, Free, Tied };
+std::string to_string(BendingTie t);
+BendingTie parse_bending_tie(const std::string& name); ///< "auto" | "free" | "tied"; ParameterError otherwise
+
+/// Woven fabrics differ between warp and weft bending typically by less than a
+/// factor of 3-4 (issue 15; the starters' own ratios are 1.17-1.29). A fitted
+/// ratio beyond this factor must be separated by the data, else BendingTie::Auto
+/// tests the two tied.
+inline constexpr double kTypicalBendingAnisotropy = 3.0;
+
 struct FitOptions {
     ModelVariant model = ModelVariant::Baseline;
     FitMethod method = FitMethod::Sensitivity;
@@ -99,6 +118,14 @@ struct FitOptions {
     /// to it before the intervals are computed (0 = keep the default floors).
     int spread_seeds = 4;
     FoldBranch branch = FoldBranch::Measured;
+    BendingTie bending = BendingTie::Auto;
+    /// BendingTie::Auto tests the tie when the free ratio (or its inverse) exceeds this.
+    double typical_bending_anisotropy = kTypicalBendingAnisotropy;
+    /// Per residual term (in the evaluator's order): sigmas that replace the noise
+    /// model's and the spread calibration's. The tied refit of BendingTie::Auto
+    /// runs on the free fit's final sigmas, so that the two chi2 compare (each
+    /// fit's own spread calibration draws other seeds; empty = not used).
+    std::vector<double> term_sigmas;
     /// When the optimum is grid-bound (a fitted bending length below the mesh
     /// spacing), fit again on this finer grid from the coarse values; 0 = off
     /// (the library's default; `drape fit` refines to 41 unless --refine-grid 0).
@@ -214,6 +241,20 @@ struct FitResult {
         int coarse_dof = 0, fine_dof = 0;
         std::string reason;         ///< one sentence: why the refit was or was not adopted
     } refinement;
+    /// Warp/weft bending (BendingTie): the free fit's ratio, whether its interval
+    /// separates it from 1, and the tied refit when one was made.
+    struct Anisotropy {
+        bool assessed = false;      ///< both bendings were fitted apart and have an interval
+        double ratio = 1;           ///< B warp / B weft of the free fit
+        double ratio_lower95 = 0, ratio_upper95 = 0; ///< its 95 % interval (from the covariance of the log10 coordinates)
+        bool separated = false;     ///< the interval excludes 1
+        bool refit = false;         ///< a tied fit was made
+        bool tied = false;          ///< this result is the tied fit (one bending for warp and weft)
+        double free_chi2 = 0, tied_chi2 = 0;
+        int free_dof = 0, tied_dof = 0;
+        double delta_chi2 = 0;      ///< (tied - free) / max(1, free chi2 / dof)
+        std::string reason;         ///< one sentence for the report
+    } anisotropy;
     FitOptions options;
 };
 

@@ -67,6 +67,25 @@ json fit_to_json(const FitResult& r)
                              {"adopted", r.refinement.adopted},   {"coarse_chi2", r.refinement.coarse_chi2},
                              {"coarse_dof", r.refinement.coarse_dof}, {"fine_chi2", r.refinement.fine_chi2},
                              {"fine_dof", r.refinement.fine_dof}, {"reason", r.refinement.reason}};
+    fit["bending"] = to_string(r.options.bending);
+    if (r.anisotropy.assessed) {
+        const auto& a = r.anisotropy;
+        json an = {{"ratio_warp_weft", a.ratio},
+                   {"ratio_lower95", a.ratio_lower95},
+                   {"ratio_upper95", std::isfinite(a.ratio_upper95) ? json(a.ratio_upper95) : json(nullptr)},
+                   {"separated", a.separated},
+                   {"tied_refit", a.refit},
+                   {"tied", a.tied},
+                   {"reason", a.reason}};
+        if (a.refit) {
+            an["free_chi2"] = a.free_chi2;
+            an["free_dof"] = a.free_dof;
+            an["tied_chi2"] = a.tied_chi2;
+            an["tied_dof"] = a.tied_dof;
+            an["delta_chi2_scaled"] = a.delta_chi2;
+        }
+        fit["bending_anisotropy"] = an;
+    }
     json params = json::array();
     std::vector<std::string> not_identifiable;
     for (const auto& e : r.estimates) {

@@ -190,6 +190,8 @@ ContourFeatures contour_features(const cloth::RadialProfile& p, double depth_m, 
     f.fold_rms_m = std::sqrt(ss / hits);
     f.cos2_m = f.series.a.size() >= 2 ? f.series.a[1] : 0;
     f.cos4_m = f.series.a.size() >= 4 ? f.series.a[3] : 0;
+    f.cos1_m = f.series.a.empty() ? 0 : f.series.a[0];
+    f.sin1_m = f.series.b.empty() ? 0 : f.series.b[0];
     for (int k = 1; k <= f.series.harmonics(); ++k) f.magnitudes_m.push_back(f.series.magnitude(k));
     if (f.closed) {
         // The shared node detector works on the smoothed series (as drape_metrics does).

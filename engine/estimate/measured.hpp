@@ -83,15 +83,18 @@ MeasuredDrape synthesize_record(const cloth::DrapeResult& r, const cloth::DrapeS
 
 /// Phase-independent features of one contour. Fold positions are random from
 /// drape to drape, so only quantities that do not depend on where the folds
-/// fall are kept: mean radius, RMS fold amplitude, harmonic magnitudes, and the
+/// fall are kept: mean radius, RMS fold amplitude, harmonic magnitudes, the
 /// signed cos(2 theta) and cos(4 theta) coefficients (warp/weft anisotropy
-/// locks their phase to the fabric axes).
+/// locks their phase to the fabric axes), and the signed first harmonic
+/// a_1, b_1 (locked to the stand: the contour's shift off the pedestal axis,
+/// x and y; zero but for the folds' irregularity on a centred stand).
 struct ContourFeatures {
     double depth_m = 0;  ///< [m]
     bool closed = false; ///< every ray hit
     double mean_radius_m = 0;
     double fold_rms_m = 0; ///< RMS of r - mean [m]
     double cos2_m = 0, cos4_m = 0; ///< signed a_2, a_4 [m]
+    double cos1_m = 0, sin1_m = 0; ///< signed a_1, b_1 [m]
     std::vector<double> magnitudes_m; ///< |c_k|, k = 1..K [m]
     int node_count = 0;                ///< crests of this contour (shared node detector)
     cloth::FourierSeries series;       ///< fit with kFeatureHarmonics terms

@@ -31,7 +31,7 @@ std::string to_string(ModelVariant v)
     return "baseline";
 }
 
-std::vector<FitVariable> fit_variables(ModelVariant v)
+std::vector<FitVariable> fit_variables(ModelVariant v, bool tie_bending)
 {
     // The fit ranges are the parameter table's (cloth/params.cpp says why
     // each is what a drape test can tell apart). Log-scaled parameters are
@@ -49,7 +49,12 @@ std::vector<FitVariable> fit_variables(ModelVariant v)
         out.push_back(std::move(f));
     };
     add(Param::BendWarp);
-    add(Param::BendWeft);
+    if (tie_bending) {
+        out.back().name = "bend_Nm";
+        out.back().params.push_back(Param::BendWeft);
+    } else {
+        add(Param::BendWeft);
+    }
     add(Param::Shear);
     if (v == ModelVariant::Stiffening || v == ModelVariant::Full) add(Param::BendStiffeningRadius);
     if (v == ModelVariant::Softening) add(Param::BendSofteningRadius);
@@ -107,7 +112,12 @@ std::vector<ResidualTerm> residual_terms(int record, const DrapeFeatures& meas, 
         add("fold_rms", s.fold_rms_m, m.fold_rms_m, noise.contour_sigma(corr * noise.fold_seed_m, N / 2), m.depth_m);
         add("cos2", s.cos2_m, m.cos2_m, noise.contour_sigma(corr * noise.axis_seed_m, N / 2), m.depth_m, 2);
         add("cos4", s.cos4_m, m.cos4_m, noise.contour_sigma(corr * noise.axis_seed_m, N / 2), m.depth_m, 4);
-        for (int k = 1; k <= noise.harmonics; ++k) {
+        // The signed first harmonic: the contour's shift off the pedestal axis (a
+        // profiler or specimen off the axis), linear in the shift where |c_1| is not.
+        add("cos1", s.cos1_m, m.cos1_m, noise.contour_sigma(corr * noise.axis_seed_m, N / 2), m.depth_m, 1);
+        add("sin1", s.sin1_m, m.sin1_m, noise.contour_sigma(corr * noise.axis_seed_m, N / 2), m.depth_m, 1);
+        // |c_1| is left out: the signed a1, b1 above carry the first harmonic linearly.
+        for (int k = 2; k <= noise.harmonics; ++k) {
             const double ms = k <= static_cast<int>(s.magnitudes_m.size()) ? s.magnitudes_m[k - 1] : 0.0;
             const double mm = k <= static_cast<int>(m.magnitudes_m.size()) ? m.magnitudes_m[k - 1] : 0.0;
             add("harmonic", ms, mm, noise.contour_sigma(corr * noise.fold_seed_m, N / 2), m.depth_m, k);
@@ -148,6 +158,8 @@ DrapeFeatures average_features(const std::vector<DrapeFeatures>& f, std::vector<
             c.fold_rms_m += s.fold_rms_m;
             c.cos2_m += s.cos2_m;
             c.cos4_m += s.cos4_m;
+            c.cos1_m += s.cos1_m;
+            c.sin1_m += s.sin1_m;
             c.node_count += s.node_count;
             if (c.magnitudes_m.size() < s.magnitudes_m.size()) c.magnitudes_m.resize(s.magnitudes_m.size(), 0.0);
             for (std::size_t k = 0; k < s.magnitudes_m.size(); ++k) c.magnitudes_m[k] += s.magnitudes_m[k];
@@ -158,6 +170,8 @@ DrapeFeatures average_features(const std::vector<DrapeFeatures>& f, std::vector<
             c.fold_rms_m /= used;
             c.cos2_m /= used;
             c.cos4_m /= used;
+            c.cos1_m /= used;
+            c.sin1_m /= used;
             c.node_count /= used;
             for (double& m : c.magnitudes_m) m /= used;
         }

@@ -36,8 +36,9 @@ struct FitVariable {
     double to_coord(double v) const { return log_scale ? std::log10(v) : v; }
 };
 
-/// Fitted coordinates of a variant (in the order of the table).
-std::vector<FitVariable> fit_variables(ModelVariant v);
+/// Fitted coordinates of a variant (in the order of the table). `tie_bending`:
+/// one coordinate "bend_Nm" sets warp and weft bending together (isotropic).
+std::vector<FitVariable> fit_variables(ModelVariant v, bool tie_bending = false);
 
 /// Measurement noise (1 sigma) of each residual channel. The lab's own
 /// figures (README): laser 0.3 mm per coordinate, drapemeter 0.5 % D. The
@@ -56,7 +57,7 @@ struct NoiseModel {
     double fold_seed_m = 1.0e-3;        ///< [m] seed spread of the RMS fold amplitude and harmonic magnitudes
     double axis_seed_m = 0.6e-3;        ///< [m] seed spread of the phase-locked cos 2theta / cos 4theta terms
     double hem_m = 4e-3;                ///< [m] hem height from the side photo (edge placement + the arc the camera sees)
-    int harmonics = 8;                  ///< harmonic magnitudes compared, k = 1..harmonics
+    int harmonics = 8;                  ///< harmonic magnitudes compared, k = 2..harmonics (k = 1: the signed a1, b1)
     /// Total sigma of a quantity averaged over `points` laser samples plus a model floor [m].
     double contour_sigma(double floor_m, int points) const;
 };

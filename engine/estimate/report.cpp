@@ -240,8 +240,12 @@ void harmonic_plot(const FitResult& fr, int record, const std::string& path)
     for (int d = 0; d < nd; ++d) {
         std::vector<double> k, v;
         for (const auto& t : fr.residuals)
-            if (t.record == record && t.kind == "harmonic" && std::abs(t.depth_m - rf.measured.contours[d].depth_m) < 1e-9) {
-                k.push_back(t.harmonic - 0.4 + w * (d + 0.5));
+            if (t.record == record && (t.kind == "harmonic" || t.kind == "cos1" || t.kind == "sin1") &&
+                std::abs(t.depth_m - rf.measured.contours[d].depth_m) < 1e-9) {
+                // k = 1: the signed a1 (left half) and b1 (right half) of the slot.
+                const double centre = t.kind == "cos1" ? 0.8 : t.kind == "sin1" ? 1.2 : t.harmonic;
+                const double width = t.kind == "harmonic" ? 1.0 : 0.5;
+                k.push_back(centre - 0.4 * width + width * w * (d + 0.5));
                 v.push_back(t.whitened());
             }
         pl.bars(k, v, 0.45 * w, palette(d, nd), d == 0 || d == nd - 1 ? fmt("depth %.0f mm", rf.measured.contours[d].depth_m * 1e3) : "");
@@ -249,7 +253,7 @@ void harmonic_plot(const FitResult& fr, int record, const std::string& path)
     pl.hline(2, {200, 0, 0});
     pl.hline(-2, {200, 0, 0});
     pl.hline(0, {0, 0, 0}, false);
-    pl.set_caption("bars: harmonic magnitude |c_k| residual per depth; dashed: +-2 sigma (noise: laser + drape-to-drape spread)");
+    pl.set_caption("bars: harmonic magnitude |c_k| residual per depth (k = 1: signed a1 left, b1 right); dashed: +-2 sigma");
     pl.save(path);
 }
 
@@ -347,6 +351,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
     if (r.refinement.from_grid > 0)
         md << "**Grid refinement**: " << r.refinement.reason
            << ". The evaluation and time counts above include both fits.\n\n";
+    if (r.anisotropy.assessed && !r.anisotropy.reason.empty()) md << "**Warp/weft bending**: " << r.anisotropy.reason << ".\n\n";
     if (r.grid_bound)
         md << "**Grid-bound preset**: a fitted bending's bending length is below the mesh spacing of the fit's grid, so the "
               "coarse mesh does part of the bending's work and the preset holds at this mesh density only (`drape predict` keeps "

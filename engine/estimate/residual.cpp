@@ -40,11 +40,13 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
         (t.fitted ? fitted_acc : held).add(w);
         kinds[t.kind].add(w);
         if (t.kind == "harmonic") harm[t.harmonic].add(w);
+        if (t.kind == "cos1" || t.kind == "sin1") harm[1].add(w); // the first harmonic, signed
         if (t.kind == "dc") dc.add(t.simulated - t.measured);
         if (t.kind == "nodes") nodes.add(t.simulated - t.measured);
         if (t.depth_m > 0 && t.kind != "closure") depth[t.depth_m].add(w);
         if (t.kind == "mean_radius") radius_by_depth[t.depth_m].add(w);
-        if (t.kind == "mean_radius" || t.kind == "fold_rms" || t.kind == "harmonic" || t.kind == "cos2" || t.kind == "cos4") {
+        if (t.kind == "mean_radius" || t.kind == "fold_rms" || t.kind == "harmonic" || t.kind == "cos2" || t.kind == "cos4" ||
+            t.kind == "cos1" || t.kind == "sin1") {
             const double d = t.simulated - t.measured;
             ss_m += d * d;
             ++n_m;
@@ -95,13 +97,29 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
         if (t.kind == "mean_radius") return -1.0 / (1.0 + t.depth_m / 0.010);
         return 0.0;
     });
-    // Off-centre stack: every depth's |c1| larger than the model's (a shift moves
-    // every cut alike). The depths' drape-to-drape floors are scaled by
-    // sqrt(depths) because one drape is cut at every depth, so their RMS
-    // understates a shift seen at all depths by that factor; the projection on
-    // the unit signature (-1 on each |c1|) does not.
-    const double off_centre_z = matched_filter("specimen_off_centre", "off-centre signature (|c1| at every depth)",
-                                               [](const ResidualTerm& t) { return t.kind == "harmonic" && t.harmonic == 1 ? -1.0 : 0.0; });
+    // Off-centre stack: a shift (dx, dy) moves every cut alike, adding dx to every
+    // depth's a1 and dy to every b1. The matched filter of a common shift in each
+    // direction, combined over the two (z = sqrt(zx^2 + zy^2), the signature's
+    // direction being the residual's own). The depths' drape-to-drape floors are
+    // scaled by sqrt(depths) because one drape is cut at every depth, so their RMS
+    // understates a shift seen at all depths by that factor; the projection does not.
+    double off_centre_z = 0;
+    {
+        double sx = 0, sy = 0;
+        int nx = 0, ny = 0;
+        for (const auto& t : terms) {
+            if (t.kind == "cos1") sx -= t.whitened(), ++nx;
+            if (t.kind == "sin1") sy -= t.whitened(), ++ny;
+        }
+        const double zx = nx ? sx / std::sqrt(nx) : 0.0, zy = ny ? sy / std::sqrt(ny) : 0.0;
+        off_centre_z = std::hypot(zx, zy);
+        a.signature_z.push_back({"specimen_off_centre", off_centre_z});
+        // Two directions fitted: beyond noise at the 3-sigma level of chi2 with 2 dof.
+        if (off_centre_z * off_centre_z > 11.83) {
+            a.exceeds_noise = true;
+            a.exceeds_because.push_back("off-centre signature (a common shift of every cut): matched filter z " + num(off_centre_z));
+        }
+    }
     a.rms_m = n_m ? std::sqrt(ss_m / n_m) : 0.0;
     a.rms_whitened = all.rms();
     a.fitted_rms_whitened = fitted_acc.rms();
@@ -137,9 +155,9 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
         a.evidence.push_back("the model's D is too low while its node count and its slices next to the disc match: friction on the "
                              "disc (the specimen does not slide inwards as it drapes) raises D that way");
     }
-    if ((harm.count(1) && harm[1].rms() > 2.0) || off_centre_z > 3.0) {
+    if ((harm.count(1) && harm[1].rms() > 2.0) || off_centre_z * off_centre_z > 11.83) {
         a.candidate_effects.push_back("specimen_off_centre");
-        a.evidence.push_back("harmonic 1 (a shift of the contour) is beyond noise (matched filter z = " + num(off_centre_z) +
+        a.evidence.push_back("harmonic 1 (a shift of the contour: the signed a1, b1) is beyond noise (matched filter z = " + num(off_centre_z) +
                              "): the specimen or the profiler axis is off the pedestal axis");
     }
     if ((kind("cos2").rms() > 2.0) || (kind("cos4").rms() > 2.0)) {

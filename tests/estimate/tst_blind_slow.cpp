@@ -38,9 +38,9 @@ private slots:
         QTest::addColumn<double>("hi");
         QTest::addColumn<QString>("unit");
         QTest::addColumn<double>("scale");
-        QTest::newRow("profiler_off_axis") << "profiler_off_axis" << QList<double>{0.002, 0.004, 0.006, 0.008, 0.012} << 0.006 << 0.008 << "mm" << 1e3;
-        QTest::newRow("camera_scale") << "camera_scale" << QList<double>{0.01, 0.02, 0.03, 0.05, 0.08} << 0.08 << 0.08 << "%" << 100.0;
-        QTest::newRow("contact_resolution") << "contact_resolution" << QList<double>{1.0} << 1.0 << 0.0 << "(on)" << 1.0;
+        QTest::newRow("profiler_off_axis") << "profiler_off_axis" << QList<double>{0.002, 0.004, 0.006, 0.008, 0.012} << 0.004 << 0.012 << "mm" << 1e3;
+        QTest::newRow("camera_scale") << "camera_scale" << QList<double>{0.01, 0.02, 0.03, 0.05, 0.08, 0.12} << 0.12 << 0.12 << "%" << 100.0;
+        QTest::newRow("contact_resolution") << "contact_resolution" << QList<double>{1.0} << 1.0 << 1.0 << "(on)" << 1.0;
         QTest::newRow("buckling") << "buckling" << QList<double>{0.015, 0.03} << 1.0 << 0.0 << "mm" << 1e3;
         QTest::newRow("bending_stiffening") << "bending_stiffening" << QList<double>{0.005, 0.01} << 1.0 << 0.0 << "mm" << 1e3;
         QTest::newRow("disc_grip") << "disc_grip" << QList<double>{1.0} << 1.0 << 0.0 << "(on)" << 1.0;

@@ -62,14 +62,14 @@ void describe(const char* what, const FitResult& r)
     for (const auto& t : r.residuals) {
         if (t.kind == "mean_radius") radius += QString::number(t.whitened(), 'f', 1).toStdString() + " ";
         if (t.kind == "fold_rms") folds += QString::number(t.whitened(), 'f', 1).toStdString() + " ";
-        if (t.kind == "harmonic" && t.harmonic == 1)
-            h1 += QString("%1/%2 mm (sigma %3) ").arg(t.simulated * 1e3, 0, 'f', 1).arg(t.measured * 1e3, 0, 'f', 1).arg(t.sigma * 1e3, 0, 'f', 1).toStdString();
+        if (t.kind == "cos1" || t.kind == "sin1")
+            h1 += QString("%1 %2/%3 mm (sigma %4) ").arg(QString::fromStdString(t.kind)).arg(t.simulated * 1e3, 0, 'f', 1).arg(t.measured * 1e3, 0, 'f', 1).arg(t.sigma * 1e3, 0, 'f', 1).toStdString();
     }
     qInfo("  whitened rms per kind: %s", kinds.c_str());
     for (const auto& [k, z] : r.residual.signature_z) qInfo("  signature %s: z = %.2f", k.c_str(), z);
     qInfo("  mean radius by depth (whitened): %s", radius.c_str());
     qInfo("  fold rms by depth (whitened): %s", folds.c_str());
-    qInfo("  |c1| by depth, simulated/measured: %s", h1.c_str());
+    qInfo("  signed a1, b1 by depth, simulated/measured: %s", h1.c_str());
     qInfo("  nodes measured %.1f, fitted %.1f (branch %d)", r.records[0].measured_features.node_count,
           r.records[0].simulated_features.node_count, r.records[0].branch_folds);
 }

@@ -167,6 +167,70 @@ private slots:
         QCOMPARE(j["fit"]["method"].get<std::string>(), std::string("lm"));
         QCOMPARE(j["fit"]["trace"].size(), r.trace.size());
         QCOMPARE(j["fit"]["factorisations"].get<long>(), r.factorisations);
+        // The warp/weft assessment agrees with the interval above: not separated,
+        // the ratio's 95 % interval holds 1; a tied refit only beyond the typical factor.
+        QVERIFY(r.anisotropy.assessed);
+        QVERIFY(!r.anisotropy.separated);
+        QVERIFY(r.anisotropy.ratio_lower95 <= 1 && r.anisotropy.ratio_upper95 >= 1);
+        QCOMPARE(r.anisotropy.refit, std::max(r.anisotropy.ratio, 1 / r.anisotropy.ratio) > kTypicalBendingAnisotropy);
+        QCOMPARE(j["fit"]["bending"].get<std::string>(), std::string("auto"));
+        QCOMPARE(j["fit"]["bending_anisotropy"]["separated"].get<bool>(), false);
+    }
+
+    void untypicalUnseparatedAnisotropyIsTied()
+    {
+        // The same isotropic record as above with the typical factor set to 1: any
+        // free ratio is then "beyond it", the free fit cannot separate warp from weft,
+        // so the tied refit runs and - the data not needing anisotropy - is kept.
+        cloth::FabricParams p = truth();
+        p[Param::BendWarp] = p[Param::BendWeft] = 1.0e-5;
+        const MeasuredDrape rec = synthetic(p, 0.30, 0.15, 25, 11);
+        FitOptions o;
+        o.grid = 25;
+        o.typical_bending_anisotropy = 1.0;
+        o.effects = false;
+        o.random_start_seeds = 0; // (the spread calibration stays: the test's chi2 are in its sigmas)
+        const FitResult r = fit_fabric({rec}, o);
+        qInfo("%s", r.anisotropy.reason.c_str());
+        QVERIFY(r.anisotropy.assessed && !r.anisotropy.separated);
+        QVERIFY(r.anisotropy.refit);
+        QVERIFY(r.anisotropy.tied);
+        QVERIFY(r.anisotropy.delta_chi2 < 9.0);
+        QCOMPARE(r.params[Param::BendWarp], r.params[Param::BendWeft]);
+        QCOMPARE(r.variables.size(), std::size_t(2));
+        QCOMPARE(r.chi2, r.anisotropy.tied_chi2);
+        // Counts and trace hold both fits, the tied one's stages prefixed.
+        bool tie_stage = false;
+        for (const auto& t : r.trace) tie_stage = tie_stage || t.stage.rfind("tie ", 0) == 0;
+        QVERIFY(tie_stage);
+        QCOMPARE(r.trace.back().evaluation, r.evaluations);
+        const auto j = fit_to_json(r);
+        QCOMPARE(j["fit"]["bending_anisotropy"]["tied"].get<bool>(), true);
+    }
+
+    void tiedBendingIsOneCoordinate()
+    {
+        // --bending tied: one coordinate sets warp and weft; the preset is isotropic
+        // and reports it (a small budget: the decade is all this checks).
+        const MeasuredDrape rec = synthetic(truth(), 0.30, 0.15, 17, 3);
+        FitOptions o;
+        o.grid = 17;
+        o.bending = BendingTie::Tied;
+        o.scan_evaluations = 2;
+        o.local_evaluations = 2;
+        o.uncertainty = false;
+        o.effects = false;
+        o.spread_seeds = 0;
+        o.random_start_seeds = 0;
+        const FitResult r = fit_fabric({rec}, o);
+        QCOMPARE(r.variables.size(), std::size_t(2));
+        QCOMPARE(r.variables.front().name, std::string("bend_Nm"));
+        QCOMPARE(r.variables.front().params.size(), std::size_t(2));
+        QCOMPARE(r.params[Param::BendWarp], r.params[Param::BendWeft]);
+        QVERIFY(!r.anisotropy.assessed);
+        QCOMPARE(fit_to_json(r)["fit"]["bending"].get<std::string>(), std::string("tied"));
+        QCOMPARE(parse_bending_tie("free"), BendingTie::Free);
+        QVERIFY_THROWS_EXCEPTION(ParameterError, parse_bending_tie("isotropic"));
     }
 
     void sameSeedSameFit()

@@ -194,6 +194,8 @@ private slots:
     void modelVariants()
     {
         QCOMPARE(fit_variables(ModelVariant::Baseline).size(), std::size_t(3));
+        QCOMPARE(fit_variables(ModelVariant::Baseline, true).size(), std::size_t(2)); // warp and weft bending tied
+        QCOMPARE(fit_variables(ModelVariant::Baseline, true).front().params.size(), std::size_t(2));
         QCOMPARE(fit_variables(ModelVariant::Stiffening).size(), std::size_t(4));
         QCOMPARE(fit_variables(ModelVariant::Stiffening).back().name, std::string("bend_stiffening_radius_m"));
         QVERIFY(!fit_variables(ModelVariant::Stiffening).back().log_scale); // 0 = linear bending stays reachable

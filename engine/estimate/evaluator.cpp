@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <limits>
 #include <mutex>
 
 namespace drape::estimate::detail {
@@ -110,9 +112,16 @@ Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
     }
     if (m_sigma_floor.size() == e.terms.size())
         for (std::size_t i = 0; i < e.terms.size(); ++i) e.terms[i].sigma = std::max(e.terms[i].sigma, m_sigma_floor[i]);
-    if (m_opt.term_sigmas.size() == e.terms.size())
-        for (std::size_t i = 0; i < e.terms.size(); ++i) e.terms[i].sigma = m_opt.term_sigmas[i];
-    e.chi2 = chi_square(e.terms);
+    bool comparable = true;
+    if (!m_opt.term_sigmas.empty()) {
+        // Given sigmas are per term of a fixed layout; a drape whose terms differ
+        // (e.g. no hem seen) is not comparable on them: its chi2 is infinite, so it
+        // is never the best point (a fallback to other sigmas would be another scale).
+        comparable = m_opt.term_sigmas.size() == e.terms.size();
+        if (comparable)
+            for (std::size_t i = 0; i < e.terms.size(); ++i) e.terms[i].sigma = m_opt.term_sigmas[i];
+    }
+    e.chi2 = comparable ? chi_square(e.terms) : std::numeric_limits<double>::infinity();
     ++m_evaluations;
     m_last = e;
     return e;

@@ -87,8 +87,14 @@ void assess_anisotropy(FitResult& out)
     a.assessed = true;
     const double d = out.best_coords[w] - out.best_coords[f];
     a.ratio = std::pow(10.0, d);
+    // The covariance is a pseudo-inverse: a direction the data do not see is left
+    // out of it (not made infinite), and its coordinates' sigmas are infinite
+    // (sigmas_from_jacobian). A bending the data cannot see cannot be separated.
+    bool seen = true;
+    for (const auto& e : out.estimates)
+        if ((e.id == Param::BendWarp || e.id == Param::BendWeft) && !std::isfinite(e.sigma_coord)) seen = false;
     double var = std::numeric_limits<double>::infinity();
-    if (out.covariance.rows() > std::max(w, f) && out.covariance.allFinite())
+    if (seen && out.covariance.rows() > std::max(w, f) && out.covariance.allFinite())
         var = out.covariance(w, w) + out.covariance(f, f) - 2 * out.covariance(w, f);
     const double half = var >= 0 && std::isfinite(var) ? 1.96 * std::sqrt(var) : std::numeric_limits<double>::infinity();
     a.ratio_lower95 = std::isfinite(half) ? std::pow(10.0, d - half) : 0.0;
@@ -468,6 +474,9 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     if (options.refine_grid != 0 && (options.refine_grid <= options.grid || options.refine_grid > 200))
         throw ParameterError("fit: refine grid = " + std::to_string(options.refine_grid) + " must be 0 (off) or above the grid " +
                              std::to_string(options.grid) + " and at most 200");
+    if (!(options.typical_bending_anisotropy >= 1) || !std::isfinite(options.typical_bending_anisotropy))
+        throw ParameterError("fit: typical bending anisotropy = " + std::to_string(options.typical_bending_anisotropy) +
+                             " must be a finite factor >= 1");
     FitResult free = fit_with_refinement(records, options);
     auto& a = free.anisotropy;
     if (options.bending != BendingTie::Auto || free.cancelled || !a.assessed) return free;
@@ -488,11 +497,10 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     tied.bending = BendingTie::Tied;
     tied.grid = free.options.grid;
     tied.refine_grid = 0;
-    tied.global_evaluations = 0;
-    // The same objective as the free fit's final one: its calibrated sigmas, no
-    // calibration of its own (each calibration draws other seeds; with them the
-    // two chi2 differed by 5.7 on an isotropic synthetic record).
-    tied.spread_seeds = 0;
+    // The same objective as the free fit's final one: its calibrated sigmas replace
+    // the tied fit's own (each calibration draws other seeds; with them the two chi2
+    // differed by 5.7 on an isotropic synthetic record). The spread stage still runs
+    // for the tied preset's drapes from flat (the report's cold_* columns).
     tied.term_sigmas.clear();
     for (const auto& r : free.residuals) tied.term_sigmas.push_back(r.sigma);
     cloth::FabricParams start = free.params;
@@ -531,6 +539,8 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     kept.refinement = free.refinement;
     kept.options.refine_grid = options.refine_grid;
     kept.options.bending = options.bending;
+    kept.options.term_sigmas.clear();
+    kept.options.scan_evaluations = options.scan_evaluations;
     kept.anisotropy = an;
     return kept;
 }

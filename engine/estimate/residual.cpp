@@ -1,6 +1,7 @@
 #include "engine/estimate/residual.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -103,19 +104,31 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
     // direction being the residual's own). The depths' drape-to-drape floors are
     // scaled by sqrt(depths) because one drape is cut at every depth, so their RMS
     // understates a shift seen at all depths by that factor; the projection does not.
-    double off_centre_z = 0;
+    // Each record has its own shift (records shifted opposite ways must not cancel):
+    // z^2 = sum over records of zx^2 + zy^2, a chi2 with 2 R degrees of freedom,
+    // beyond noise above its 3-sigma quantile (11.83 for one record); z = sqrt(z^2).
+    double off_centre_z = 0, off_centre_limit = 11.83;
     {
-        double sx = 0, sy = 0;
-        int nx = 0, ny = 0;
+        std::map<int, std::array<double, 4>> per; // record: sum x, n x, sum y, n y
         for (const auto& t : terms) {
-            if (t.kind == "cos1") sx -= t.whitened(), ++nx;
-            if (t.kind == "sin1") sy -= t.whitened(), ++ny;
+            if (t.kind == "cos1") per[t.record][0] -= t.whitened(), per[t.record][1] += 1;
+            if (t.kind == "sin1") per[t.record][2] -= t.whitened(), per[t.record][3] += 1;
         }
-        const double zx = nx ? sx / std::sqrt(nx) : 0.0, zy = ny ? sy / std::sqrt(ny) : 0.0;
-        off_centre_z = std::hypot(zx, zy);
+        double z2 = 0;
+        for (const auto& [r, s] : per) {
+            const double zx = s[1] > 0 ? s[0] / std::sqrt(s[1]) : 0.0, zy = s[3] > 0 ? s[2] / std::sqrt(s[3]) : 0.0;
+            z2 += zx * zx + zy * zy;
+        }
+        const double k = 2.0 * static_cast<double>(std::max<std::size_t>(1, per.size()));
+        if (per.size() > 1) {
+            // chi2_k's upper quantile at p = 0.0027 (as 11.83 is for k = 2): Wilson-Hilferty
+            // with the normal quantile 2.782 (11.98 for k = 2).
+            const double c = 2.0 / (9.0 * k);
+            off_centre_limit = k * std::pow(1.0 - c + 2.782 * std::sqrt(c), 3);
+        }
+        off_centre_z = std::sqrt(z2);
         a.signature_z.push_back({"specimen_off_centre", off_centre_z});
-        // Two directions fitted: beyond noise at the 3-sigma level of chi2 with 2 dof.
-        if (off_centre_z * off_centre_z > 11.83) {
+        if (z2 > off_centre_limit) {
             a.exceeds_noise = true;
             a.exceeds_because.push_back("off-centre signature (a common shift of every cut): matched filter z " + num(off_centre_z));
         }
@@ -155,7 +168,7 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
         a.evidence.push_back("the model's D is too low while its node count and its slices next to the disc match: friction on the "
                              "disc (the specimen does not slide inwards as it drapes) raises D that way");
     }
-    if ((harm.count(1) && harm[1].rms() > 2.0) || off_centre_z * off_centre_z > 11.83) {
+    if ((harm.count(1) && harm[1].rms() > 2.0) || off_centre_z * off_centre_z > off_centre_limit) {
         a.candidate_effects.push_back("specimen_off_centre");
         a.evidence.push_back("harmonic 1 (a shift of the contour: the signed a1, b1) is beyond noise (matched filter z = " + num(off_centre_z) +
                              "): the specimen or the profiler axis is off the pedestal axis");

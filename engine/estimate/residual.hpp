@@ -34,7 +34,9 @@ struct ResidualAnalysis {
     /// signature of an effect, z = s.w / |s|. With noise alone |z| is at most
     /// about N(0, 1) (the sigmas are noise bounds), so z > 3 is a structured
     /// residual even when the total chi2 is not large. Keys, in this order:
-    /// rim_wrapping, specimen_off_centre (|c1| at every depth).
+    /// rim_wrapping, specimen_off_centre (a common shift of every depth's signed a1,
+    /// b1 per record; z = sqrt of a chi2 with 2 degrees of freedom per record, beyond
+    /// noise above its 3-sigma quantile, 11.83 = 3.44^2 for one record).
     std::vector<std::pair<std::string, double>> signature_z;
     /// Which test put the residual beyond noise (e.g. "harmonic 3: chi2 18.1 over 5 terms").
     std::vector<std::string> exceeds_because;

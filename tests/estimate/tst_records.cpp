@@ -141,16 +141,17 @@ private slots:
         std::normal_distribution<double> g(0, 1);
         std::vector<ResidualTerm> terms;
         for (int d = 1; d <= 6; ++d) {
-            for (const char* kind : {"mean_radius", "fold_rms", "cos2", "cos4"}) {
+            for (const char* kind : {"mean_radius", "fold_rms", "cos2", "cos4", "cos1", "sin1"}) {
                 ResidualTerm t;
                 t.kind = kind;
+                t.harmonic = std::string(kind) == "cos1" || std::string(kind) == "sin1" ? 1 : 0;
                 t.depth_m = 0.005 * d;
                 t.sigma = 1e-3;
                 t.measured = 0.1;
                 t.simulated = 0.1 + 1e-3 * g(rng);
                 terms.push_back(t);
             }
-            for (int k = 1; k <= 8; ++k) {
+            for (int k = 2; k <= 8; ++k) { // k = 1: the signed a1, b1 above
                 ResidualTerm t;
                 t.kind = "harmonic";
                 t.harmonic = k;
@@ -165,6 +166,32 @@ private slots:
         QVERIFY(!a.exceeds_noise);
         QVERIFY(a.candidate_effects.empty());
         QVERIFY(a.dominant_harmonics.empty());
+    }
+
+    void oppositeShiftsDoNotCancel()
+    {
+        // Two records whose stacks are shifted 2 sigma per depth in opposite
+        // directions: pooled they would cancel; per record the shift is seen.
+        std::vector<ResidualTerm> terms;
+        for (int r = 0; r < 2; ++r)
+            for (int d = 1; d <= 5; ++d)
+                for (const char* kind : {"cos1", "sin1"}) {
+                    ResidualTerm t;
+                    t.record = r;
+                    t.kind = kind;
+                    t.harmonic = 1;
+                    t.depth_m = 0.005 * d;
+                    t.sigma = 1e-3;
+                    t.measured = std::string(kind) == "cos1" ? (r == 0 ? 2e-3 : -2e-3) : 0.0;
+                    t.simulated = 0.0;
+                    terms.push_back(t);
+                }
+        const ResidualAnalysis a = analyse_residual(terms, 3);
+        double z = 0;
+        for (const auto& [k, v] : a.signature_z)
+            if (k == "specimen_off_centre") z = v;
+        QVERIFY2(z > 6, "each record's shift counts (2 sigma x sqrt(5) depths per record)");
+        QVERIFY(std::find(a.candidate_effects.begin(), a.candidate_effects.end(), "specimen_off_centre") != a.candidate_effects.end());
     }
 
     void offCentreContoursPointToHarmonicOne()

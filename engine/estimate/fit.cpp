@@ -102,6 +102,18 @@ void assess_anisotropy(FitResult& out)
     a.separated = std::isfinite(half) && std::abs(d) > half;
 }
 
+/// The caller's progress callback with every stage name prefixed (a second fit
+/// run on behalf of the first: "refine ", "tie "); empty when there is none.
+std::function<void(const FitProgress&)> prefixed_progress(const FitOptions& options, std::string prefix)
+{
+    if (!options.progress) return nullptr;
+    return [&options, prefix = std::move(prefix)](const FitProgress& p) {
+        FitProgress q = p;
+        q.stage = prefix + p.stage;
+        options.progress(q);
+    };
+}
+
 /// `kept` (one of two fits of the same records, run one after the other) with the
 /// counts and time of both and one trace in the order they ran, the second's
 /// stages prefixed.
@@ -427,12 +439,7 @@ FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const F
     FitOptions fine = options;
     fine.grid = options.refine_grid;
     fine.start = coarse.params;
-    if (options.progress)
-        fine.progress = [&options](const FitProgress& p) {
-            FitProgress q = p;
-            q.stage = "refine " + p.stage;
-            options.progress(q);
-        };
+    fine.progress = prefixed_progress(options, "refine ");
     FitResult out = fit_at_grid(records, fine);
     FitResult::Refinement ref;
     ref.from_grid = options.grid;
@@ -506,12 +513,7 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     cloth::FabricParams start = free.params;
     start[Param::BendWarp] = start[Param::BendWeft] = std::sqrt(free.params[Param::BendWarp] * free.params[Param::BendWeft]);
     tied.start = start;
-    if (options.progress)
-        tied.progress = [&options](const FitProgress& p) {
-            FitProgress q = p;
-            q.stage = "tie " + p.stage;
-            options.progress(q);
-        };
+    tied.progress = prefixed_progress(options, "tie ");
     FitResult t = fit_at_grid(records, tied);
     FitResult::Anisotropy an = a;
     an.refit = true;
@@ -540,7 +542,6 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     kept.options.refine_grid = options.refine_grid;
     kept.options.bending = options.bending;
     kept.options.term_sigmas.clear();
-    kept.options.scan_evaluations = options.scan_evaluations;
     kept.anisotropy = an;
     return kept;
 }

@@ -98,27 +98,25 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
         if (t.kind == "mean_radius") return -1.0 / (1.0 + t.depth_m / 0.010);
         return 0.0;
     });
-    // Off-centre stack: a shift (dx, dy) moves every cut alike, adding dx to every
-    // depth's a1 and dy to every b1. The matched filter of a common shift in each
-    // direction, combined over the two (z = sqrt(zx^2 + zy^2), the signature's
-    // direction being the residual's own). The depths' drape-to-drape floors are
-    // scaled by sqrt(depths) because one drape is cut at every depth, so their RMS
-    // understates a shift seen at all depths by that factor; the projection does not.
-    // Each record has its own shift (records shifted opposite ways must not cancel):
-    // z^2 = sum over records of zx^2 + zy^2, a chi2 with 2 R degrees of freedom,
-    // beyond noise above its 3-sigma quantile (11.83 for one record); z = sqrt(z^2).
+    // Off-centre stack: a shift (dx, dy) moves every cut of a record alike, adding
+    // dx to every depth's a1 and dy to every b1. Per record, the matched filter of a
+    // common shift along x and along y (zx = sum of the a1 residuals / sqrt(depths));
+    // the depths' drape-to-drape floors are scaled by sqrt(depths) because one drape
+    // is cut at every depth, so their RMS understates a shift seen at all depths by
+    // that factor, and the projection does not. Records shifted opposite ways must
+    // not cancel: z^2 = sum over records of zx^2 + zy^2, a chi2 with 2 R degrees of
+    // freedom, beyond noise above its 3-sigma quantile (11.83 for one record).
     double off_centre_z = 0, off_centre_limit = 11.83;
     {
-        std::map<int, std::array<double, 4>> per; // record: sum x, n x, sum y, n y
+        std::map<int, std::array<Acc, 2>> per; // record: a1 and b1 residuals
         for (const auto& t : terms) {
-            if (t.kind == "cos1") per[t.record][0] -= t.whitened(), per[t.record][1] += 1;
-            if (t.kind == "sin1") per[t.record][2] -= t.whitened(), per[t.record][3] += 1;
+            if (t.kind == "cos1") per[t.record][0].add(t.whitened());
+            if (t.kind == "sin1") per[t.record][1].add(t.whitened());
         }
         double z2 = 0;
-        for (const auto& [r, s] : per) {
-            const double zx = s[1] > 0 ? s[0] / std::sqrt(s[1]) : 0.0, zy = s[3] > 0 ? s[2] / std::sqrt(s[3]) : 0.0;
-            z2 += zx * zx + zy * zy;
-        }
+        for (const auto& [r, s] : per)
+            for (const Acc& c : s)
+                if (c.n > 0) z2 += c.sum * c.sum / c.n;
         const double k = 2.0 * static_cast<double>(std::max<std::size_t>(1, per.size()));
         if (per.size() > 1) {
             // chi2_k's upper quantile at p = 0.0027 (as 11.83 is for k = 2): Wilson-Hilferty

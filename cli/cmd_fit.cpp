@@ -44,6 +44,9 @@ as not identifiable.
                       | buckling (+ the membrane's compression limit, buckling_length_m)
   --recentre-contours measurement model: re-centre every contour stack (record and simulation)
                       on its own axis, for a profiler or specimen off the pedestal axis
+  --untilt-contours   measurement model: as --recentre-contours with an axis that moves with depth
+                      (offset + depth x tilt, fitted to the cuts' centroids), for a tilted profiler
+                      or a drape that leans (residual candidate profiler_tilt)
   --vertex-contact-only  contact at mesh vertices only (the seed's; coarse elements then cut the
                       pedestal rim): reproduces fits made before edge contact
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
@@ -118,7 +121,7 @@ std::string measured_text(double v, const char* fmt)
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending"},
-           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--vertex-contact-only", "--cold-global", "--cold-local"});
+           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
@@ -159,6 +162,7 @@ int run(const std::vector<std::string>& argv)
     }
     fo.warm_local = !a.has("--cold-local");
     fo.recentre_contours = a.has("--recentre-contours");
+    fo.untilt_contours = a.has("--untilt-contours");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
     if (const auto s = a.get("--start")) {
         fo.start = fabric::load_fabric(*s).params; // a seed-19 preset starts from its continuum equivalent

@@ -30,6 +30,12 @@ void DrapeSetup::validate() const
     if (grid < 5 || grid > 1000) throw ParameterError("grid = " + std::to_string(grid) + " must be in [5, 1000]");
     if (!(perturbation >= 0) || perturbation > 0.05)
         throw ParameterError("perturbation = " + format_double(perturbation) + " m must be in [0, 0.05]");
+    if (!specimen_offset.allFinite() || specimen_offset.norm() >= disc_diameter / 2)
+        throw ParameterError("specimen offset (" + format_double(specimen_offset.x()) + ", " + format_double(specimen_offset.y()) +
+                             ") m must be finite and within the disc radius " + format_double(disc_diameter / 2) + " m");
+    if (!density_gradient.allFinite() || density_gradient.norm() >= 1)
+        throw ParameterError("density gradient (" + format_double(density_gradient.x()) + ", " + format_double(density_gradient.y()) +
+                             ") per specimen radius must be finite and shorter than 1 (the density would reach 0)");
     if (fold_mode != 0 && (fold_mode < 2 || fold_mode > 16))
         throw ParameterError("fold mode = " + std::to_string(fold_mode) + " must be 0 (seeded mix) or a fold count in [2, 16]");
     for (double d : slice_depths)
@@ -160,6 +166,10 @@ std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const Dra
         if (o.bending == BendingModel::Quadratic) o.bending = BendingModel::Flexion;
         model = make_grid_spring_model(mesh, g, o);
     }
+    if (setup.density_gradient.squaredNorm() > 0)
+        for (int i = 0; i < mesh.vertex_count(); ++i)
+            model.mass(i) *= 1 + setup.density_gradient.dot(Eigen::Vector2d(mesh.X(i, 0), mesh.X(i, 1))) / (setup.sample_diameter / 2);
+    const Eigen::Vector3d offset(setup.specimen_offset.x(), setup.specimen_offset.y(), 0.0);
     // Static friction holds the specimen's centre on the disc (see HorizontalAnchor):
     // the material centre is tethered horizontally to the pedestal axis, stiff
     // enough that the whole weight pulling sideways would move it 0.1 mm. On an odd
@@ -169,7 +179,7 @@ std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const Dra
         const double weight = model.total_mass() * model.gravity.norm();
         const double k = weight / 1e-4;
         HorizontalAnchor centre;
-        centre.target = Eigen::Vector3d::Zero();
+        centre.target = offset;
         centre.k = k;
         const GridInfo& g = mesh.grid;
         const int mid = g.nu / 2;
@@ -187,15 +197,16 @@ std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const Dra
                     c = i;
                 }
             centre.v[0] = c;
-            centre.target = Eigen::Vector3d(mesh.X(c, 0), mesh.X(c, 1), 0.0);
+            centre.target = Eigen::Vector3d(mesh.X(c, 0), mesh.X(c, 1), 0.0) + offset;
         }
         model.anchors.push_back(centre);
         if (setup.disc_grip)
             for (int i = 0; i < mesh.vertex_count(); ++i) {
                 bool is_centre = false;
                 for (int j = 0; j < centre.n; ++j) is_centre |= centre.v[static_cast<std::size_t>(j)] == i;
-                if (!is_centre && std::hypot(mesh.X(i, 0), mesh.X(i, 1)) < setup.disc_diameter / 2)
-                    model.anchors.push_back(HorizontalAnchor::at_vertex(i, Eigen::Vector3d(mesh.X(i, 0), mesh.X(i, 1), 0.0), k));
+                const Eigen::Vector3d laid = Eigen::Vector3d(mesh.X(i, 0), mesh.X(i, 1), 0.0) + offset;
+                if (!is_centre && std::hypot(laid.x(), laid.y()) < setup.disc_diameter / 2)
+                    model.anchors.push_back(HorizontalAnchor::at_vertex(i, laid, k));
             }
     }
     auto sys = std::make_unique<ClothSystem>(std::move(mesh), std::move(model));
@@ -208,6 +219,8 @@ void place_on_drapemeter(ClothSystem& sys, const DrapeSetup& setup)
     // Start flat, just above the pedestal top (offset by half the thickness).
     sys.x.col(2).setConstant(sys.model().contact_offset + 1e-6);
     perturb(sys.x, setup);
+    sys.x.col(0).array() += setup.specimen_offset.x();
+    sys.x.col(1).array() += setup.specimen_offset.y();
     const double R2 = setup.disc_diameter / 2;
     sys.add_collider(std::make_shared<PedestalCollider>(Eigen::Vector3d::Zero(), R2, setup.pedestal_height,
                                                         std::min(setup.edge_radius, 0.5 * R2)));

@@ -38,8 +38,16 @@ struct DrapeSetup {
     /// default: only the centre is held (the seed's disc is frictionless; see
     /// HorizontalAnchor). A hypothesis tested in docs/model-discrepancy.md.
     bool disc_grip = false;
+    /// The specimen laid off centre [m] (x, y): its centre (and the grip of the
+    /// disc, when on) this far from the pedestal axis. A lab error tested in
+    /// docs/model-discrepancy.md; 0 by default.
+    Eigen::Vector2d specimen_offset = Eigen::Vector2d::Zero();
+    /// A specimen whose areal density varies across it (x, y): the relative
+    /// change per specimen radius, rho(X) = rho (1 + g . X / R1) on the flat
+    /// sheet (the mean is unchanged). |g| < 1; 0 by default.
+    Eigen::Vector2d density_gradient = Eigen::Vector2d::Zero();
     std::vector<double> slice_depths = {0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05}; ///< [m] below the pedestal top
-    void validate() const;          ///< ParameterError on negative sizes, sample <= disc, grid < 5, fold_mode 1 or > 16
+    void validate() const;          ///< ParameterError on negative sizes, sample <= disc, grid < 5, fold_mode 1 or > 16, an offset off the disc, |density gradient| >= 1
 };
 
 /// Default lift of an n-fold start [m] (DrapeSetup::fold_mode): the static

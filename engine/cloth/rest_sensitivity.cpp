@@ -20,9 +20,9 @@ namespace {
 Eigen::Map<const Eigen::VectorXd> flat(const Positions& p) { return {p.data(), p.size()}; }
 
 /// The force at fixed positions of the drape scene built with parameters `p`.
-Positions forces_with(const FabricParams& p, const DrapeSetup& setup, const ModelOptions& mopt, const Positions& x)
+Positions forces_with(const Material& p, const DrapeSetup& setup, const ModelOptions& mopt, const Positions& x)
 {
-    auto sys = make_drape_system(Material(p), setup, mopt);
+    auto sys = make_drape_system(p, setup, mopt);
     Positions f;
     sys->conservative_forces(x, f);
     for (int i = 0; i < sys->vertex_count(); ++i)
@@ -35,6 +35,12 @@ Positions forces_with(const FabricParams& p, const DrapeSetup& setup, const Mode
 std::vector<RestSensitivity> rest_sensitivities(const Material& fabric, const DrapeSetup& setup, const Positions& rest,
                                                 const std::vector<Param>& params, const ModelOptions& mopt,
                                                 const RestSensitivityOptions& opt)
+{
+    return rest_responses(fabric, setup, rest, params, {}, mopt, opt).params;
+}
+
+RestResponses rest_responses(const Material& fabric, const DrapeSetup& setup, const Positions& rest, const std::vector<Param>& params,
+                             const std::vector<DrapeSetup>& changed_setups, const ModelOptions& mopt, const RestSensitivityOptions& opt)
 {
     if (fabric.grid_springs)
         throw ParameterError("rest sensitivities: a seed-19 preset's grid springs are not continuum parameters (use its continuum equivalent)");
@@ -73,23 +79,37 @@ std::vector<RestSensitivity> rest_sensitivities(const Material& fabric, const Dr
 
     const Positions turn = axis_turn(rest);
     const Eigen::VectorXd t = flat(turn) / flat(turn).norm();
-    std::vector<RestSensitivity> out;
+    // x = H^-1 b, orthogonal to the turn; the solve's relative residual.
+    auto solve = [&](const Positions& force, Positions& dx) {
+        const Eigen::VectorXd b = flat(force);
+        Eigen::VectorXd x = llt->solve(b);
+        x += llt->solve(b - H_times(x)); // one step of refinement against the unshifted H
+        x -= t.dot(x) * t;
+        dx = Eigen::Map<const Positions>(x.data(), n, 3);
+        const double bn = b.norm();
+        return bn > 0 ? (H_times(x) - b).norm() / bn : 0.0;
+    };
+    RestResponses out;
     for (Param p : params) {
         const double v = fabric.params[p], h = opt.relative_step * std::abs(v);
         FabricParams lo = fabric.params, hi = fabric.params;
         lo[p] = v - h;
         hi[p] = v + h;
-        const Positions dfdp = (forces_with(hi, setup, mopt, rest) - forces_with(lo, setup, mopt, rest)) / (2 * h);
-        const Eigen::VectorXd b = flat(dfdp);
-        Eigen::VectorXd x = llt->solve(b);
-        x += llt->solve(b - H_times(x)); // one step of refinement against the unshifted H
-        x -= t.dot(x) * t;
         RestSensitivity s;
         s.param = p;
-        s.dx = Eigen::Map<const Positions>(x.data(), n, 3);
-        const double bn = b.norm();
-        s.solve_residual = bn > 0 ? (H_times(x) - b).norm() / bn : 0.0;
-        out.push_back(std::move(s));
+        s.solve_residual = solve((forces_with(Material(hi), setup, mopt, rest) - forces_with(Material(lo), setup, mopt, rest)) / (2 * h), s.dx);
+        out.params.push_back(std::move(s));
+    }
+    if (!changed_setups.empty()) {
+        const Positions f0 = forces_with(fabric, setup, mopt, rest);
+        for (const DrapeSetup& c : changed_setups) {
+            if (c.grid != setup.grid || c.sample_diameter != setup.sample_diameter)
+                throw ParameterError("rest responses: a changed set-up must keep the mesh (grid " + std::to_string(c.grid) + " vs " +
+                                     std::to_string(setup.grid) + ")");
+            Positions dx;
+            out.setup_residuals.push_back(solve(forces_with(fabric, c, mopt, rest) - f0, dx));
+            out.setups.push_back(std::move(dx));
+        }
     }
     detail::keep_analysed(std::move(llt), As);
     return out;

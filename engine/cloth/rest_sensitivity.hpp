@@ -42,6 +42,21 @@ std::vector<RestSensitivity> rest_sensitivities(const Material& fabric, const Dr
                                                 const std::vector<Param>& params, const ModelOptions& mopt = {},
                                                 const RestSensitivityOptions& opt = {});
 
+/// The rest state's responses to parameters and to changes of the set-up, on
+/// one factorisation of the Hessian. A changed set-up (the same mesh: the
+/// specimen laid off centre, an uneven weight - DrapeSetup::specimen_offset,
+/// density_gradient) adds the force f(rest; changed) - f(rest; setup) at fixed
+/// positions; its response is H^-1 of that force, first order in the change
+/// (exact for those two: the force is linear in them).
+struct RestResponses {
+    std::vector<RestSensitivity> params; ///< as rest_sensitivities
+    std::vector<Positions> setups;       ///< dx per changed set-up [m for the whole change], the turn removed
+    std::vector<double> setup_residuals; ///< relative residuals of their solves
+};
+RestResponses rest_responses(const Material& fabric, const DrapeSetup& setup, const Positions& rest, const std::vector<Param>& params,
+                             const std::vector<DrapeSetup>& changed_setups, const ModelOptions& mopt = {},
+                             const RestSensitivityOptions& opt = {});
+
 /// The drape metrics' derivatives at the rest state: the shadow's drape
 /// coefficient and the hem's mean height along dx/dp (a central difference of the
 /// shared metric code along x +- e dx/dp, e = 1e-3 of the parameter).

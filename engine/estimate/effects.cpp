@@ -24,6 +24,11 @@ const std::vector<EffectSpec>& effect_library()
             e.amplitude_unit = "relative change";
             l.push_back(std::move(e));
         };
+        auto ratio = [&](std::string name, std::string family, std::string doc, Param up, Param down) {
+            param(std::move(name), std::move(family), std::move(doc), {up, down});
+            l.back().weights = {1.0, -1.0};
+            l.back().amplitude_unit = "relative change of each (the ratio by twice that)";
+        };
         auto sw = [&](std::string name, std::string family, std::string doc, std::vector<Param> ps, double on, bool grip, bool vertex) {
             EffectSpec e;
             e.name = std::move(name);
@@ -47,22 +52,47 @@ const std::vector<EffectSpec>& effect_library()
             l.push_back(std::move(e));
         };
         meas("profiler_off_axis", "the laser profiler (or the specimen) off the pedestal axis: contours shifted sideways (2 parameters, x and y)",
-             EffectKind::ProfilerAxis, "m (x shift)");
+             EffectKind::ProfilerAxis, "m (x, y shift)");
+        meas("profiler_tilt",
+             "the profiler's axis tilted against the pedestal's, or the rig off level (a skirt hangs plumb): contours shifted sideways in "
+             "proportion to their depth (2 parameters, x and y)",
+             EffectKind::ProfilerTilt, "rad (x, y tilt)");
         meas("camera_scale", "the photos' scale off (calibration): the drape coefficient and the hem height scaled", EffectKind::CameraScale,
              "fraction");
         meas("profiler_scale", "the laser contours' scale off: every contour radius scaled", EffectKind::ProfilerScale, "fraction");
+        auto specimen = [&](std::string name, std::string doc, double offset, double gradient, std::string unit) {
+            EffectSpec e;
+            e.name = std::move(name);
+            e.family = "specimen";
+            e.description = std::move(doc);
+            e.kind = EffectKind::Specimen;
+            e.specimen_offset_m = offset;
+            e.density_gradient = gradient;
+            e.amplitude_unit = std::move(unit);
+            l.push_back(std::move(e));
+        };
+        specimen("specimen_weight_gradient",
+                 "the specimen heavier on one side (areal density changing linearly across it; x and y): the skirt leans away from the "
+                 "heavy side, more so the deeper",
+                 0, 0.2, "fraction per radius (x, y)");
         param("buckling", "membrane", "the membrane's compression limit (buckling_length_m): how easily the fabric buckles in its plane",
               {Param::BucklingLength});
         param("tensile_stiffness", "membrane", "the tensile stiffness warp and weft together (stretch_warp_N_m, stretch_weft_N_m)",
               {Param::StretchWarp, Param::StretchWeft});
+        ratio("tensile_anisotropy", "membrane", "the tensile stiffness warp against weft (stretch_warp_N_m up, stretch_weft_N_m down)",
+              Param::StretchWarp, Param::StretchWeft);
         param("shear_stiffness", "membrane", "the in-plane shear stiffness (shear_N_m)", {Param::Shear});
         sw("bending_stiffening", "bending", "bending that stiffens at small radii (bend_stiffening_radius_m switched on at 5 mm)",
            {Param::BendStiffeningRadius}, 5e-3, false, false);
         sw("bending_softening", "bending", "bending that yields at small radii (bend_softening_radius_m switched on at 5 mm)",
            {Param::BendSofteningRadius}, 5e-3, false, false);
+        ratio("bending_anisotropy", "bending", "the bending stiffness warp against weft (bend_warp_Nm up, bend_weft_Nm down) when the fit ties them",
+              Param::BendWarp, Param::BendWeft);
         param("declared_weight", "declared", "the declared areal density wrong (areal_density_kg_m2)", {Param::AreaDensity});
         param("declared_thickness", "declared", "the declared thickness wrong (thickness_m: the contact offset)", {Param::Thickness});
         sw("disc_grip", "contact", "the specimen gripped by the pedestal top (static friction) instead of sliding", {}, 0, true, false);
+        sw("self_contact", "contact", "the folds touching each other (self-contact switched on at the declared thickness)", {}, 0, false, false);
+        l.back().self_contact = true;
         sw("contact_resolution", "numerical", "the pedestal contact resolved at mesh vertices only (a coarse mesh cutting the rim)", {}, 0,
            false, true);
         return l;
@@ -70,9 +100,40 @@ const std::vector<EffectSpec>& effect_library()
     return lib;
 }
 
-std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                                             const std::vector<EffectSignature>& signatures, int terms)
+double effect_weight(const EffectSpec& spec, std::size_t i)
 {
+    return i < spec.weights.size() ? spec.weights[i] : 1.0;
+}
+
+std::string fitted_by(const EffectSpec& sp, const std::vector<FitVariable>& vars)
+{
+    const auto n = static_cast<Eigen::Index>(sp.params.size());
+    if (n == 0) return {};
+    Eigen::VectorXd w(n);
+    for (Eigen::Index i = 0; i < n; ++i) w[i] = effect_weight(sp, static_cast<std::size_t>(i));
+    std::vector<Eigen::VectorXd> cols;
+    std::string keys;
+    for (const auto& v : vars) {
+        Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
+        for (Param q : v.params)
+            for (Eigen::Index i = 0; i < n; ++i)
+                if (sp.params[static_cast<std::size_t>(i)] == q) {
+                    c[i] = 1;
+                    keys += (keys.empty() ? "" : ", ") + std::string(cloth::spec(q).key);
+                }
+        if (c.squaredNorm() > 0) cols.push_back(c);
+    }
+    if (cols.empty()) return {};
+    Eigen::MatrixXd V(n, static_cast<Eigen::Index>(cols.size()));
+    for (std::size_t j = 0; j < cols.size(); ++j) V.col(static_cast<Eigen::Index>(j)) = cols[j];
+    const Eigen::VectorXd left = w - V * V.colPivHouseholderQr().solve(w);
+    return left.norm() < 1e-9 * w.norm() ? keys : std::string();
+}
+
+std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                                             const std::vector<EffectSignature>& signatures, int terms, double chi2_scale)
+{
+    const double s2 = std::isfinite(chi2_scale) ? std::max(1.0, chi2_scale) : 1.0;
     std::vector<EffectCandidate> out;
     // Projector onto the complement of the fitted columns (the fit has already
     // used what they can explain). Q of a rank-revealing QR spans J's range.
@@ -101,6 +162,12 @@ std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eig
         const Eigen::MatrixXd S = project(sig.columns);
         // Columns the fitted parameters can already mimic carry nothing new.
         const double full = sig.columns.norm(), left = S.norm();
+        if (!(full > 1e-9)) {
+            c.verdict = "not testable";
+            c.note = "switching it on changes none of the fitted terms here";
+            out.push_back(std::move(c));
+            continue;
+        }
         // Less than 5 % new: what is left is rounding and the fit's own noise.
         if (!(left > 0.05 * std::max(full, 1e-300)) || !(left > 1e-9)) {
             c.verdict = "not testable";
@@ -111,19 +178,25 @@ std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eig
         const Eigen::MatrixXd StS = S.transpose() * S;
         const Eigen::VectorXd Str = S.transpose() * rp;
         const Eigen::VectorXd a = StS.ldlt().solve(-Str); // amplitude that best removes the residual
-        c.delta_chi2 = std::max(0.0, -Str.dot(a));
-        c.z = c.parameters == 1 ? -Str[0] / std::sqrt(StS(0, 0)) : std::sqrt(c.delta_chi2);
+        c.delta_chi2 = std::max(0.0, -Str.dot(a)) / s2;
+        c.z = c.parameters == 1 ? -Str[0] / std::sqrt(StS(0, 0) * s2) : std::sqrt(c.delta_chi2);
         c.amplitude = a[0];
+        c.amplitudes.assign(a.data(), a.data() + a.size());
         c.information = c.delta_chi2 - c.parameters * lnN;
         const double quantile = c.parameters == 1 ? 9.0 : 11.83; // 3 sigma (p = 0.0027) of chi2 with k dof
         c.verdict = c.delta_chi2 > quantile && c.information > 0 ? "beyond noise" : "within noise";
         // A first-order amplitude far outside the linear range (a parameter by more
-        // than a factor 10, a switched effect more than 3 times over) is not a
-        // refit the engine would make: the effect would have to be another one.
-        const double limit = sig.spec->kind == EffectKind::Parameter ? std::log(10.0) : sig.spec->kind == EffectKind::Switch ? 3.0 : HUGE_VAL;
-        if (std::abs(c.amplitude) > limit) {
+        // than a factor 10, a switched effect - the specimen's too - more than 3
+        // times over) is not a refit the engine would make: the effect would have
+        // to be another one. The instruments' signatures are exact geometry.
+        const auto& sp = *sig.spec;
+        const double limit = sp.kind == EffectKind::Parameter ? std::log(10.0)
+                             : sp.kind == EffectKind::Switch  ? 3.0
+                             : sp.kind == EffectKind::Specimen ? 3.0 * std::abs(sp.specimen_offset_m != 0 ? sp.specimen_offset_m : sp.density_gradient)
+                                                               : HUGE_VAL;
+        if (a.norm() > limit) {
             if (c.verdict == "beyond noise") c.verdict = "within noise";
-            c.note = "the refit would need an amplitude of " + std::to_string(c.amplitude) + " " + c.amplitude_unit +
+            c.note = "the refit would need an amplitude of " + std::to_string(c.parameters == 1 ? a[0] : a.norm()) + " " + c.amplitude_unit +
                      ", beyond the linear range: not this effect";
         }
         if (left < 0.3 * full && c.note.empty())

@@ -26,6 +26,8 @@ enum class EffectKind {
     CameraScale,   ///< the top/side photos' scale off by a fraction: positions scaled, photo channels (D, hem) re-measured
     ProfilerScale, ///< the laser profiler's scale off: contour channels re-measured at scaled positions
     ProfilerAxis,  ///< the profiler (or the specimen) off the pedestal axis: contour channels re-measured at shifted positions (x and y: 2 columns)
+    ProfilerTilt,  ///< the profiler's axis tilted against the pedestal's (or the rig off level): contours shifted in proportion to depth (x and y: 2 columns)
+    Specimen,      ///< the specimen itself uneven or misplaced (DrapeSetup::specimen_offset / density_gradient along x and y): the rest state's responses (cloth::rest_responses)
 };
 
 /// One entry of the library.
@@ -35,14 +37,32 @@ struct EffectSpec {
     std::string description; ///< one sentence for the report
     EffectKind kind = EffectKind::Parameter;
     std::vector<cloth::Param> params; ///< Parameter: moved together (relative change); Switch: set to `on_value`
+    /// Parameter: the relative change of each of `params` per unit of the effect
+    /// (empty: 1 for every one; {+1, -1}: a ratio between two, e.g. warp against weft).
+    std::vector<double> weights;
     double on_value = 0;     ///< Switch (parameter at 0): the typical value it is switched on at
     bool disc_grip = false;  ///< Switch: the specimen held on the disc (grip, the limit of large static friction)
     bool vertex_contact = false; ///< Switch: contact at mesh vertices only (the numerical contact resolution)
+    bool self_contact = false;   ///< Switch: the folds' self-contact switched on (ModelOptions::self_collision)
+    double specimen_offset_m = 0;  ///< Specimen: laid this far off centre (along x, then y) [m]
+    double density_gradient = 0;   ///< Specimen: areal density changing by this fraction per specimen radius (along x, then y)
     std::string amplitude_unit; ///< unit of the fitted amplitude ("relative", "m", "fraction of the switch")
 };
 
 /// The candidate effects, in report order.
 const std::vector<EffectSpec>& effect_library();
+
+/// The weight of `spec`'s i-th parameter (EffectSpec::weights, 1 when not given).
+double effect_weight(const EffectSpec& spec, std::size_t i);
+
+/// Whether the fitted variables already move a parameter effect: its direction
+/// (relative change per parameter, EffectSpec::weights) lies in the span of the
+/// variables' directions (each an equal relative change of its parameters)
+/// restricted to the effect's parameters. Returns the keys of the fitted
+/// parameters it involves when it does, "" when it does not (or has no
+/// parameters). One parameter fitted on its own covers an effect on it alone;
+/// warp and weft tied leave their ratio free.
+std::string fitted_by(const EffectSpec& spec, const std::vector<FitVariable>& vars);
 
 /// A candidate's signature: whitened columns over the fit's residual terms
 /// (rows in the order of the terms; zero where the effect does not act or the
@@ -69,6 +89,7 @@ struct EffectCandidate {
     /// (Bayesian information criterion, N fitted smooth terms).
     double information = 0;
     double amplitude = 0;    ///< the refit's size of the effect (first column), in amplitude_unit
+    std::vector<double> amplitudes; ///< every column's (x and y for the two-column instruments)
     std::string amplitude_unit;
     /// Delta chi2 of the refit verified by draping the preset with the effect
     /// (parameter effects only; NaN otherwise).
@@ -81,9 +102,12 @@ struct EffectCandidate {
 /// Jacobian, `r` the whitened residual (same rows; rows outside the test are
 /// zero in both), `terms` the number of rows in the test. Beyond noise: delta
 /// chi2 above the 3-sigma quantile of chi2 with k degrees of freedom (9.0 for
-/// one, 11.8 for two) and information > 0.
+/// one, 11.8 for two) and information > 0. `chi2_scale` (>= 1): a fit worse
+/// than its noise model (chi2 / dof > 1) scales the noise up by that factor -
+/// z and delta chi2 are divided by it (as the intervals), the amplitudes are
+/// the refit's, unscaled.
 std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                                             const std::vector<EffectSignature>& signatures, int terms);
+                                             const std::vector<EffectSignature>& signatures, int terms, double chi2_scale = 1.0);
 
 /// The named effect: the candidate beyond noise with the largest delta chi2,
 /// when its refit explains the residual - the refit's chi2 (chi2 - delta chi2)

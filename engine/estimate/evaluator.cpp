@@ -361,30 +361,23 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
     bool all_at_rest = static_cast<int>(e.sims.size()) == R;
     for (const auto& rs : e.sims)
         for (const auto& sim : rs) all_at_rest = all_at_rest && sim.status.converged();
-    auto fitted_param = [&](Param q) {
-        for (const auto& v : m_vars)
-            for (Param w : v.params)
-                if (w == q) return true;
-        return false;
-    };
     // Which effects can be made here, and their columns.
     std::vector<Param> sens_params; // parameters whose dx/dp the sensitivities give
     for (std::size_t k = 0; k < lib.size(); ++k) {
         const EffectSpec& sp = lib[k];
         auto& sig = out[k];
         sig.spec = &sp;
-        const int cols = sp.kind == EffectKind::ProfilerAxis ? 2 : 1;
+        const int cols = sp.kind == EffectKind::ProfilerAxis || sp.kind == EffectKind::ProfilerTilt || sp.kind == EffectKind::Specimen ? 2 : 1;
         sig.columns = Eigen::MatrixXd::Zero(rows, cols);
         if (!all_at_rest) {
             sig.available = false;
             sig.why_not = "the fit's drapes are not at rest: no linearisation";
             continue;
         }
-        for (Param q : sp.params)
-            if (fitted_param(q)) {
-                sig.available = false;
-                sig.why_not = "the model fits it already (" + std::string(cloth::spec(q).key) + ")";
-            }
+        if (const std::string keys = fitted_by(sp, m_vars); !keys.empty()) {
+            sig.available = false;
+            sig.why_not = "the model fits it already (" + keys + ")";
+        }
         if (!sig.available) continue;
         if (sp.kind == EffectKind::Parameter) {
             for (Param q : sp.params)
@@ -411,6 +404,8 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
     constexpr double kRel = 1e-3;   // relative change of a parameter along its dx/d ln p (first order: any small step)
     constexpr double kScale = 1e-3; // scale error
     constexpr double kShift = 1e-4; // [m] axis shift
+    constexpr double kTilt = 1e-3;  // [rad] axis tilt
+    constexpr double kLin = 1e-3;   // fraction of a specimen effect's switched-on size along its response
     long resolves = 0;
     std::atomic<bool> parameter_failed{false};
     std::vector<std::atomic<char>> switch_failed(lib.size());
@@ -436,9 +431,25 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
             std::vector<Param> qs;
             for (Param q : sens_params)
                 if (pr[q] > 0) qs.push_back(q);
+            // The specimen's effects: the set-up changed along x, then y (responses
+            // on the same factorisation as the parameters').
+            std::vector<cloth::DrapeSetup> changed;
+            std::vector<std::size_t> changed_first(lib.size(), 0);
+            for (std::size_t k = 0; k < lib.size(); ++k)
+                if (out[k].available && lib[k].kind == EffectKind::Specimen) {
+                    changed_first[k] = changed.size();
+                    for (int c = 0; c < 2; ++c) {
+                        cloth::DrapeSetup su = setup;
+                        su.specimen_offset[c] = lib[k].specimen_offset_m;
+                        su.density_gradient[c] = lib[k].density_gradient;
+                        changed.push_back(su);
+                    }
+                }
+            cloth::RestResponses resp;
             bool sens_ok = true;
             try {
-                if (!qs.empty()) sens = cloth::rest_sensitivities(mat, setup, sim.x, qs, m_opt.model_options);
+                if (!qs.empty() || !changed.empty()) resp = cloth::rest_responses(mat, setup, sim.x, qs, changed, m_opt.model_options);
+                sens = std::move(resp.params);
             } catch (const drape::Error&) {
                 sens_ok = false; // not a stable rest state: no parameter signatures (the others need no Hessian)
                 parameter_failed = true;
@@ -452,9 +463,9 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                 case EffectKind::Parameter: {
                     if (!sens_ok) break;
                     cloth::Positions dx = cloth::Positions::Zero(sim.x.rows(), 3);
-                    for (Param q : sp.params)
+                    for (std::size_t m = 0; m < sp.params.size(); ++m)
                         for (std::size_t i = 0; i < qs.size(); ++i)
-                            if (qs[i] == q) dx += pr[q] * sens[i].dx; // d x / d ln p
+                            if (qs[i] == sp.params[m]) dx += effect_weight(sp, m) * pr[qs[i]] * sens[i].dx; // d x / d ln p
                     mine[k] = {measure(sim.x + kRel * dx)};
                     break;
                 }
@@ -465,6 +476,7 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                     su.disc_grip = su.disc_grip || sp.disc_grip;
                     cloth::ModelOptions mo = m_opt.model_options;
                     if (sp.vertex_contact) mo.edge_contact = false;
+                    if (sp.self_contact) mo.self_collision = true;
                     cloth::RestOptions ro = m_opt.rest;
                     ro.cancel = m_opt.cancel;
                     ro.progress = nullptr;
@@ -472,6 +484,11 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                     ++my_resolves;
                     if (!d.status.converged()) switch_failed[k] = 1; // not at rest: no signature
                     mine[k] = {drape_features(d, rec)};
+                    break;
+                }
+                case EffectKind::Specimen: { // the set-up's response along x, then y, a kLin of the way
+                    if (!sens_ok) break;
+                    for (int c = 0; c < 2; ++c) mine[k].push_back(measure(sim.x + kLin * resp.setups[changed_first[k] + static_cast<std::size_t>(c)]));
                     break;
                 }
                 case EffectKind::CameraScale: // the photos: every length, the hem's height too
@@ -490,6 +507,13 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                     mine[k] = {measure(X), measure(Y)};
                     break;
                 }
+                case EffectKind::ProfilerTilt: { // a cut at depth d (z = -d) lands d tan(t) sideways
+                    cloth::Positions X = sim.x, Y = sim.x;
+                    X.col(0) -= kTilt * sim.x.col(2);
+                    Y.col(1) -= kTilt * sim.x.col(2);
+                    mine[k] = {measure(X), measure(Y)};
+                    break;
+                }
                 }
             }
             std::lock_guard lock(count_mutex);
@@ -497,13 +521,16 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
         });
         m_simulations += resolves;
         m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
-        if (!sens_params.empty() && !parameter_failed) {
+        long specimen_columns = 0;
+        for (std::size_t k = 0; k < lib.size(); ++k)
+            if (out[k].available && lib[k].kind == EffectKind::Specimen) specimen_columns += 2;
+        if ((!sens_params.empty() || specimen_columns > 0) && !parameter_failed) {
             m_factorisations += R * S;
-            m_back_substitutions += static_cast<long>(R * S) * static_cast<long>(sens_params.size());
+            m_back_substitutions += static_cast<long>(R * S) * (static_cast<long>(sens_params.size()) + specimen_columns);
         }
         for (std::size_t k = 0; k < lib.size(); ++k) {
             if (!out[k].available) continue;
-            if (lib[k].kind == EffectKind::Parameter && parameter_failed) {
+            if ((lib[k].kind == EffectKind::Parameter || lib[k].kind == EffectKind::Specimen) && parameter_failed) {
                 out[k].available = false;
                 out[k].why_not = "the Hessian at a rest state is not positive definite: no sensitivity";
             }
@@ -522,7 +549,9 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
         if (!sig.available) continue;
         const EffectSpec& sp = lib[k];
         const double unit = sp.kind == EffectKind::Parameter ? kRel : sp.kind == EffectKind::Switch ? 1.0
+                            : sp.kind == EffectKind::Specimen ? kLin * (sp.specimen_offset_m != 0 ? sp.specimen_offset_m : sp.density_gradient)
                             : sp.kind == EffectKind::ProfilerAxis                                 ? kShift
+                            : sp.kind == EffectKind::ProfilerTilt                                 ? kTilt
                                                                                                   : kScale;
         for (Eigen::Index c = 0; c < sig.columns.cols(); ++c)
             for (int r = 0; r < R; ++r) {
@@ -544,7 +573,9 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                     if (!same_closure(cu, cb, mr, t)) continue;
                     // The instruments act on their own channels only.
                     if (sp.kind == EffectKind::CameraScale && !photo_row(t.kind)) continue;
-                    if ((sp.kind == EffectKind::ProfilerScale || sp.kind == EffectKind::ProfilerAxis) && photo_row(t.kind)) continue;
+                    if ((sp.kind == EffectKind::ProfilerScale || sp.kind == EffectKind::ProfilerAxis || sp.kind == EffectKind::ProfilerTilt) &&
+                        photo_row(t.kind))
+                        continue;
                     if (!std::isfinite(tu[i].simulated) || !std::isfinite(tb[i].simulated)) continue;
                     sig.columns(static_cast<Eigen::Index>(row), c) = (tu[i].simulated - tb[i].simulated) / unit / t.sigma;
                 }

@@ -177,9 +177,9 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
         }
     }
     // A fit worse than its noise model (chi2 / dof > 1) scales every delta chi2
-    // up by that factor: the tests use the residual scaled back, as the intervals do.
+    // up by that factor: the tests divide by it, as the intervals do.
     const double s2 = std::max(1.0, out.chi2 / std::max(1, out.dof));
-    auto cands = test_candidates(J, r / std::sqrt(s2), sigs, rows);
+    auto cands = test_candidates(J, r, sigs, rows, s2);
     // Verify the strongest parameter effect beyond noise with a drape: the joint
     // Gauss-Newton step (fitted coordinates and the effect), warm from the optimum.
     int top = -1;
@@ -205,7 +205,10 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
         }
         cloth::FabricParams p = ev.params_at(xn);
         const double a = std::clamp(step[n], -std::log(3.0), std::log(3.0)); // d ln p, at most a factor 3
-        for (cloth::Param q : sig.spec->params) p[q] = std::clamp(p[q] * std::exp(a), cloth::spec(q).lower, cloth::spec(q).upper);
+        for (std::size_t j = 0; j < sig.spec->params.size(); ++j) {
+            const cloth::Param q = sig.spec->params[j];
+            p[q] = std::clamp(p[q] * std::exp(effect_weight(*sig.spec, j) * a), cloth::spec(q).lower, cloth::spec(q).upper);
+        }
         const Evaluation v = ev.evaluate_params(p, Start::Best);
         ev.report("effects");
         cands[static_cast<std::size_t>(top)].verified_delta_chi2 = (best.chi2 - v.chi2) / s2; // on the scale of the test
@@ -238,7 +241,10 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
 FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOptions& options)
 {
     std::vector<MeasuredDrape> records = records_in;
-    for (auto& r : records) r.recentre_contours = r.recentre_contours || options.recentre_contours;
+    for (auto& r : records) {
+        r.recentre_contours = r.recentre_contours || options.recentre_contours;
+        r.untilt_contours = r.untilt_contours || options.untilt_contours;
+    }
     if (records.empty()) throw ParameterError("fit: no records to fit");
     if (options.channels.empty()) throw ParameterError("fit: no channels to fit");
     if (options.grid < 9 || options.grid > 200) throw ParameterError("fit: grid = " + std::to_string(options.grid) + " is outside [9, 200]");
@@ -335,7 +341,14 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     out.chi2 = best.chi2;
     int fitted_terms = 0;
     for (const auto& t : best.terms) fitted_terms += t.fitted ? 1 : 0;
-    out.dof = std::max(1, fitted_terms - n);
+    // The measurement model's own parameters are fitted too: a re-centred stack's
+    // axis (2 per record), an untilted one's offset and tilt (4; 2 with one cut).
+    int measurement_params = 0;
+    const bool contours_fitted = std::find(options.channels.begin(), options.channels.end(), "contours") != options.channels.end();
+    for (const auto& r : records)
+        if (contours_fitted && !r.contours.empty() && (r.untilt_contours || r.recentre_contours))
+            measurement_params += r.untilt_contours && r.contours.size() >= 2 ? 4 : 2;
+    out.dof = std::max(1, fitted_terms - n - measurement_params);
 
     // ---- uncertainty and estimates -------------------------------------------
     out.covariance = Eigen::MatrixXd::Constant(n, n, std::numeric_limits<double>::quiet_NaN());

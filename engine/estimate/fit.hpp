@@ -153,6 +153,9 @@ struct FitOptions {
     /// Measurement-model component "profiler axis": re-centre the contour stacks
     /// of records and simulations on their own axis (MeasuredDrape::recentre_contours).
     bool recentre_contours = false;
+    /// Measurement-model component "profiler axis tilted": remove each contour
+    /// stack's axis line, offset + depth x tilt (MeasuredDrape::untilt_contours).
+    bool untilt_contours = false;
     /// Engine options of every simulation. edge_contact = false reproduces the
     /// vertex-only contact of the seed (and of Drapekit before issue 7), whose
     /// coarse elements cut the pedestal rim.

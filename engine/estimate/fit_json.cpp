@@ -30,6 +30,7 @@ json fit_to_json(const FitResult& r)
     }
     prov["records"] = recs;
     prov["recentre_contours"] = r.options.recentre_contours;
+    prov["untilt_contours"] = r.options.untilt_contours;
     prov["edge_contact"] = r.options.model_options.edge_contact;
     prov["model"] = to_string(r.options.model);
     prov["seed"] = r.options.seed;
@@ -131,7 +132,9 @@ json fit_to_json(const FitResult& r)
                        {"cold_node_error", rf.cold_seeds ? json(rf.cold_node_error) : json(nullptr)},
                        {"node_source", rf.measured.node_source},
                        {"contours_recentred", rf.measured.recentre_contours},
-                       {"profiler_axis_offset_m", {rf.measured_features.axis_offset_m.x(), rf.measured_features.axis_offset_m.y()}}});
+                       {"contours_untilted", rf.measured.untilt_contours},
+                       {"profiler_axis_offset_m", {rf.measured_features.axis_offset_m.x(), rf.measured_features.axis_offset_m.y()}},
+                       {"profiler_axis_tilt_rad", {rf.measured_features.axis_tilt.x(), rf.measured_features.axis_tilt.y()}}});
     }
     fit["records"] = per;
     summary.details = fit;

@@ -204,44 +204,81 @@ ContourFeatures contour_features(const cloth::RadialProfile& p, double depth_m, 
     return f;
 }
 
+namespace {
+/// Area centroid of a closed cut (nullopt-like: false when it is degenerate).
+bool cut_centroid(const cloth::RadialProfile& p, Eigen::Vector2d& centroid)
+{
+    if (!p.complete()) return false;
+    const cloth::Polygon2 poly = cloth::polygon_from_profile(p);
+    double a = 0;
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const Eigen::Vector2d& p0 = poly[i];
+        const Eigen::Vector2d& p1 = poly[(i + 1) % poly.size()];
+        const double cr = p0.x() * p1.y() - p1.x() * p0.y();
+        a += cr;
+        c += cr * (p0 + p1);
+    }
+    if (std::abs(a) < 1e-12) return false;
+    centroid = c / (3 * a);
+    return true;
+}
+
+void move_cut(cloth::RadialProfile& p, const Eigen::Vector2d& shift)
+{
+    cloth::Polygon2 poly = cloth::polygon_from_profile(p);
+    for (auto& v : poly) v -= shift;
+    p = cloth::radial_profile(poly, p.size());
+}
+} // namespace
+
 Eigen::Vector2d recentre_stack(std::vector<cloth::RadialProfile>& profiles)
 {
-    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-    int n = 0;
-    for (const auto& p : profiles) {
-        if (!p.complete()) continue;
-        const cloth::Polygon2 poly = cloth::polygon_from_profile(p);
-        double a = 0;
-        Eigen::Vector2d c = Eigen::Vector2d::Zero();
-        for (std::size_t i = 0; i < poly.size(); ++i) {
-            const Eigen::Vector2d& p0 = poly[i];
-            const Eigen::Vector2d& p1 = poly[(i + 1) % poly.size()];
-            const double cr = p0.x() * p1.y() - p1.x() * p0.y();
-            a += cr;
-            c += cr * (p0 + p1);
-        }
-        if (std::abs(a) < 1e-12) continue;
-        sum += c / (3 * a);
-        ++n;
+    Eigen::Vector2d tilt;
+    return untilt_stack(profiles, {}, tilt);
+}
+
+Eigen::Vector2d untilt_stack(std::vector<cloth::RadialProfile>& profiles, const std::vector<double>& depths, Eigen::Vector2d& tilt)
+{
+    tilt.setZero();
+    std::vector<Eigen::Vector2d> cs;
+    std::vector<double> ds;
+    for (std::size_t i = 0; i < profiles.size(); ++i) {
+        Eigen::Vector2d c;
+        if (!cut_centroid(profiles[i], c)) continue;
+        cs.push_back(c);
+        ds.push_back(i < depths.size() ? depths[i] : 0.0);
     }
-    if (n == 0) return Eigen::Vector2d::Zero();
-    const Eigen::Vector2d shift = sum / n;
-    for (auto& p : profiles) {
-        if (!p.complete()) continue;
-        cloth::Polygon2 poly = cloth::polygon_from_profile(p);
-        for (auto& v : poly) v -= shift;
-        p = cloth::radial_profile(poly, p.size());
+    if (cs.empty()) return Eigen::Vector2d::Zero();
+    const double n = static_cast<double>(cs.size());
+    Eigen::Vector2d mc = Eigen::Vector2d::Zero();
+    double md = 0;
+    for (std::size_t i = 0; i < cs.size(); ++i) {
+        mc += cs[i] / n;
+        md += ds[i] / n;
     }
-    return shift;
+    double sdd = 0;
+    Eigen::Vector2d sdc = Eigen::Vector2d::Zero();
+    for (std::size_t i = 0; i < cs.size(); ++i) {
+        sdd += (ds[i] - md) * (ds[i] - md);
+        sdc += (ds[i] - md) * (cs[i] - mc);
+    }
+    if (!depths.empty() && sdd > 1e-12) tilt = sdc / sdd;
+    const Eigen::Vector2d offset = mc - md * tilt;
+    for (std::size_t i = 0; i < profiles.size(); ++i)
+        if (profiles[i].complete()) move_cut(profiles[i], offset + (i < depths.size() ? depths[i] : 0.0) * tilt);
+    return offset;
 }
 
 namespace {
 /// Features of a contour stack at the given depths, re-centred when asked.
 std::vector<ContourFeatures> stack_features(std::vector<cloth::RadialProfile> profiles, const std::vector<double>& depths,
-                                            bool recentre, Eigen::Vector2d& offset)
+                                            const MeasuredDrape& how, Eigen::Vector2d& offset, Eigen::Vector2d& tilt)
 {
     offset.setZero();
-    if (recentre) offset = recentre_stack(profiles);
+    tilt.setZero();
+    if (how.untilt_contours) offset = untilt_stack(profiles, depths, tilt);
+    else if (how.recentre_contours) offset = recentre_stack(profiles);
     std::vector<ContourFeatures> out;
     for (std::size_t i = 0; i < profiles.size(); ++i) out.push_back(contour_features(profiles[i], depths[i]));
     return out;
@@ -259,7 +296,7 @@ DrapeFeatures drape_features(const MeasuredDrape& m)
         profiles.push_back(c.profile);
         depths.push_back(c.depth_m);
     }
-    f.contours = stack_features(std::move(profiles), depths, m.recentre_contours, f.axis_offset_m);
+    f.contours = stack_features(std::move(profiles), depths, m, f.axis_offset_m, f.axis_tilt);
     if (m.node_count >= 0) f.node_count = m.node_count;
     else if (!f.contours.empty()) f.node_count = f.contours.back().node_count;
     return f;
@@ -290,7 +327,7 @@ DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& l
         profiles.push_back(s ? s->profile : cloth::RadialProfile{});
         depths.push_back(c.depth_m);
     }
-    f.contours = stack_features(std::move(profiles), depths, like.recentre_contours, f.axis_offset_m);
+    f.contours = stack_features(std::move(profiles), depths, like, f.axis_offset_m, f.axis_tilt);
     if (like.node_count >= 0) {
         // Counted like the photo: the shadow outline with the photo's detector settings.
         const cloth::DrapeMetrics dm = cloth::drape_metrics(r.outline, like.sample_diameter / 2, like.disc_diameter / 2, like.node_metric_options);

@@ -54,6 +54,12 @@ struct MeasuredDrape {
     /// axis is estimated instead of read as fold shape. Off by default: a centred
     /// stack keeps its harmonic 1, which is information about the drape.
     bool recentre_contours = false;
+    /// Measurement-model component "profiler axis tilted" (issue 20): as
+    /// recentre_contours, with an axis that moves linearly with depth - the cuts'
+    /// centroids fitted by offset + depth x tilt (least squares; needs two closed
+    /// cuts, else the mean) and each cut moved by its line's point. For a profiler
+    /// whose axis is tilted against the pedestal's, or a drape that leans.
+    bool untilt_contours = false;
     std::optional<record::Camera> top_camera; ///< calibration of the top photo, for overlays
     std::string top_photo;           ///< path of top.jpg ("" if none)
 
@@ -112,11 +118,20 @@ struct DrapeFeatures {
     std::vector<ContourFeatures> contours;
     /// Axis of the contour stack removed by MeasuredDrape::recentre_contours [m] (zero when not re-centred).
     Eigen::Vector2d axis_offset_m = Eigen::Vector2d::Zero();
+    /// Tilt of that axis [rad, as dx/d(depth), dy/d(depth)] removed by MeasuredDrape::untilt_contours.
+    Eigen::Vector2d axis_tilt = Eigen::Vector2d::Zero();
 };
 
 /// Shifts the closed profiles of a contour stack so that the mean area centroid
 /// of the closed ones is at the origin; returns the shift removed [m].
 Eigen::Vector2d recentre_stack(std::vector<cloth::RadialProfile>& profiles);
+
+/// The same with an axis that moves with depth: the closed cuts' area centroids
+/// fitted by offset + depth x tilt (least squares over the cuts at `depths` [m];
+/// the mean when fewer than two are closed or they share a depth), each closed
+/// cut moved by its depth's point. Returns the offset at depth 0 [m]; `tilt`
+/// gets the slope [m per m of depth].
+Eigen::Vector2d untilt_stack(std::vector<cloth::RadialProfile>& profiles, const std::vector<double>& depths, Eigen::Vector2d& tilt);
 
 /// Features of a measured record. The node count is the record's own if it
 /// states one; otherwise the crests of the deepest closed contour.

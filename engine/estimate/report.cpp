@@ -320,6 +320,15 @@ void convergence_plot(const FitResult& fr, const std::string& path)
 
 std::string num(double v, const char* f = "%.3g") { return std::isfinite(v) ? fmt(f, v) : std::string("n/a"); }
 
+/// A candidate's fitted amplitude: one number, or "x, y" for the two-column instruments.
+std::string amplitudes(const EffectCandidate& c)
+{
+    if (c.amplitudes.size() < 2) return num(c.amplitude);
+    std::string s;
+    for (double a : c.amplitudes) s += (s.empty() ? "" : ", ") + num(a);
+    return s;
+}
+
 } // namespace
 
 std::string parameter_table_markdown(const FitResult& r)
@@ -491,7 +500,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
             if (c.verdict == "not testable") md << "- | - | - | - | ";
             else
                 md << num(c.z, "%+.2f") << " | " << num(c.delta_chi2, "%.2f") << " | " << num(c.information, "%+.2f") << " | "
-                   << num(c.amplitude, "%.3g") << " " << c.amplitude_unit << " | ";
+                   << amplitudes(c) << " " << c.amplitude_unit << " | ";
             md << c.verdict << " | " << c.note << " |\n";
         }
         md << "\n";

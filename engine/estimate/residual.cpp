@@ -249,6 +249,7 @@ nlohmann::json residual_to_json(const ResidualAnalysis& a)
             e["delta_chi2"] = c.delta_chi2;
             e["information"] = c.information;
             e["amplitude"] = c.amplitude;
+            if (c.amplitudes.size() > 1) e["amplitudes"] = c.amplitudes;
             e["amplitude_unit"] = c.amplitude_unit;
             if (std::isfinite(c.verified_delta_chi2)) e["verified_delta_chi2"] = c.verified_delta_chi2;
         }

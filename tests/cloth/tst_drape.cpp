@@ -147,6 +147,27 @@ private slots:
         }
     }
 
+    void specimen_offset_and_weight_gradient_set_up()
+    {
+        // A specimen laid off centre: its centre held there, the sheet laid there.
+        DrapeSetup s = small(25);
+        s.specimen_offset = Eigen::Vector2d(4e-3, -2e-3);
+        const auto off = make_drape_system(Material(FabricParams()), s);
+        const auto ref = make_drape_system(Material(FabricParams()), small(25));
+        QCOMPARE(off->model().anchors.front().target.x(), ref->model().anchors.front().target.x() + 4e-3);
+        QCOMPARE(off->model().anchors.front().target.y(), ref->model().anchors.front().target.y() - 2e-3);
+        QVERIFY((off->x.leftCols(2).colwise().mean() - ref->x.leftCols(2).colwise().mean() - Eigen::RowVector2d(4e-3, -2e-3)).norm() < 1e-12);
+        // A weight gradient: the weight is the same, its centre moves towards +y
+        // by g R1 <y^2> / R1 (a quarter of the radius times g for a uniform disc).
+        s = small(25);
+        s.density_gradient = Eigen::Vector2d(0, 0.4);
+        const auto grad = make_drape_system(Material(FabricParams()), s);
+        const double m = ref->model().total_mass();
+        QVERIFY(std::abs(grad->model().total_mass() - m) < 1e-12 * m);
+        const double cy = grad->model().mass.dot(grad->x.col(1)) / m;
+        QVERIFY2(std::abs(cy - 0.4 * 0.15 / 4) < 0.1 * 0.4 * 0.15 / 4, qPrintable(QString::number(cy)));
+    }
+
     void bad_setups_are_refused()
     {
         DrapeSetup s = small();
@@ -160,6 +181,12 @@ private slots:
         FabricParams p;
         p[Param::AreaDensity] = std::nan("");
         QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(p, small()));
+        s = small();
+        s.specimen_offset = Eigen::Vector2d(0.08, 0); // off the 75 mm disc
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(FabricParams(), s));
+        s = small();
+        s.density_gradient = Eigen::Vector2d(0.6, 0.8); // the density would reach 0 at the edge
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(FabricParams(), s));
         // A seed preset describes its own sheet size.
         s = small();
         s.sample_diameter = 0.36;

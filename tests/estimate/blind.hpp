@@ -25,6 +25,17 @@ inline cloth::FabricParams truth()
     return p;
 }
 
+/// The cut `p` seen by a profiler whose axis is (sx, sy) off the pedestal's: the
+/// curve itself moved and sampled again on the profiler's rays (not the first-order
+/// r += s cos(theta - phi), which is exact for a circle only: a folded cut's
+/// flanks move along the rays too).
+inline cloth::RadialProfile shifted(const cloth::RadialProfile& p, double sx, double sy)
+{
+    cloth::Polygon2 poly = cloth::polygon_from_profile(p);
+    for (auto& v : poly) v += Eigen::Vector2d(sx, sy);
+    return cloth::radial_profile(poly, p.size());
+}
+
 /// A record of `p` with the effect `effect` at `strength` injected (the record
 /// does not declare it), noise seed from `seed`.
 inline MeasuredDrape injected(const std::string& effect, double strength, std::uint64_t seed)
@@ -36,13 +47,27 @@ inline MeasuredDrape injected(const std::string& effect, double strength, std::u
     if (effect == "bending_stiffening") p[Param::BendStiffeningRadius] = strength; // [m]
     if (effect == "disc_grip") s.disc_grip = true;
     if (effect == "contact_resolution") mo.edge_contact = false;
+    if (effect == "self_contact") mo.self_collision = true;
+    const double direction = 1.3 * static_cast<double>(seed); // a phase per record
+    if (effect == "specimen_off_centre") s.specimen_offset = strength * Eigen::Vector2d(std::cos(direction), std::sin(direction)); // [m]
+    if (effect == "specimen_weight_gradient") s.density_gradient = strength * Eigen::Vector2d(std::cos(direction), std::sin(direction));
+    if (effect == "tensile_anisotropy") { // warp stiffer, weft softer by the factor (1 + strength)
+        p[Param::StretchWarp] *= 1 + strength;
+        p[Param::StretchWeft] /= 1 + strength;
+    }
     MeasuredDrape rec = synthesize_record(cloth::simulate_drape(p, s, {}, mo), s, p, 0.3e-3, seed + 100, effect);
     if (effect == "profiler_off_axis") {
-        // The profiler's axis `strength` metres off the pedestal's:
-        // every contour's r(theta) gains strength cos(theta - 30 deg) (first order).
-        const double phase = 1.3 * static_cast<double>(seed); // a phase per record
-        for (auto& c : rec.contours)
-            for (int k = 0; k < c.profile.size(); ++k) c.profile.r[static_cast<std::size_t>(k)] += strength * std::cos(c.profile.theta(k) - phase);
+        // The profiler's axis `strength` metres off the pedestal's (towards the
+        // record's direction): every cut moved by that, sampled again.
+        for (auto& c : rec.contours) c.profile = shifted(c.profile, strength * std::cos(direction), strength * std::sin(direction));
+    }
+    if (effect == "profiler_tilt") {
+        // The profiler's axis tilted by `strength` radians: the cut at depth d
+        // is d tan(strength) off the pedestal's axis.
+        for (auto& c : rec.contours) {
+            const double sh = c.depth_m * std::tan(strength);
+            c.profile = shifted(c.profile, sh * std::cos(direction), sh * std::sin(direction));
+        }
     }
     if (effect == "camera_scale") {
         // The top photo's scale off by `strength`: the shadow's area by (1 + s)^2.

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <set>
 #include <string>
 
 using namespace drape;
@@ -80,6 +81,35 @@ private slots:
         QCOMPARE(test_candidates(J, noise, {sig}, N)[0].verdict, std::string("not testable"));
     }
 
+    void libraryAndWhatTheFitCovers()
+    {
+        // The candidates issue 20 lists, each once in the library.
+        std::set<std::string> names;
+        for (const auto& e : effect_library()) QVERIFY2(names.insert(e.name).second, e.name.c_str());
+        for (const char* n : {"profiler_off_axis", "profiler_tilt", "camera_scale", "profiler_scale", "specimen_weight_gradient", "buckling",
+                              "tensile_stiffness", "tensile_anisotropy", "shear_stiffness", "bending_stiffening", "bending_softening",
+                              "bending_anisotropy", "declared_weight", "declared_thickness", "disc_grip", "self_contact", "contact_resolution"})
+            QVERIFY2(names.count(n), n);
+        auto spec = [](const std::string& n) {
+            for (const auto& e : effect_library())
+                if (e.name == n) return e;
+            return EffectSpec{};
+        };
+        // Warp and weft fitted apart cover their ratio; tied, the ratio is free.
+        const FitOptions o;
+        QVERIFY(!fitted_by(spec("bending_anisotropy"), fit_variables(o.model, false)).empty());
+        QVERIFY(fitted_by(spec("bending_anisotropy"), fit_variables(o.model, true)).empty());
+        // The held tensile stiffness is not covered, either way round; shear is fitted.
+        QVERIFY(fitted_by(spec("tensile_anisotropy"), fit_variables(o.model, false)).empty());
+        QVERIFY(fitted_by(spec("tensile_stiffness"), fit_variables(o.model, false)).empty());
+        QCOMPARE(fitted_by(spec("shear_stiffness"), fit_variables(o.model, false)), std::string("shear_N_m"));
+        // One of a pair fitted alone does not cover the pair's common change.
+        FitVariable warp;
+        warp.params = {Param::StretchWarp};
+        QVERIFY(fitted_by(spec("tensile_stiffness"), {warp}).empty());
+        QVERIFY(fitted_by(spec("self_contact"), {warp}).empty()); // a switch: no parameters
+    }
+
     void injectedEffectIsNamed_data()
     {
         QTest::addColumn<QString>("effect");
@@ -113,6 +143,17 @@ private slots:
         describe(r);
         QVERIFY(r.residual.named_effect.empty());
         for (const auto& c : r.residual.candidates) QVERIFY2(c.verdict != "beyond noise", c.name.c_str());
+        // The new candidates are tested; a drapemeter's folds do not touch.
+        for (const auto& c : r.residual.candidates) {
+            if (c.name == "profiler_tilt" || c.name == "specimen_weight_gradient") {
+                QCOMPARE(c.verdict, std::string("within noise"));
+                QCOMPARE(c.amplitudes.size(), std::size_t(2));
+            }
+            if (c.name == "self_contact") {
+                QCOMPARE(c.verdict, std::string("not testable"));
+                QVERIFY2(c.note.find("changes none") != std::string::npos, c.note.c_str());
+            }
+        }
         // The JSON contract of `drape fit --json`.
         const auto j = fit_to_json(r);
         QVERIFY(j["residual"].contains("exceeds_noise"));

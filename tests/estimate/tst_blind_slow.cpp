@@ -39,6 +39,10 @@ private slots:
         QTest::addColumn<QString>("unit");
         QTest::addColumn<double>("scale");
         QTest::newRow("profiler_off_axis") << "profiler_off_axis" << QList<double>{0.002, 0.004, 0.006, 0.008, 0.012} << 0.004 << 0.012 << "mm" << 1e3;
+        QTest::newRow("profiler_tilt") << "profiler_tilt" << QList<double>{0.03, 0.06, 0.1, 0.2} << 1.0 << 0.0 << "rad" << 1.0;
+        QTest::newRow("specimen_weight_gradient") << "specimen_weight_gradient" << QList<double>{0.1, 0.2, 0.4} << 1.0 << 0.0 << "per radius" << 1.0;
+        QTest::newRow("tensile_anisotropy") << "tensile_anisotropy" << QList<double>{0.5, 1.0} << 1.0 << 0.0 << "(factor - 1)" << 1.0;
+        QTest::newRow("self_contact") << "self_contact" << QList<double>{1.0} << 1.0 << 0.0 << "(on)" << 1.0;
         QTest::newRow("camera_scale") << "camera_scale" << QList<double>{0.01, 0.02, 0.03, 0.05, 0.08, 0.12} << 0.12 << 0.12 << "%" << 100.0;
         QTest::newRow("contact_resolution") << "contact_resolution" << QList<double>{1.0} << 1.0 << 1.0 << "(on)" << 1.0;
         QTest::newRow("buckling") << "buckling" << QList<double>{0.015, 0.03} << 1.0 << 0.0 << "mm" << 1e3;

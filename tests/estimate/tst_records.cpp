@@ -218,6 +218,38 @@ private slots:
         QVERIFY(!analyse_residual(same, 3).exceeds_noise);
     }
 
+    void untiltedStackRecoversItsAxisLine()
+    {
+        // Folded cuts whose axis moves by offset + depth x tilt (a tilted profiler):
+        // the untilted stack finds the line and centres every cut (a1, b1 ~ 0);
+        // re-centring finds only the mean shift and leaves the slope.
+        const Eigen::Vector2d offset(0.5e-3, -0.3e-3), tilt(0.12, 0.3);
+        std::vector<cloth::RadialProfile> stack, same;
+        std::vector<double> depths;
+        for (int d = 1; d <= 5; ++d) {
+            const double depth = 0.005 * d;
+            const Eigen::Vector2d c = offset + depth * tilt;
+            stack.push_back(folded(0.08 + 0.002 * d, 6, 0.001 * d, c.x(), c.y()));
+            depths.push_back(depth);
+        }
+        same = stack;
+        Eigen::Vector2d found_tilt;
+        const Eigen::Vector2d found = untilt_stack(stack, depths, found_tilt);
+        QVERIFY2((found - offset).norm() < 1e-5, qPrintable(QString("%1 %2").arg(found.x()).arg(found.y())));
+        QVERIFY2((found_tilt - tilt).norm() < 2e-3, qPrintable(QString("%1 %2").arg(found_tilt.x()).arg(found_tilt.y())));
+        for (std::size_t i = 0; i < stack.size(); ++i) {
+            const ContourFeatures f = contour_features(stack[i], depths[i]);
+            QVERIFY2(std::hypot(f.cos1_m, f.sin1_m) < 2e-5, qPrintable(QString::number(std::hypot(f.cos1_m, f.sin1_m))));
+        }
+        recentre_stack(same);
+        const ContourFeatures deepest = contour_features(same.back(), depths.back());
+        QVERIFY(std::hypot(deepest.cos1_m, deepest.sin1_m) > 2e-3); // 10 mm x 0.32 from the mean depth
+        // One cut: the mean shift, no tilt.
+        std::vector<cloth::RadialProfile> one = {folded(0.08, 6, 0.002, 1e-3, 0)};
+        QVERIFY((untilt_stack(one, {0.01}, found_tilt) - Eigen::Vector2d(1e-3, 0)).norm() < 1e-5);
+        QCOMPARE(found_tilt, Eigen::Vector2d(0, 0));
+    }
+
     void modelVariants()
     {
         QCOMPARE(fit_variables(ModelVariant::Baseline).size(), std::size_t(3));

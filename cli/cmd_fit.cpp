@@ -163,6 +163,8 @@ int run(const std::vector<std::string>& argv)
     fo.warm_local = !a.has("--cold-local");
     fo.recentre_contours = a.has("--recentre-contours");
     fo.untilt_contours = a.has("--untilt-contours");
+    if (fo.recentre_contours && fo.untilt_contours)
+        throw UsageError("--recentre-contours and --untilt-contours are two measurement models of the profiler's axis: choose one");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
     if (const auto s = a.get("--start")) {
         fo.start = fabric::load_fabric(*s).params; // a seed-19 preset starts from its continuum equivalent

@@ -195,6 +195,7 @@ case_ "fit --global -1" 2 "--global" -- "$drape" fit "$src_record" --out "$tmp/f
 case_ "fit --method bobyqa" 2 "--method" -- "$drape" fit "$src_record" --out "$tmp/fit.json" --method bobyqa --quiet
 case_ "fit --branch sideways" 2 "--branch" -- "$drape" fit "$src_record" --out "$tmp/fit.json" --branch sideways --quiet
 case_ "fit --bending isotropic" 2 "--bending" -- "$drape" fit "$src_record" --out "$tmp/fit.json" --bending isotropic --quiet
+case_ "fit --recentre-contours --untilt-contours" 2 "choose one" -- "$drape" fit "$src_record" --out "$tmp/fit.json" --recentre-contours --untilt-contours --quiet
 case_ "compare --seeds 0" 2 "--seeds" -- "$drape" compare "$src_record" --fabric silk --seeds 0 --quiet
 case_ "import --unit furlong" 2 "--unit" -- "$drape" import "$tmp/none.obj" --unit furlong
 

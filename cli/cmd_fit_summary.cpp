@@ -87,6 +87,13 @@ Entry read_report(const std::string& label, const std::string& dir)
     int fitted = 0;
     for (const auto& p : j["fit"].value("parameters", nlohmann::json::array()))
         if (p.value("role", "") == "fitted") ++fitted;
+    // The measurement model's axis parameters (re-centred or untilted stacks)
+    // count too: the fit's own dof says how many (reports since the seventh session).
+    if (const auto& fj = j["fit"]; fj.contains("dof") && fj["dof"].is_number_integer() && fj.contains("chi2")) {
+        int terms_fitted = 0;
+        for (const auto& t : j["residual_terms"]) terms_fitted += t.value("fitted", true) ? 1 : 0;
+        fitted = std::max(fitted, terms_fitted - fj["dof"].get<int>());
+    }
     std::vector<estimate::ResidualTerm> terms;
     for (const auto& t : j["residual_terms"]) {
         estimate::ResidualTerm rt;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace drape::estimate {
 
@@ -55,12 +56,13 @@ const std::vector<EffectSpec>& effect_library()
              EffectKind::ProfilerAxis, "m (x, y shift)");
         meas("profiler_tilt",
              "the profiler's axis tilted against the pedestal's, or the rig off level (a skirt hangs plumb): contours shifted sideways in "
-             "proportion to their depth (2 parameters, x and y)",
+             "proportion to their depth (2 parameters, x and y); a drape that leans (specimen_weight_gradient) looks alike on contours",
              EffectKind::ProfilerTilt, "rad (x, y tilt)");
         meas("camera_scale", "the photos' scale off (calibration): the drape coefficient and the hem height scaled", EffectKind::CameraScale,
              "fraction");
         meas("profiler_scale", "the laser contours' scale off: every contour radius scaled", EffectKind::ProfilerScale, "fraction");
         auto specimen = [&](std::string name, std::string doc, double offset, double gradient, std::string unit) {
+            if ((offset != 0) == (gradient != 0)) throw std::logic_error("effect library: a specimen effect moves the offset or the gradient");
             EffectSpec e;
             e.name = std::move(name);
             e.family = "specimen";
@@ -74,7 +76,7 @@ const std::vector<EffectSpec>& effect_library()
         specimen("specimen_weight_gradient",
                  "the specimen heavier on one side (areal density changing linearly across it; x and y): the skirt leans away from the "
                  "heavy side, more so the deeper",
-                 0, 0.2, "fraction per radius (x, y)");
+                 0, 0.3, "fraction per radius (x, y)");
         param("buckling", "membrane", "the membrane's compression limit (buckling_length_m): how easily the fabric buckles in its plane",
               {Param::BucklingLength});
         param("tensile_stiffness", "membrane", "the tensile stiffness warp and weft together (stretch_warp_N_m, stretch_weft_N_m)",
@@ -107,25 +109,48 @@ double effect_weight(const EffectSpec& spec, std::size_t i)
 
 std::string fitted_by(const EffectSpec& sp, const std::vector<FitVariable>& vars)
 {
-    const auto n = static_cast<Eigen::Index>(sp.params.size());
-    if (n == 0) return {};
-    Eigen::VectorXd w(n);
-    for (Eigen::Index i = 0; i < n; ++i) w[i] = effect_weight(sp, static_cast<std::size_t>(i));
-    std::vector<Eigen::VectorXd> cols;
-    std::string keys;
-    for (const auto& v : vars) {
-        Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
-        for (Param q : v.params)
-            for (Eigen::Index i = 0; i < n; ++i)
-                if (sp.params[static_cast<std::size_t>(i)] == q) {
-                    c[i] = 1;
-                    keys += (keys.empty() ? "" : ", ") + std::string(cloth::spec(q).key);
-                }
-        if (c.squaredNorm() > 0) cols.push_back(c);
+    if (sp.params.empty()) return {};
+    // The parameters in play: the effect's and every fitted variable's that
+    // shares one with it (a variable that moves others too covers less).
+    std::vector<Param> ps = sp.params;
+    auto index = [&](Param q) {
+        for (std::size_t i = 0; i < ps.size(); ++i)
+            if (ps[i] == q) return static_cast<Eigen::Index>(i);
+        ps.push_back(q);
+        return static_cast<Eigen::Index>(ps.size() - 1);
+    };
+    // The variables that touch a parameter in play, and theirs in turn (a
+    // variable tying warp to weft brings in one fitting weft alone).
+    std::vector<const FitVariable*> touching;
+    std::vector<char> taken(vars.size(), 0);
+    for (bool grew = true; grew;) {
+        grew = false;
+        for (std::size_t j = 0; j < vars.size(); ++j) {
+            if (taken[j]) continue;
+            bool touches = false;
+            for (Param q : vars[j].params)
+                touches = touches || std::find(ps.begin(), ps.end(), q) != ps.end();
+            if (!touches) continue;
+            taken[j] = 1;
+            grew = true;
+            touching.push_back(&vars[j]);
+            for (Param q : vars[j].params) index(q);
+        }
     }
-    if (cols.empty()) return {};
-    Eigen::MatrixXd V(n, static_cast<Eigen::Index>(cols.size()));
-    for (std::size_t j = 0; j < cols.size(); ++j) V.col(static_cast<Eigen::Index>(j)) = cols[j];
+    if (touching.empty()) return {};
+    std::string keys;
+    for (Param e : sp.params)
+        for (const FitVariable* v : touching)
+            if (std::find(v->params.begin(), v->params.end(), e) != v->params.end()) {
+                keys += (keys.empty() ? "" : ", ") + std::string(cloth::spec(e).key);
+                break;
+            }
+    const auto n = static_cast<Eigen::Index>(ps.size());
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
+    for (std::size_t i = 0; i < sp.params.size(); ++i) w[index(sp.params[i])] = effect_weight(sp, i);
+    Eigen::MatrixXd V = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(touching.size()));
+    for (std::size_t j = 0; j < touching.size(); ++j)
+        for (Param q : touching[j]->params) V(index(q), static_cast<Eigen::Index>(j)) = 1;
     const Eigen::VectorXd left = w - V * V.colPivHouseholderQr().solve(w);
     return left.norm() < 1e-9 * w.norm() ? keys : std::string();
 }
@@ -164,7 +189,7 @@ std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eig
         const double full = sig.columns.norm(), left = S.norm();
         if (!(full > 1e-9)) {
             c.verdict = "not testable";
-            c.note = "switching it on changes none of the fitted terms here";
+            c.note = "it changes none of the fitted terms here (at this rest state)";
             out.push_back(std::move(c));
             continue;
         }

@@ -33,7 +33,7 @@ enum class EffectKind {
 /// One entry of the library.
 struct EffectSpec {
     std::string name;        ///< e.g. "buckling"
-    std::string family;      ///< measurement | membrane | bending | contact | declared | numerical
+    std::string family;      ///< measurement | specimen | membrane | bending | contact | declared | numerical
     std::string description; ///< one sentence for the report
     EffectKind kind = EffectKind::Parameter;
     std::vector<cloth::Param> params; ///< Parameter: moved together (relative change); Switch: set to `on_value`
@@ -69,7 +69,7 @@ std::string fitted_by(const EffectSpec& spec, const std::vector<FitVariable>& va
 /// term is not fitted / not smooth).
 struct EffectSignature {
     const EffectSpec* spec = nullptr;
-    Eigen::MatrixXd columns; ///< rows x k (k = 1, or 2 for the profiler axis)
+    Eigen::MatrixXd columns; ///< rows x k (k = 1, or 2 for x and y: the profiler's axis and tilt, the specimen's weight gradient)
     bool available = true;
     std::string why_not;     ///< when not available (e.g. the model fits that parameter already)
 };
@@ -89,7 +89,7 @@ struct EffectCandidate {
     /// (Bayesian information criterion, N fitted smooth terms).
     double information = 0;
     double amplitude = 0;    ///< the refit's size of the effect (first column), in amplitude_unit
-    std::vector<double> amplitudes; ///< every column's (x and y for the two-column instruments)
+    std::vector<double> amplitudes; ///< every column's (x and y for the two-column effects)
     std::string amplitude_unit;
     /// Delta chi2 of the refit verified by draping the preset with the effect
     /// (parameter effects only; NaN otherwise).

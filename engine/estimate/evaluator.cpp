@@ -349,6 +349,16 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
     return J;
 }
 
+namespace {
+/// Whether a record's measurement model takes the instrument effect out of its contours.
+bool removed_by_measurement_model(const EffectSpec& sp, const MeasuredDrape& rec)
+{
+    if (sp.kind == EffectKind::ProfilerAxis) return rec.recentre_contours || rec.untilt_contours;
+    if (sp.kind == EffectKind::ProfilerTilt) return rec.untilt_contours;
+    return false;
+}
+} // namespace
+
 std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd& x, const Evaluation& e)
 {
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
@@ -372,6 +382,16 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
         if (!all_at_rest) {
             sig.available = false;
             sig.why_not = "the fit's drapes are not at rest: no linearisation";
+            continue;
+        }
+        // The measurement model removes the profiler's axis (re-centred stacks)
+        // and its tilt (untilted stacks) from record and simulation alike: what
+        // would be left of the signature is the resampling's rounding.
+        bool removed_everywhere = sp.kind == EffectKind::ProfilerAxis || sp.kind == EffectKind::ProfilerTilt;
+        for (const auto& rec : m_recs) removed_everywhere = removed_everywhere && removed_by_measurement_model(sp, rec);
+        if (removed_everywhere) {
+            sig.available = false;
+            sig.why_not = "the measurement model removes it (--recentre-contours / --untilt-contours)";
             continue;
         }
         if (const std::string keys = fitted_by(sp, m_vars); !keys.empty()) {
@@ -576,6 +596,7 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                     if ((sp.kind == EffectKind::ProfilerScale || sp.kind == EffectKind::ProfilerAxis || sp.kind == EffectKind::ProfilerTilt) &&
                         photo_row(t.kind))
                         continue;
+                    if (removed_by_measurement_model(sp, m_recs[static_cast<std::size_t>(r)])) continue;
                     if (!std::isfinite(tu[i].simulated) || !std::isfinite(tb[i].simulated)) continue;
                     sig.columns(static_cast<Eigen::Index>(row), c) = (tu[i].simulated - tb[i].simulated) / unit / t.sigma;
                 }

@@ -247,6 +247,9 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     }
     if (records.empty()) throw ParameterError("fit: no records to fit");
     if (options.channels.empty()) throw ParameterError("fit: no channels to fit");
+    for (const auto& r : records)
+        if (r.untilt_contours && r.recentre_contours)
+            throw ParameterError("fit: record '" + r.id + "': re-centred and untilted contours are two models of the profiler's axis - choose one");
     if (options.grid < 9 || options.grid > 200) throw ParameterError("fit: grid = " + std::to_string(options.grid) + " is outside [9, 200]");
     if (!(options.branch_lift_m > 0) || options.branch_lift_m > 0.05)
         throw ParameterError("fit: branch lift = " + std::to_string(options.branch_lift_m) + " m is outside (0, 0.05]");
@@ -343,11 +346,16 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     for (const auto& t : best.terms) fitted_terms += t.fitted ? 1 : 0;
     // The measurement model's own parameters are fitted too: a re-centred stack's
     // axis (2 per record), an untilted one's offset and tilt (4; 2 with one cut).
+    // Counted over the record's closed cuts: none, no axis; one depth, an offset.
     int measurement_params = 0;
     const bool contours_fitted = std::find(options.channels.begin(), options.channels.end(), "contours") != options.channels.end();
-    for (const auto& r : records)
-        if (contours_fitted && !r.contours.empty() && (r.untilt_contours || r.recentre_contours))
-            measurement_params += r.untilt_contours && r.contours.size() >= 2 ? 4 : 2;
+    for (const auto& r : records) {
+        if (!contours_fitted || !(r.untilt_contours || r.recentre_contours)) continue;
+        std::vector<double> depths;
+        for (const auto& c : r.contours)
+            if (c.profile.complete() && std::find(depths.begin(), depths.end(), c.depth_m) == depths.end()) depths.push_back(c.depth_m);
+        if (!depths.empty()) measurement_params += r.untilt_contours && depths.size() >= 2 ? 4 : 2;
+    }
     out.dof = std::max(1, fitted_terms - n - measurement_params);
 
     // ---- uncertainty and estimates -------------------------------------------
@@ -408,7 +416,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         }
         out.records.push_back(std::move(rf));
     }
-    out.residual = analyse_residual(out.residuals, n);
+    out.residual = analyse_residual(out.residuals, n + measurement_params);
     out.residual.exceeds_noise_by_residual = out.residual.exceeds_noise;
     if (options.effects && !out.cancelled) {
         try {

@@ -254,9 +254,11 @@ Eigen::Vector2d untilt_stack(std::vector<cloth::RadialProfile>& profiles, const 
     Eigen::Vector2d mc = Eigen::Vector2d::Zero();
     double md = 0;
     for (std::size_t i = 0; i < cs.size(); ++i) {
-        mc += cs[i] / n;
-        md += ds[i] / n;
+        mc += cs[i];
+        md += ds[i];
     }
+    mc /= n; // summed, then divided: re-centring rounds as it did before the tilt
+    md /= n;
     double sdd = 0;
     Eigen::Vector2d sdc = Eigen::Vector2d::Zero();
     for (std::size_t i = 0; i < cs.size(); ++i) {

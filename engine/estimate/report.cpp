@@ -320,7 +320,7 @@ void convergence_plot(const FitResult& fr, const std::string& path)
 
 std::string num(double v, const char* f = "%.3g") { return std::isfinite(v) ? fmt(f, v) : std::string("n/a"); }
 
-/// A candidate's fitted amplitude: one number, or "x, y" for the two-column instruments.
+/// A candidate's fitted amplitude: one number, or "x, y" for the two-column effects.
 std::string amplitudes(const EffectCandidate& c)
 {
     if (c.amplitudes.size() < 2) return num(c.amplitude);

@@ -144,7 +144,7 @@ private slots:
         const double err = (an - fd).norm() / fd.norm();
         qInfo("|dx| %.3g per unit, relative difference from finite differences %.2g, solve residual %.1g (re-solves: %ld, %ld Newton steps)",
               fd.norm(), err, resp.setup_residuals.front(), rl.status.newton_iterations, rh.status.newton_iterations);
-        QVERIFY2(err < 2e-2, qPrintable(QString::number(err)));
+        QVERIFY2(err < 1e-3, qPrintable(QString::number(err)));
         // Another mesh is refused.
         DrapeSetup other = s;
         other.grid = 25;

@@ -76,6 +76,16 @@ private slots:
                 QCOMPARE(name_effect(c, r.squaredNorm(), N - 2), std::string("test_effect"));
             }
         }
+        // A fit worse than its noise model by a factor 4 in chi2: z halves, delta
+        // chi2 quarters, the refit's amplitude is the same.
+        {
+            const Eigen::VectorXd r = noise + 0.5 * s;
+            const auto one = test_candidates(J, r, {sig}, N)[0], four = test_candidates(J, r, {sig}, N, 4.0)[0];
+            QVERIFY(std::abs(four.z - one.z / 2) < 1e-12 * std::abs(one.z));
+            QVERIFY(std::abs(four.delta_chi2 - one.delta_chi2 / 4) < 1e-12 * one.delta_chi2);
+            QCOMPARE(four.amplitude, one.amplitude);
+            QCOMPARE(four.amplitudes.size(), std::size_t(1));
+        }
         // A signature the fitted columns already make is not testable.
         sig.columns = 2 * J.col(0);
         QCOMPARE(test_candidates(J, noise, {sig}, N)[0].verdict, std::string("not testable"));
@@ -108,6 +118,15 @@ private slots:
         warp.params = {Param::StretchWarp};
         QVERIFY(fitted_by(spec("tensile_stiffness"), {warp}).empty());
         QVERIFY(fitted_by(spec("self_contact"), {warp}).empty()); // a switch: no parameters
+        // A variable that ties two parameters does not cover an effect on one of them.
+        FitVariable tied;
+        tied.params = {Param::BendWarp, Param::BendWeft};
+        EffectSpec warp_only;
+        warp_only.params = {Param::BendWarp};
+        QVERIFY(fitted_by(warp_only, {tied}).empty());
+        FitVariable weft;
+        weft.params = {Param::BendWeft};
+        QVERIFY(!fitted_by(warp_only, {tied, weft}).empty()); // with weft on its own, warp is free too
     }
 
     void injectedEffectIsNamed_data()

@@ -9,6 +9,7 @@
 #include "blind.hpp"
 
 #include <QList>
+#include <QStringList>
 #include <QTest>
 
 #include <cmath>
@@ -38,17 +39,20 @@ private slots:
         QTest::addColumn<double>("hi");
         QTest::addColumn<QString>("unit");
         QTest::addColumn<double>("scale");
-        QTest::newRow("profiler_off_axis") << "profiler_off_axis" << QList<double>{0.002, 0.004, 0.006, 0.008, 0.012} << 0.004 << 0.012 << "mm" << 1e3;
-        QTest::newRow("profiler_tilt") << "profiler_tilt" << QList<double>{0.03, 0.06, 0.1, 0.2} << 1.0 << 0.0 << "rad" << 1.0;
-        QTest::newRow("specimen_weight_gradient") << "specimen_weight_gradient" << QList<double>{0.1, 0.2, 0.4} << 1.0 << 0.0 << "per radius" << 1.0;
-        QTest::newRow("tensile_anisotropy") << "tensile_anisotropy" << QList<double>{0.5, 1.0} << 1.0 << 0.0 << "(factor - 1)" << 1.0;
-        QTest::newRow("self_contact") << "self_contact" << QList<double>{1.0} << 1.0 << 0.0 << "(on)" << 1.0;
-        QTest::newRow("camera_scale") << "camera_scale" << QList<double>{0.01, 0.02, 0.03, 0.05, 0.08, 0.12} << 0.12 << 0.12 << "%" << 100.0;
-        QTest::newRow("contact_resolution") << "contact_resolution" << QList<double>{1.0} << 1.0 << 1.0 << "(on)" << 1.0;
-        QTest::newRow("buckling") << "buckling" << QList<double>{0.015, 0.03} << 1.0 << 0.0 << "mm" << 1e3;
-        QTest::newRow("bending_stiffening") << "bending_stiffening" << QList<double>{0.005, 0.01} << 1.0 << 0.0 << "mm" << 1e3;
-        QTest::newRow("disc_grip") << "disc_grip" << QList<double>{1.0} << 1.0 << 0.0 << "(on)" << 1.0;
-        QTest::newRow("declared_weight") << "declared_weight" << QList<double>{-0.2, 0.2} << 1.0 << 0.0 << "% off" << 100.0;
+        // Candidates whose signature is alike the injected one's on these records
+        // (section 17): naming one of them is not a misnaming; any other name is.
+        QTest::addColumn<QStringList>("alike");
+        QTest::newRow("profiler_off_axis") << "profiler_off_axis" << QList<double>{0.002, 0.004, 0.006, 0.008, 0.012} << 0.004 << 0.012 << "mm" << 1e3 << QStringList{};
+        QTest::newRow("profiler_tilt") << "profiler_tilt" << QList<double>{0.03, 0.06, 0.1, 0.2} << 1.0 << 0.0 << "rad" << 1.0 << QStringList{"specimen_weight_gradient"};
+        QTest::newRow("specimen_weight_gradient") << "specimen_weight_gradient" << QList<double>{0.1, 0.2, 0.4, 0.6} << 1.0 << 0.0 << "per radius" << 1.0 << QStringList{"profiler_tilt"};
+        QTest::newRow("tensile_anisotropy") << "tensile_anisotropy" << QList<double>{0.5, 1.0} << 1.0 << 0.0 << "(factor - 1)" << 1.0 << QStringList{};
+        QTest::newRow("self_contact") << "self_contact" << QList<double>{1.0} << 1.0 << 0.0 << "(on)" << 1.0 << QStringList{};
+        QTest::newRow("camera_scale") << "camera_scale" << QList<double>{0.01, 0.02, 0.03, 0.05, 0.08, 0.12} << 0.12 << 0.12 << "%" << 100.0 << QStringList{};
+        QTest::newRow("contact_resolution") << "contact_resolution" << QList<double>{1.0} << 1.0 << 1.0 << "(on)" << 1.0 << QStringList{};
+        QTest::newRow("buckling") << "buckling" << QList<double>{0.015, 0.03} << 1.0 << 0.0 << "mm" << 1e3 << QStringList{};
+        QTest::newRow("bending_stiffening") << "bending_stiffening" << QList<double>{0.005, 0.01} << 1.0 << 0.0 << "mm" << 1e3 << QStringList{};
+        QTest::newRow("disc_grip") << "disc_grip" << QList<double>{1.0} << 1.0 << 0.0 << "(on)" << 1.0 << QStringList{};
+        QTest::newRow("declared_weight") << "declared_weight" << QList<double>{-0.2, 0.2} << 1.0 << 0.0 << "% off" << 100.0 << QStringList{};
     }
     void detectionLimits()
     {
@@ -58,9 +62,10 @@ private slots:
         QFETCH(double, hi);
         QFETCH(QString, unit);
         QFETCH(double, scale);
+        QFETCH(QStringList, alike);
         const std::string eff = effect.toStdString();
         std::printf("\n| injected effect | strength | record seed | named | verdict of the injected candidate (z, delta chi2) | chi2 / dof |\n|---|---|---|---|---|---|\n");
-        int misses = 0;
+        int misses = 0, misnamed = 0;
         for (double st : strengths)
             for (std::uint64_t seed : {21u, 22u}) {
                 const FitResult r = fit(injected(eff, st, seed));
@@ -75,8 +80,13 @@ private slots:
                             r.residual.named_effect.empty() ? "-" : r.residual.named_effect.c_str(), mine.c_str(), r.chi2, r.dof);
                 std::fflush(stdout);
                 if (std::abs(st) >= lo && std::abs(st) <= hi && r.residual.named_effect != eff) ++misses;
+                const QString named = QString::fromStdString(r.residual.named_effect);
+                if (!named.isEmpty() && named != effect && !alike.contains(named)) ++misnamed;
+                for (const auto& e : r.residual.candidates)
+                    if (e.name == "self_contact" && eff == "self_contact" && e.verdict != "not testable") ++misnamed; // its folds do not touch
             }
         QCOMPARE(misses, 0);
+        QCOMPARE(misnamed, 0);
     }
 
     void falseAlarmsOnCleanRecords()

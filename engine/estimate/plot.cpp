@@ -128,7 +128,14 @@ void Plot::save(const std::string& path) const
     if (y1 - y0 < 1e-300) y0 -= 0.5, y1 += 0.5;
     if (!m_fixed_x) { const double p = 0.04 * (x1 - x0); x0 -= p; x1 += p; }
     if (!m_fixed_y) { const double p = 0.06 * (y1 - y0); y0 -= p; y1 += p; }
-    const int L = 80, R = 20, T = 40, B = m_caption.empty() ? 55 : 80;
+    // The left margin holds the longest row label (parameter keys, effect names).
+    int L = 80;
+    for (const auto& [v, t] : m_ytick_labels) {
+        int base = 0;
+        L = std::max(L, cv::getTextSize(t, cv::FONT_HERSHEY_SIMPLEX, 0.35, 1, &base).width + 12);
+    }
+    L = std::min(L, m_w / 3);
+    const int R = 20, T = 40, B = m_caption.empty() ? 55 : 80;
     const int pw = m_w - L - R, ph = m_h - T - B;
     if (m_equal) { // same metres per pixel on both axes
         const double sx = (x1 - x0) / pw, sy = (y1 - y0) / ph, s = std::max(sx, sy);

@@ -287,6 +287,43 @@ void parameter_plot(const FitResult& fr, const std::string& path)
     pl.save(path);
 }
 
+/// The candidate effects (issue 20): each one's sqrt(delta chi2) - its |z| for
+/// one parameter - as a bar from 0, against the 3-sigma levels of one and two
+/// parameters; red beyond noise, grey within, the named one green, the
+/// untestable ones listed with why.
+void candidates_plot(const FitResult& fr, const std::string& path)
+{
+    const auto& cs = fr.residual.candidates;
+    const int n = static_cast<int>(cs.size());
+    Plot pl(860, 150 + 34 * std::max(n, 1), "candidate effects: how much of the residual each would explain",
+            "sqrt(delta chi2) of the refit with the effect freed (= |z| for one parameter)", "");
+    double top = 4.5;
+    for (const auto& c : cs)
+        if (c.verdict != "not testable" && std::isfinite(c.delta_chi2)) top = std::max(top, std::sqrt(c.delta_chi2) * 1.08);
+    std::vector<std::pair<double, std::string>> labels;
+    for (int i = 0; i < n; ++i) {
+        const auto& c = cs[static_cast<std::size_t>(i)];
+        const double y = n - i;
+        labels.push_back({y, c.name});
+        if (c.verdict == "not testable") {
+            pl.text(0.02 * top, y - 0.15, "not testable: " + c.note.substr(0, 70), {120, 120, 120});
+            continue;
+        }
+        const double v = std::sqrt(std::max(0.0, c.delta_chi2));
+        const Rgb col = c.name == fr.residual.named_effect ? Rgb{30, 150, 60} : c.verdict == "beyond noise" ? Rgb{210, 60, 40} : Rgb{150, 150, 150};
+        pl.interval(0.0, v, v, y, col);
+        if (!c.note.empty() && c.verdict == "within noise" && v > 3) pl.text(v + 0.01 * top, y - 0.15, "amplitude out of range", {120, 120, 120});
+    }
+    for (double lvl : {3.0, std::sqrt(11.83)}) pl.line({lvl, lvl}, {0.3, n + 0.7}, {90, 90, 90}, "", 1, true);
+    pl.set_xrange(0, top);
+    pl.set_yrange(0.3, n + 0.7);
+    pl.set_yticklabels(labels);
+    pl.set_caption(fr.residual.named_effect.empty()
+                       ? std::string("named: none. Dashed: 3 sigma for one and for two parameters; red beyond noise, grey within")
+                       : "named: " + fr.residual.named_effect + " (green). Dashed: 3 sigma for one and two parameters; red beyond noise, grey within");
+    pl.save(path);
+}
+
 /// The fit's convergence: chi2 of every evaluation (points, one colour per
 /// stage) and the best so far (line), against the evaluation number.
 void convergence_plot(const FitResult& fr, const std::string& path)
@@ -494,7 +531,11 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
         md << "### Candidate effects (engine-made signatures, docs/model-discrepancy.md section 11)\n\n";
         md << (r.residual.named_effect.empty() ? std::string("Named effect: **none**") : "Named effect: **" + r.residual.named_effect + "**");
         if (!r.residual.unexplained.empty()) md << " (" << r.residual.unexplained << ")";
-        md << ".\n\n| effect | family | parameters | z | delta chi2 | information | amplitude | verdict | note |\n|---|---|---|---|---|---|---|---|---|\n";
+        md << ".\n\n";
+        candidates_plot(r, (root / "candidates.png").string());
+        files.push_back("candidates.png");
+        md << "![candidate effects](candidates.png)\n\n";
+        md << "| effect | family | parameters | z | delta chi2 | information | amplitude | verdict | note |\n|---|---|---|---|---|---|---|---|---|\n";
         for (const auto& c : r.residual.candidates) {
             md << "| " << c.name << " | " << c.family << " | " << c.parameters << " | ";
             if (c.verdict == "not testable") md << "- | - | - | - | ";

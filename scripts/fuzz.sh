@@ -7,7 +7,7 @@
 # TARGET: names, meta, contours, preset, library, mesh, image (fuzz/fuzz_TARGET.cpp).
 # Configures build-fuzz/ with clang (DRAPE_FUZZ=ON: every library instrumented,
 # address + undefined sanitizers), builds the target, seeds its corpus from the
-# project's own files the first time (examples/, data/library, docs/fit-report,
+# project's own files the first time (examples/, data/library, docs/fit-report, the legacy preset in tests/library/data,
 # ../shared/data/drape-lab, assimp's small test models), and runs it at low
 # priority in one process. The corpus grows in build-fuzz/corpus/TARGET;
 # findings (crash-*, leak-*, timeout-*, oom-*) land in build-fuzz/findings/TARGET/
@@ -65,7 +65,7 @@ if [ -z "$(ls -A "$seeds")" ]; then
     head -40 "$root/examples/DL-A04/contours.csv" >"$build/contours-head.csv" && seed '\000' "$build/contours-head.csv"
     ;;
   preset)
-    for f in "$root"/data/library/*.json "$root"/docs/fit-report/*.fabric.json; do seed "" "$f"; done
+    for f in "$root"/data/library/*.json "$root"/docs/fit-report/*.fabric.json "$root"/tests/library/data/*.fabric.json; do seed "" "$f"; done
     "$root/build/bin/drape" export-seed --fabric "$root/data/library/silk.json" --out "$seeds/silk-seed19.json" >/dev/null 2>&1 ||
       printf '{"format":"seed-19","w":30,"h":30,"u":30,"v":30,"x0":-15,"y0":15,"z0":0,"ClothOverMass":0.5,"SstKu":150,"SstDu":7,"SstKv":150,"SstDv":7,"SshK":40,"SshD":6,"SflKu":24,"SflDu":8,"SflKv":24,"SflDv":8}' >"$seeds/seed-table1.json"
     ;;

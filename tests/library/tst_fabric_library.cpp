@@ -295,13 +295,14 @@ private slots:
         QVERIFY_THROWS_EXCEPTION(ParameterError, b.import_all(json{{"format", "other"}}, "doc4"));
     }
 
-    /// A preset `drape fit` wrote before the typed format (docs/fit-report, keys
-    /// before the unit-suffix rule) loads, and enters the library with its fit
+    /// A preset `drape fit` wrote before the typed format (the fourth session's
+    /// docs/fit-report preset, kept in tests/library/data; keys before the
+    /// unit-suffix rule) loads, and enters the library with its fit
     /// quality (the reduced chi-square) - the library used to look for fields
     /// the fit never wrote.
     void fittedPresetShowsItsFitQuality()
     {
-        const fabric::FabricPreset p = fabric::load_fabric(DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json");
+        const fabric::FabricPreset p = fabric::load_fabric(DRAPE_SOURCE_DIR "/tests/library/data/DL-A08-legacy.fabric.json");
         QVERIFY(p.fit.has_value() && p.fit->reduced_chi2.has_value());
         QVERIFY(p.provenance.has_value());
         QCOMPARE(p.provenance->grid, 25);

@@ -299,14 +299,17 @@ void candidates_plot(const FitResult& fr, const std::string& path)
             "sqrt(delta chi2) of the refit with the effect freed (= |z| for one parameter)", "");
     double top = 4.5;
     for (const auto& c : cs)
-        if (c.verdict != "not testable" && std::isfinite(c.delta_chi2)) top = std::max(top, std::sqrt(c.delta_chi2) * 1.08);
+        if (c.verdict != "not testable" && std::isfinite(c.delta_chi2)) // room for the note beside a bar past the 3-sigma line
+            top = std::max(top, std::sqrt(c.delta_chi2) * (c.verdict == "within noise" && !c.note.empty() && c.delta_chi2 > 9 ? 1.45 : 1.08));
     std::vector<std::pair<double, std::string>> labels;
     for (int i = 0; i < n; ++i) {
         const auto& c = cs[static_cast<std::size_t>(i)];
         const double y = n - i;
         labels.push_back({y, c.name});
         if (c.verdict == "not testable") {
-            pl.text(0.02 * top, y - 0.15, "not testable: " + c.note.substr(0, 70), {120, 120, 120});
+            std::string why = c.note;
+            if (why.size() > 72) why = why.substr(0, why.rfind(' ', 68)) + " ..."; // the table below has it whole
+            pl.text(0.02 * top, y - 0.15, "not testable: " + why, {120, 120, 120});
             continue;
         }
         const double v = std::sqrt(std::max(0.0, c.delta_chi2));

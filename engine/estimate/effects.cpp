@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 namespace drape::estimate {
 
@@ -61,22 +60,17 @@ const std::vector<EffectSpec>& effect_library()
         meas("camera_scale", "the photos' scale off (calibration): the drape coefficient and the hem height scaled", EffectKind::CameraScale,
              "fraction");
         meas("profiler_scale", "the laser contours' scale off: every contour radius scaled", EffectKind::ProfilerScale, "fraction");
-        auto specimen = [&](std::string name, std::string doc, double offset, double gradient, std::string unit) {
-            if ((offset != 0) == (gradient != 0)) throw std::logic_error("effect library: a specimen effect moves the offset or the gradient");
+        {
             EffectSpec e;
-            e.name = std::move(name);
+            e.name = "specimen_weight_gradient";
             e.family = "specimen";
-            e.description = std::move(doc);
+            e.description = "the specimen heavier on one side (areal density changing linearly across it; x and y): the skirt leans away "
+                            "from the heavy side, more so the deeper";
             e.kind = EffectKind::Specimen;
-            e.specimen_offset_m = offset;
-            e.density_gradient = gradient;
-            e.amplitude_unit = std::move(unit);
+            e.density_gradient = 0.3;
+            e.amplitude_unit = "fraction per radius (x, y)";
             l.push_back(std::move(e));
-        };
-        specimen("specimen_weight_gradient",
-                 "the specimen heavier on one side (areal density changing linearly across it; x and y): the skirt leans away from the "
-                 "heavy side, more so the deeper",
-                 0, 0.3, "fraction per radius (x, y)");
+        }
         param("buckling", "membrane", "the membrane's compression limit (buckling_length_m): how easily the fabric buckles in its plane",
               {Param::BucklingLength});
         param("tensile_stiffness", "membrane", "the tensile stiffness warp and weft together (stretch_warp_N_m, stretch_weft_N_m)",
@@ -217,7 +211,7 @@ std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eig
         const auto& sp = *sig.spec;
         const double limit = sp.kind == EffectKind::Parameter ? std::log(10.0)
                              : sp.kind == EffectKind::Switch  ? 3.0
-                             : sp.kind == EffectKind::Specimen ? 3.0 * std::abs(sp.specimen_offset_m != 0 ? sp.specimen_offset_m : sp.density_gradient)
+                             : sp.kind == EffectKind::Specimen ? 3.0 * std::abs(sp.density_gradient)
                                                                : HUGE_VAL;
         if (a.norm() > limit) {
             if (c.verdict == "beyond noise") c.verdict = "within noise";

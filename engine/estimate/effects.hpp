@@ -27,7 +27,7 @@ enum class EffectKind {
     ProfilerScale, ///< the laser profiler's scale off: contour channels re-measured at scaled positions
     ProfilerAxis,  ///< the profiler (or the specimen) off the pedestal axis: contour channels re-measured at shifted positions (x and y: 2 columns)
     ProfilerTilt,  ///< the profiler's axis tilted against the pedestal's (or the rig off level): contours shifted in proportion to depth (x and y: 2 columns)
-    Specimen,      ///< the specimen itself uneven or misplaced (DrapeSetup::specimen_offset / density_gradient along x and y): the rest state's responses (cloth::rest_responses)
+    Specimen,      ///< the specimen itself uneven (DrapeSetup::density_gradient along x and y): the rest state's responses (cloth::rest_responses)
 };
 
 /// One entry of the library.
@@ -44,7 +44,6 @@ struct EffectSpec {
     bool disc_grip = false;  ///< Switch: the specimen held on the disc (grip, the limit of large static friction)
     bool vertex_contact = false; ///< Switch: contact at mesh vertices only (the numerical contact resolution)
     bool self_contact = false;   ///< Switch: the folds' self-contact switched on (ModelOptions::self_collision)
-    double specimen_offset_m = 0;  ///< Specimen: laid this far off centre (along x, then y) [m]
     double density_gradient = 0;   ///< Specimen: areal density changing by this fraction per specimen radius (along x, then y)
     std::string amplitude_unit; ///< unit of the fitted amplitude ("relative", "m", "fraction of the switch")
 };

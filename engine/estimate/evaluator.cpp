@@ -460,7 +460,6 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                     changed_first[k] = changed.size();
                     for (int c = 0; c < 2; ++c) {
                         cloth::DrapeSetup su = setup;
-                        su.specimen_offset[c] = lib[k].specimen_offset_m;
                         su.density_gradient[c] = lib[k].density_gradient;
                         changed.push_back(su);
                     }
@@ -569,7 +568,7 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
         if (!sig.available) continue;
         const EffectSpec& sp = lib[k];
         const double unit = sp.kind == EffectKind::Parameter ? kRel : sp.kind == EffectKind::Switch ? 1.0
-                            : sp.kind == EffectKind::Specimen ? kLin * (sp.specimen_offset_m != 0 ? sp.specimen_offset_m : sp.density_gradient)
+                            : sp.kind == EffectKind::Specimen ? kLin * sp.density_gradient
                             : sp.kind == EffectKind::ProfilerAxis                                 ? kShift
                             : sp.kind == EffectKind::ProfilerTilt                                 ? kTilt
                                                                                                   : kScale;

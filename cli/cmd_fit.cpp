@@ -49,6 +49,10 @@ as not identifiable.
                       or a drape that leans (residual candidate profiler_tilt)
   --vertex-contact-only  contact at mesh vertices only (the seed's; coarse elements then cut the
                       pedestal rim): reproduces fits made before edge contact
+  --bending-correction  the grid's bending stencils with their fourth-order correction (a fold
+                      crest one cell in radius keeps its bending energy; the preset then carries
+                      model.bending_correction; docs/model-discrepancy.md section 18); on too
+                      when the --start preset says model.bending_correction
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 41: 7.5 mm
@@ -121,7 +125,8 @@ std::string measured_text(double v, const char* fmt)
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending"},
-           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local"});
+           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
+            "--bending-correction"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
@@ -166,8 +171,12 @@ int run(const std::vector<std::string>& argv)
     if (fo.recentre_contours && fo.untilt_contours)
         throw UsageError("--recentre-contours and --untilt-contours are two measurement models of the profiler's axis: choose one");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
+    fo.model_options.bending_correction = a.has("--bending-correction");
     if (const auto s = a.get("--start")) {
-        fo.start = fabric::load_fabric(*s).params; // a seed-19 preset starts from its continuum equivalent
+        const fabric::FabricPreset start = fabric::load_fabric(*s);
+        fo.start = start.params; // a seed-19 preset starts from its continuum equivalent
+        // A corrected preset refits corrected (a seed-19 preset's model is the default).
+        if (start.model.bending_correction) fo.model_options.bending_correction = true;
     }
     for (const auto& kv : a.get_all("--set"))
         for (const char* declared : {"areal_density_kg_m2=", "thickness_m="})

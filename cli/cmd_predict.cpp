@@ -76,7 +76,9 @@ int run(const std::vector<std::string>& argv)
     progress.finish(to_string(r.status.outcome), r.status.converged());
     if (!check_drape_result(r, setup)) return 4;
     if (json) {
-        std::cout << dump_json(cloth::drape_summary_json(r, setup, ro.integrator)) << "\n";
+        nlohmann::json j = cloth::drape_summary_json(r, setup, ro.integrator);
+        j["bending_correction"] = preset.model.bending_correction; // as simulate's summary
+        std::cout << dump_json(j) << "\n";
     } else {
         std::printf("set-up             %.0f / %.0f mm (grid %d, seed %llu)\n", setup.sample_diameter * 1e3, setup.disc_diameter * 1e3,
                     setup.grid, static_cast<unsigned long long>(setup.seed));

@@ -42,6 +42,7 @@ int run(const std::vector<std::string>& argv)
     if (preset.is_seed()) throw UsageError("sensitivity needs a drapekit-fabric (continuum) preset, not seed-19");
     const cloth::FabricParams* base = &preset.params;
     estimate::SensitivityOptions o;
+    o.model = preset.model;
     cloth::DrapeSetup defaults;
     defaults.grid = 25;
     o.setup = parse_setup(a, defaults);

@@ -55,6 +55,9 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
                         a log or pipe plain lines)
   --disc-grip           the specimen cannot slide on the disc top (large static friction)
   --vertex-contact-only contact at mesh vertices only (the seed's): coarse elements cut the pedestal rim
+  --bending-correction  the grid's bending stencils with their fourth-order correction (a fold crest one
+                        cell in radius keeps its bending energy; docs/model-discrepancy.md section 18);
+                        on too when the preset says model.bending_correction
   --self-collision      keep the cloth from passing through itself (a barrier one fabric thickness
                         wide; off by default: a drapemeter's folds stay open). The summary counts the
                         rest state's self-intersections either way
@@ -68,7 +71,8 @@ int run(const std::vector<std::string>& argv)
     Args a(argv,
            fabric_flags() + setup_value_flags(kAllSetup) +
                std::set<std::string>{"--integrator", "--dt", "--tolerance", "--max-time", "--out", "--max-iterations", "--sensitivity"},
-           setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet", "--trace", "--vertex-contact-only", "--self-collision"});
+           setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet", "--trace", "--vertex-contact-only", "--self-collision",
+                                                                 "--bending-correction"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     fabric::FabricPreset preset = load_fabric_flags(a);
     cloth::DrapeSetup defaults;
@@ -109,6 +113,10 @@ int run(const std::vector<std::string>& argv)
     ro.trace = a.has("--trace");
     preset.model.edge_contact = !a.has("--vertex-contact-only");
     preset.model.self_collision = a.has("--self-collision");
+    if (a.has("--bending-correction")) {
+        if (preset.seed) throw UsageError("--bending-correction: a seed-19 preset has grid springs, no bending stencils to correct");
+        preset.model.bending_correction = true;
+    }
     Progress progress("simulate", quiet);
     if (!quiet) ro.progress = progress.solver_callback(ro);
     cloth::single_threaded_blas(); // the same rounding as the widget, predict and garment: the same rest state
@@ -118,6 +126,7 @@ int run(const std::vector<std::string>& argv)
     auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
     const auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // the mesh topology
     summary["self_collision"] = preset.model.self_collision;
+    summary["bending_correction"] = preset.model.bending_correction;
     summary["self_intersections"] = cloth::self_intersections(r.x, sys->mesh().F).pairs;
     std::vector<cloth::DrapeMetricSensitivity> sens;
     if (!sens_params.empty() && r.status.converged()) {

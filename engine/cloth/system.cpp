@@ -487,9 +487,10 @@ double ClothSystem::potential_energy(const Positions& X) const
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        const double s2 = s.squaredNorm();
-        const double base = rho2 > 0 ? (std::sqrt(1.0 + rho2 * s2) - 1.0) / rho2 : 0.5 * s2;
-        e += b.k * (base + 0.25 * beta * s2 * s2);
+        // The material's law g of the corrected squared curvature (BendStencil::quartic).
+        const double s2 = s.squaredNorm(), sig = s2 * (1.0 + 0.5 * b.quartic * s2);
+        const double base = rho2 > 0 ? (std::sqrt(1.0 + rho2 * sig) - 1.0) / rho2 : 0.5 * sig;
+        e += b.k * (base + 0.25 * beta * sig * sig);
     }
     for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
     for (const auto& a : m_model.anchors) {
@@ -538,8 +539,8 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        const double s2 = s.squaredNorm();
-        const double c = b.k * ((rho2 > 0 ? 1.0 / std::sqrt(1.0 + rho2 * s2) : 1.0) + beta * s2);
+        const double s2 = s.squaredNorm(), sig = s2 * (1.0 + 0.5 * b.quartic * s2);
+        const double c = b.k * ((rho2 > 0 ? 1.0 / std::sqrt(1.0 + rho2 * sig) : 1.0) + beta * sig) * (1.0 + b.quartic * s2);
         for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (c * b.w[a] * s).transpose();
     }
     for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();
@@ -765,16 +766,22 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
     const double beta = m.bend_stiffening, rho2 = m.bend_softening;
     for (std::size_t s = 0; s < m.bends.size(); ++s) {
         const auto& b = m.bends[s];
-        // Energy k g(|d|^2) with g = (sqrt(1 + rho2 s) - 1)/rho2 + beta s^2/4 (g = s/2 when
-        // linear); force coefficient c(s) = 2 g'(s) = 1/q + beta s, q = sqrt(1 + rho2 s).
-        // Hessian in d: k (c I + 2 c'(s) d d^T) = k ((1/q + beta s) I + (2 beta - rho2/q^3) d d^T):
-        // positive definite (1/q^3 + 3 beta s along d). Vertex blocks are w_p w_q times it.
+        // Energy k g(sig) with g = (sqrt(1 + rho2 sig) - 1)/rho2 + beta sig^2/4 (g = sig/2
+        // when linear) of the corrected squared curvature sig = s (1 + quartic s / 2), s =
+        // |d|^2 (BendStencil::quartic; sig = s without it). Force coefficient c(s) = 2 g'(sig)
+        // sig'(s) = (1/q + beta sig)(1 + quartic s), q = sqrt(1 + rho2 sig); Hessian in d:
+        // k (c I + 2 c'(s) d d^T), c' = 2 g''(sig) sig'^2 + 2 g'(sig) quartic with 2 g'' =
+        // beta - rho2 / (2 q^3). Without the correction: k ((1/q + beta s) I + (2 beta -
+        // rho2/q^3) d d^T), positive definite (1/q^3 + 3 beta s along d). Vertex blocks are
+        // w_p w_q times it.
         Eigen::Matrix3d Kd = (b.k + damping_scale * b.d) * I;
-        if (beta > 0 || rho2 > 0) {
+        if (beta > 0 || rho2 > 0 || b.quartic > 0) {
             Vec3 d = Vec3::Zero();
             for (int a = 0; a < b.n; ++a) d += b.w[a] * X.row(b.v[a]).transpose();
-            const double s2 = d.squaredNorm(), q = std::sqrt(1.0 + rho2 * s2);
-            Kd += b.k * ((1.0 / q - 1.0 + beta * s2) * I + (2.0 * beta - rho2 / (q * q * q)) * d * d.transpose());
+            const double s2 = d.squaredNorm(), ds = 1.0 + b.quartic * s2, sig = s2 * (1.0 + 0.5 * b.quartic * s2);
+            const double q = std::sqrt(1.0 + rho2 * sig), g1 = 1.0 / q + beta * sig, g2 = beta - rho2 / (2 * q * q * q);
+            const double c = g1 * ds, c1 = g2 * ds * ds + g1 * b.quartic;
+            Kd += b.k * ((c - 1.0) * I + 2.0 * c1 * d * d.transpose());
         }
         for (int p = 0; p < b.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(b.v[p])], b.w[p] * b.w[p] * Kd);
         std::size_t t = m_bend_offset[s];

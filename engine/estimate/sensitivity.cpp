@@ -51,7 +51,7 @@ std::vector<SensitivityRow> sensitivity_study(const cloth::FabricParams& base, c
             p[r.param] = r.value;
             cloth::RestOptions ro;
             ro.cancel = opt.cancel;
-            const cloth::DrapeResult d = cloth::simulate_drape(p, opt.setup, ro);
+            const cloth::DrapeResult d = cloth::simulate_drape(p, opt.setup, ro, opt.model);
             r.drape_coefficient_percent = d.metrics.drape_coefficient_percent;
             r.node_count = d.metrics.node_count;
             r.hem_min_z = d.hem.min_z;

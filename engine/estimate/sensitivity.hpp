@@ -20,6 +20,7 @@ struct SensitivityOptions {
     double span_decades = 1.0;    ///< log parameters vary by 10^(+-span); linear ones by +-50 % of the range
     int harmonics = 8;
     int threads = 2;
+    cloth::ModelOptions model;    ///< engine options of every drape (the preset's model)
     std::function<void(int done, int total)> progress;
     const std::atomic<bool>* cancel = nullptr;
     SensitivityOptions() { setup.grid = 25; }

@@ -234,6 +234,13 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
             } else if (b != "none")
                 throw ParameterError(where + ": field 'model.buckling' = \"" + b + "\" must be \"euler\" or \"none\"");
         }
+        // Absent in presets written before 2026-11-30: they were made without it.
+        if (m.contains("bending_correction")) {
+            if (!m["bending_correction"].is_boolean())
+                throw ParameterError(where + ": field 'model.bending_correction' = " + describe_json(m["bending_correction"]) +
+                                     " must be true or false");
+            out.model.bending_correction = m["bending_correction"].get<bool>();
+        }
         if (m.contains("contact_depth_m")) {
             if (!m["contact_depth_m"].is_number() || !(m["contact_depth_m"].get<double>() > 0) ||
                 !(m["contact_depth_m"].get<double>() < 0.01))
@@ -262,7 +269,8 @@ json fabric_to_json(const FabricPreset& preset)
         j["parameters"] = params;
         j["model"] = {{"bending", bending_name(preset.model.bending)},
                       {"contact_depth_m", preset.model.contact_depth},
-                      {"edge_contact", preset.model.edge_contact}};
+                      {"edge_contact", preset.model.edge_contact},
+                      {"bending_correction", preset.model.bending_correction}};
     }
     if (!preset.composition.empty()) j["composition"] = preset.composition;
     if (!preset.source.empty()) j["source"] = preset.source;

@@ -4,9 +4,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash cmake/setup-deps.sh
+# Build jobs: the processors this process may use. GNU nproc also honours
+# OMP_NUM_THREADS, which the tests below set to 1 (the sanitizer build ran on one
+# core in CI for that reason), so it is asked without it, once.
+jobs=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
 WERROR=OFF; [ "${CI:-}" = "true" ] && WERROR=ON
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DDRAPE_WERROR=$WERROR >/dev/null
-cmake --build build -j"$(nproc)"
+cmake --build build -j"$jobs"
 # Each test is one process; CHOLMOD's OpenMP threads only pay on large solves.
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}
 status=0
@@ -18,7 +22,7 @@ fi
 # The engine's unit tests again under the address and undefined-behaviour sanitizers.
 if [ "${DRAPE_SKIP_SANITIZE:-}" != "1" ]; then
   cmake --preset sanitize >/dev/null
-  cmake --build --preset sanitize -j"$(nproc)"
+  cmake --build --preset sanitize -j"$jobs"
   ASAN_OPTIONS=detect_leaks=0 ctest --preset sanitize -j2 || status=$?
 fi
 exit $status

@@ -80,6 +80,34 @@ void ClothSystem::set_mass(int vertex, double mass)
 
 namespace {
 
+/// The bending law of one stencil at s2 = |d|^2, d = sum w_a x_a: energy k g(sig) with
+/// g = (sqrt(1 + rho2 sig) - 1) / rho2 + beta sig^2 / 4 (g = sig / 2 + beta sig^2 / 4
+/// without softening) of the corrected squared curvature sig = s2 (1 + quartic s2 / 2)
+/// (ClothModel::bend_stiffening = beta, bend_softening = rho2, BendStencil::quartic;
+/// sig = s2 without the correction). The force is -k g1 ds d; the Hessian in d is
+/// k (c I + 2 c' d d^T) with c = g1 ds and c' = g2 ds^2 + g1 quartic. Without the
+/// correction that is k ((1/q + beta s2) I + (2 beta - rho2/q^3) d d^T), positive
+/// definite (1/q^3 + 3 beta s2 along d). The energy, the forces and the Hessian
+/// assembler all evaluate the law here.
+struct BendLaw {
+    double g;  ///< g(sig): the energy over k
+    double g1; ///< 2 g'(sig) = 1/q + beta sig, q = sqrt(1 + rho2 sig)
+    double g2; ///< 2 g''(sig) = beta - rho2 / (2 q^3)
+    double ds; ///< d sig / d s2 = 1 + quartic s2
+};
+
+BendLaw bend_law(double s2, double quartic, double beta, double rho2)
+{
+    const double sig = s2 * (1.0 + 0.5 * quartic * s2);
+    const double q = rho2 > 0 ? std::sqrt(1.0 + rho2 * sig) : 1.0;
+    BendLaw l;
+    l.g = (rho2 > 0 ? (q - 1.0) / rho2 : 0.5 * sig) + 0.25 * beta * sig * sig;
+    l.g1 = 1.0 / q + beta * sig;
+    l.g2 = beta - rho2 / (2 * q * q * q);
+    l.ds = 1.0 + quartic * s2;
+    return l;
+}
+
 /// One edge in contact at an interior point: p(t) = (1 - t) x_a + t x_b is the
 /// point of the edge deepest in the offset surface (phi(p(t)) minimal in t).
 struct EdgeContact {
@@ -487,10 +515,7 @@ double ClothSystem::potential_energy(const Positions& X) const
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        // The material's law g of the corrected squared curvature (BendStencil::quartic).
-        const double s2 = s.squaredNorm(), sig = s2 * (1.0 + 0.5 * b.quartic * s2);
-        const double base = rho2 > 0 ? (std::sqrt(1.0 + rho2 * sig) - 1.0) / rho2 : 0.5 * sig;
-        e += b.k * (base + 0.25 * beta * sig * sig);
+        e += b.k * bend_law(s.squaredNorm(), b.quartic, beta, rho2).g;
     }
     for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
     for (const auto& a : m_model.anchors) {
@@ -539,8 +564,8 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        const double s2 = s.squaredNorm(), sig = s2 * (1.0 + 0.5 * b.quartic * s2);
-        const double c = b.k * ((rho2 > 0 ? 1.0 / std::sqrt(1.0 + rho2 * sig) : 1.0) + beta * sig) * (1.0 + b.quartic * s2);
+        const BendLaw law = bend_law(s.squaredNorm(), b.quartic, beta, rho2);
+        const double c = b.k * law.g1 * law.ds;
         for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (c * b.w[a] * s).transpose();
     }
     for (int i = 0; i < X.rows(); ++i) f.row(i) += m_model.mass(i) * m_model.gravity.transpose();
@@ -766,21 +791,13 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
     const double beta = m.bend_stiffening, rho2 = m.bend_softening;
     for (std::size_t s = 0; s < m.bends.size(); ++s) {
         const auto& b = m.bends[s];
-        // Energy k g(sig) with g = (sqrt(1 + rho2 sig) - 1)/rho2 + beta sig^2/4 (g = sig/2
-        // when linear) of the corrected squared curvature sig = s (1 + quartic s / 2), s =
-        // |d|^2 (BendStencil::quartic; sig = s without it). Force coefficient c(s) = 2 g'(sig)
-        // sig'(s) = (1/q + beta sig)(1 + quartic s), q = sqrt(1 + rho2 sig); Hessian in d:
-        // k (c I + 2 c'(s) d d^T), c' = 2 g''(sig) sig'^2 + 2 g'(sig) quartic with 2 g'' =
-        // beta - rho2 / (2 q^3). Without the correction: k ((1/q + beta s) I + (2 beta -
-        // rho2/q^3) d d^T), positive definite (1/q^3 + 3 beta s along d). Vertex blocks are
-        // w_p w_q times it.
+        // The Hessian in d of bend_law's energy; vertex blocks are w_p w_q times it.
         Eigen::Matrix3d Kd = (b.k + damping_scale * b.d) * I;
         if (beta > 0 || rho2 > 0 || b.quartic > 0) {
             Vec3 d = Vec3::Zero();
             for (int a = 0; a < b.n; ++a) d += b.w[a] * X.row(b.v[a]).transpose();
-            const double s2 = d.squaredNorm(), ds = 1.0 + b.quartic * s2, sig = s2 * (1.0 + 0.5 * b.quartic * s2);
-            const double q = std::sqrt(1.0 + rho2 * sig), g1 = 1.0 / q + beta * sig, g2 = beta - rho2 / (2 * q * q * q);
-            const double c = g1 * ds, c1 = g2 * ds * ds + g1 * b.quartic;
+            const BendLaw law = bend_law(d.squaredNorm(), b.quartic, beta, rho2);
+            const double c = law.g1 * law.ds, c1 = law.g2 * law.ds * law.ds + law.g1 * b.quartic;
             Kd += b.k * ((c - 1.0) * I + 2.0 * c1 * d * d.transpose());
         }
         for (int p = 0; p < b.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(b.v[p])], b.w[p] * b.w[p] * Kd);

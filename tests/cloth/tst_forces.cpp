@@ -76,7 +76,8 @@ private slots:
         QTest::newRow("grid, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false;
         QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << 0.03 << false;
         // The stencils' fourth-order correction (30 mm cells: 300 mm^2 per stencil),
-        // alone, with the material's softening and with its stiffening.
+        // alone, with the material's softening, with its stiffening and with the
+        // compression limit.
         QTest::newRow("grid, crest-corrected bending") << false << 0.0 << 0.0 << 0.0 << true;
         QTest::newRow("grid, crest-corrected and softening") << false << 0.0 << 0.02 << 0.0 << true;
         QTest::newRow("grid, crest-corrected and stiffening") << false << 0.02 << 0.0 << 0.0 << true;
@@ -282,10 +283,10 @@ private slots:
 
     /// A fold crest about one cell in radius (grid 41 on 300 mm: 7.5 mm cells; a
     /// cylinder of radius 8 mm, the crests of the cotton starter at grid 81): the
-    /// plain second differences store 14 % too little bending energy, the corrected
-    /// stencils (ModelOptions::bending_correction) within 5 % along either grid
-    /// direction, and closer than the plain ones at 45 degrees; both converge to
-    /// the continuum under refinement (grid 81), the corrected ones faster.
+    /// plain second differences store 14 % too little bending energy along the grid,
+    /// the corrected stencils (ModelOptions::bending_correction) within 5 %; both
+    /// converge to the continuum under refinement (grid 81), the corrected ones at
+    /// fourth order - along the grid, and the twist (cell) stencils at 45 degrees.
     void bending_correction_keeps_a_sharp_crest()
     {
         FabricParams p;

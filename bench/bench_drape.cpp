@@ -6,6 +6,12 @@
 // beside every row (the machine is shared).
 //
 //   build/bin/bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]
+//   build/bin/bench_drape --starters [--grids 41,61,81,101] [--plain]
+//
+// --starters (issue 14): D, folds, wall time and Newton iterations of every
+// starter fabric draped from flat (300 / 150 mm, seed 1, its own model options;
+// --plain: without the crest-corrected bending stencils) at each grid, one
+// drape at a time, with the spread of D and of the fold count over the grids.
 #include "engine/cloth/drape.hpp"
 #include "engine/fabric/seed_format.hpp"
 #include "engine/library/starter.hpp"
@@ -56,8 +62,8 @@ Row in_child(F fn)
     }
     close(fd[1]);
     Row r;
-    long ints[4];
-    double dbl[2];
+    long ints[4] = {0, 0, 0, 0};
+    double dbl[2] = {0, 0};
     if (read(fd[0], &r.wall, sizeof(double)) <= 0 || read(fd[0], ints, sizeof ints) <= 0 || read(fd[0], dbl, sizeof dbl) <= 0 ||
         read(fd[0], r.status, sizeof r.status) <= 0)
         std::strcpy(r.status, "crashed");
@@ -100,19 +106,88 @@ void print(const std::string& name, const Row& r)
 
 } // namespace
 
+/// The starters under refinement: one row per starter, one column per grid.
+int starters_table(const std::vector<int>& grids, bool plain)
+{
+    std::printf("starters draped from flat, 300 / 150 mm, seed 1%s; D [%%] (folds), wall [s], Newton iterations\n\n",
+                plain ? ", plain bending stencils (--plain)" : ", the presets' own model options");
+    std::printf("| starter |");
+    for (int g : grids) std::printf(" grid %d |", g);
+    std::printf(" spread of D | folds | load avg |\n|---|");
+    for (std::size_t i = 0; i < grids.size(); ++i) std::printf("---|");
+    std::printf("---|---|---|\n");
+    for (const auto& st : drape::library::starters()) {
+        drape::fabric::FabricPreset p = st.preset;
+        if (plain) p.model.bending_correction = false;
+        std::printf("| %s |", st.short_name.c_str());
+        std::fflush(stdout);
+        double lo = 1e9, hi = -1e9;
+        int nlo = 1000, nhi = -1;
+        for (int g : grids) {
+            DrapeSetup setup;
+            setup.sample_diameter = 0.30;
+            setup.disc_diameter = 0.15;
+            setup.grid = g;
+            const Row r = in_child([&] { // `drape simulate`'s budget: 1,000 Newton iterations per level
+                return to_row(simulate_drape(p.material(), setup, {}, p.model), 0);
+            });
+            std::printf(" %.2f (%d), %.1f s, %ld%s |", r.dc, r.nodes, r.wall, r.iters,
+                        std::strcmp(r.status, "converged") ? (std::string(", ") + r.status).c_str() : "");
+            std::fflush(stdout);
+            if (!std::strcmp(r.status, "crashed")) continue;
+            lo = std::min(lo, r.dc);
+            hi = std::max(hi, r.dc);
+            nlo = std::min(nlo, r.nodes);
+            nhi = std::max(nhi, r.nodes);
+        }
+        double load[1] = {0};
+        if (getloadavg(load, 1) < 1) load[0] = -1;
+        std::printf(" %.2f | %d..%d | %.2f |\n", hi - lo, nlo, nhi, load[0]);
+    }
+    return 0;
+}
+
 int main(int argc, char** argv)
 {
     double rk4_limit = 900, tol = 1e-6;
-    bool quick = false, static_only = false;
+    bool quick = false, static_only = false, starters = false, plain = false, grids_given = false;
+    std::vector<int> grids = {41, 61, 81, 101};
     for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--quick")) quick = true;
+        if (!std::strcmp(argv[i], "--starters")) starters = true;
+        else if (!std::strcmp(argv[i], "--plain")) plain = true;
+        else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) {
+            grids_given = true;
+            grids.clear();
+            for (const char* c = argv[++i]; *c;) {
+                char* end = nullptr;
+                const long g = std::strtol(c, &end, 10);
+                if (end == c || g < 5 || g > 401) {
+                    std::fprintf(stderr, "bench_drape: --grids: '%s' is not a list of grids in [5, 401]\n", argv[i]);
+                    return 2;
+                }
+                grids.push_back(static_cast<int>(g));
+                c = *end == ',' ? end + 1 : end;
+            }
+        } else if (!std::strcmp(argv[i], "--quick")) quick = true;
         else if (!std::strcmp(argv[i], "--static-only")) static_only = true;
         else if (!std::strcmp(argv[i], "--rk4-wall-limit") && i + 1 < argc) rk4_limit = std::atof(argv[++i]);
         else if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc) tol = std::atof(argv[++i]);
         else {
-            std::fprintf(stderr, "usage: bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]\n");
+            std::fprintf(stderr, "usage: bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]\n"
+                                 "       bench_drape --starters [--grids 41,61,81,101] [--plain]\n");
             return 2;
         }
+    }
+    if (starters) {
+        if (grids.empty()) {
+            std::fprintf(stderr, "bench_drape: --grids: no grid\n");
+            return 2;
+        }
+        return starters_table(grids, plain);
+    }
+    if (plain || grids_given) {
+        std::fprintf(stderr, "bench_drape: --grids and --plain go with --starters\n");
+        return 2;
     }
     std::printf("tolerance: relative force residual %.0e; RK4 stops at %.0f s wall if not at rest\n\n", tol, rk4_limit);
     std::printf("| case                               | vertices | wall [s] | iters/steps | force evals | residual | D [%%] | nodes | peak [MB] | status | load avg |\n");
@@ -179,7 +254,7 @@ int main(int argc, char** argv)
         std::printf("\n");
     }
     if (quick) return 0;
-    // 2. Issue 13's case: the cotton starter preset (data/library/cotton-plain-weave.json)
+    // 2. Issue 13's case: the cotton starter's parameters (data/library/cotton-plain-weave.json) with the plain stencils (as issue 13 measured it)
     // on a 300 mm specimen over a 150 mm disc, grid 100.
     {
         DrapeSetup setup;
@@ -190,8 +265,8 @@ int main(int argc, char** argv)
         q[Param::BendWeft] *= 1.1;
         Row cold, warm;
         static_cases(p, q, setup, cold, warm);
-        print("cotton 100x100, static, cold", cold);
-        print("cotton 100x100, static, warm (+10 % bending)", warm);
+        print("cotton 100x100, plain stencils, cold", cold);
+        print("cotton 100x100, plain stencils, warm (+10 %)", warm);
         std::printf("\n");
     }
     // 3. A 100 x 100 grid disc (about 7,700 particles) of a mid-weight fabric.

@@ -8,9 +8,9 @@
 // other work slows every row alike.
 //
 //   build/bin/bench_fit [RECORD_DIR ...] [--grid N] [--methods lm,nlopt]
-//                       [--set KEY=VALUE] [--branch measured|random] [--cores 1|2] [--trace]
+//                       [--set KEY=VALUE] [--branch measured|random] [--cores 1|2] [--plain] [--trace]
 // RECORD_DIR defaults to examples/DL-A04 (a copy of a set-a record). The
-// defaults are `drape fit`'s: grid 41, measured branch, buckling_length_m of
+// defaults are `drape fit`'s: grid 41, measured branch, corrected bending stencils (--plain: the plain ones), buckling_length_m of
 // the fit's start (see engine/estimate/fit.hpp FitOptions).
 #include "engine/cloth/params.hpp"
 #include "engine/estimate/fit.hpp"
@@ -44,6 +44,7 @@ int main(int argc, char** argv)
     bool trace = false;
     std::vector<estimate::FitMethod> methods{estimate::FitMethod::Sensitivity, estimate::FitMethod::Nlopt};
     estimate::FitOptions base;
+    base.model_options.bending_correction = true; // `drape fit`'s default (--plain: the plain stencils)
     cloth::FabricParams start = estimate::default_fit_start();
     try {
         for (int i = 1; i < argc; ++i) {
@@ -52,6 +53,7 @@ int main(int argc, char** argv)
             if (a == "--grid" && more) grid = std::atoi(argv[++i]);
             else if (a == "--cores" && more) cores = std::atoi(argv[++i]);
             else if (a == "--trace") trace = true;
+            else if (a == "--plain") base.model_options.bending_correction = false;
             else if (a == "--branch" && more) base.branch = estimate::parse_fold_branch(argv[++i]);
             else if (a == "--methods" && more) {
                 methods.clear();
@@ -66,13 +68,15 @@ int main(int argc, char** argv)
             } else if (a[0] != '-') dirs.push_back(a);
             else {
                 std::fprintf(stderr, "usage: bench_fit [RECORD_DIR ...] [--grid N] [--methods lm,nlopt] [--set KEY=VALUE] "
-                                     "[--branch measured|random] [--cores 1|2] [--trace]\n");
+                                     "[--branch measured|random] [--cores 1|2] [--plain] [--trace]\n");
                 return 2;
             }
         }
         if (dirs.empty()) dirs.push_back(DRAPE_SOURCE_DIR "/examples/DL-A04");
-        std::printf("bench_fit: grid %d, model baseline, branch %s, buckling_length_m %.4g, %d core(s), default budgets, seed 1\n",
-                    grid, estimate::to_string(base.branch).c_str(), start[cloth::Param::BucklingLength], cores);
+        std::printf("bench_fit: grid %d, model baseline, %s bending stencils, branch %s, buckling_length_m %.4g, %d core(s), default "
+                    "budgets, seed 1\n",
+                    grid, base.model_options.bending_correction ? "corrected" : "plain", estimate::to_string(base.branch).c_str(),
+                    start[cloth::Param::BucklingLength], cores);
         std::printf("load average before: %s\n\n", loadavg().c_str());
         std::printf("| record | method | wall [s] | drapes | factorisations | back-substitutions | evaluations | chi2 / dof | "
                     "D err fitted | nodes err fitted | D err from flat | nodes err from flat | warp / weft bending | 60 s |\n");

@@ -49,10 +49,11 @@ as not identifiable.
                       or a drape that leans (residual candidate profiler_tilt)
   --vertex-contact-only  contact at mesh vertices only (the seed's; coarse elements then cut the
                       pedestal rim): reproduces fits made before edge contact
-  --bending-correction  the grid's bending stencils with their fourth-order correction (a fold
-                      crest one cell in radius keeps its bending energy; the preset then carries
-                      model.bending_correction; docs/model-discrepancy.md section 18); on too
-                      when the --start preset says model.bending_correction
+  --plain-bending     the grid's plain bending stencils (fits made before 2026-11-30). By
+                      default the stencils carry their fourth-order correction (a fold crest one
+                      cell in radius keeps its bending energy) and the preset says
+                      model.bending_correction (docs/model-discrepancy.md sections 18-19);
+                      --bending-correction (the default) is still accepted
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 41: 7.5 mm
@@ -126,7 +127,7 @@ int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
-            "--bending-correction"});
+            "--bending-correction", "--plain-bending"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
@@ -171,12 +172,14 @@ int run(const std::vector<std::string>& argv)
     if (fo.recentre_contours && fo.untilt_contours)
         throw UsageError("--recentre-contours and --untilt-contours are two measurement models of the profiler's axis: choose one");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
-    fo.model_options.bending_correction = a.has("--bending-correction");
+    // The corrected stencils by default: with them the fitted presets carry over
+    // between meshes and drape from flat closer to their records (section 19).
+    if (a.has("--bending-correction") && a.has("--plain-bending"))
+        throw UsageError("--bending-correction and --plain-bending: choose one");
+    fo.model_options.bending_correction = !a.has("--plain-bending");
     if (const auto s = a.get("--start")) {
         const fabric::FabricPreset start = fabric::load_fabric(*s);
         fo.start = start.params; // a seed-19 preset starts from its continuum equivalent
-        // A corrected preset refits corrected (a seed-19 preset's model is the default).
-        if (start.model.bending_correction) fo.model_options.bending_correction = true;
     }
     for (const auto& kv : a.get_all("--set"))
         for (const char* declared : {"areal_density_kg_m2=", "thickness_m="})

@@ -56,8 +56,11 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --disc-grip           the specimen cannot slide on the disc top (large static friction)
   --vertex-contact-only contact at mesh vertices only (the seed's): coarse elements cut the pedestal rim
   --bending-correction  the grid's bending stencils with their fourth-order correction (a fold crest one
-                        cell in radius keeps its bending energy; docs/model-discrepancy.md section 18);
-                        on too when the preset says model.bending_correction
+                        cell in radius keeps its bending energy; docs/model-discrepancy.md sections 18-19);
+                        on too when the preset says model.bending_correction (the starters and the
+                        fits made since 2026-11-30 do)
+  --plain-bending       the plain stencils even where the preset says model.bending_correction (to
+                        compare; a preset drapes as it was fitted only with its own setting)
   --self-collision      keep the cloth from passing through itself (a barrier one fabric thickness
                         wide; off by default: a drapemeter's folds stay open). The summary counts the
                         rest state's self-intersections either way
@@ -72,7 +75,7 @@ int run(const std::vector<std::string>& argv)
            fabric_flags() + setup_value_flags(kAllSetup) +
                std::set<std::string>{"--integrator", "--dt", "--tolerance", "--max-time", "--out", "--max-iterations", "--sensitivity"},
            setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet", "--trace", "--vertex-contact-only", "--self-collision",
-                                                                 "--bending-correction"});
+                                                                 "--bending-correction", "--plain-bending"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     fabric::FabricPreset preset = load_fabric_flags(a);
     cloth::DrapeSetup defaults;
@@ -115,8 +118,10 @@ int run(const std::vector<std::string>& argv)
     preset.model.self_collision = a.has("--self-collision");
     if (a.has("--bending-correction")) {
         if (preset.seed) throw UsageError("--bending-correction: a seed-19 preset has grid springs, no bending stencils to correct");
+        if (a.has("--plain-bending")) throw UsageError("--bending-correction and --plain-bending: choose one");
         preset.model.bending_correction = true;
     }
+    if (a.has("--plain-bending")) preset.model.bending_correction = false;
     Progress progress("simulate", quiet);
     if (!quiet) ro.progress = progress.solver_callback(ro);
     cloth::single_threaded_blas(); // the same rounding as the widget, predict and garment: the same rest state

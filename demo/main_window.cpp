@@ -418,8 +418,10 @@ void MainWindow::fitFromRecord()
     m_cancel->setEnabled(true);
     const bool started = m_fitJob.start(tr("fit"), [records, result, where](widget::JobContext& ctx) {
         estimate::FitOptions o;
-        // `drape fit`'s defaults: grid 41 and the typical compression limit held.
+        // `drape fit`'s defaults: grid 41, the typical compression limit held and
+        // the crest-corrected bending stencils.
         o.grid = 41;
+        o.model_options.bending_correction = true;
         o.start = estimate::default_fit_start();
         o.cancel = ctx.cancelFlag();
         o.progress = [&ctx](const estimate::FitProgress& p) {

@@ -175,6 +175,8 @@ case_ "simulate --dt nan" 2 "--dt" -- "$drape" simulate --fabric seed-table1 --d
 case_ "simulate --tolerance 0x1p-3" 2 "--tolerance" -- "$drape" simulate --fabric seed-table1 --tolerance 0x1p-3 --quiet
 case_ "simulate --grid 99999999999" 2 "--grid" -- "$drape" simulate --fabric seed-table1 --grid 99999999999 --quiet
 case_ "simulate seed-19 --bending-correction" 2 "no bending stencils" -- "$drape" simulate --fabric seed-table1 --bending-correction --quiet
+case_ "simulate --bending-correction --plain-bending" 2 "choose one" -- "$drape" simulate --fabric silk --bending-correction --plain-bending --quiet
+case_ "fit --bending-correction --plain-bending" 2 "choose one" -- "$drape" fit "$src_record" --out "$tmp/fit.json" --bending-correction --plain-bending --quiet
 case_ "simulate --grid 7.5" 2 "--grid" -- "$drape" simulate --fabric seed-table1 --grid 7.5 --quiet
 # The set-up flags are checked by cli/setup.cpp after parsing (exit 1, naming the quantity);
 # branch harden-setup makes them usage errors (exit 2).

@@ -291,9 +291,9 @@ void DrapeWorker::runStatic(long maxNewton)
         cloth::SolverStatus st;
         const bool fresh = pristine() && maxNewton < 0;
         if (fresh && m_spec->shape == Drape::Disc && m_spec->setup.grid > 40 && !m_spec->preset.is_seed()) {
-            // The drapemeter from its start, on a fine grid: the engine's own
-            // drape (a coarse grid first, then this one), exactly what
-            // `drape simulate` runs. Shown when it is done.
+            // The drapemeter from its start, on grid 41 or finer: the engine's
+            // own drape (finer than 41: grid 41 first, then this one), exactly
+            // what `drape simulate` runs. Shown when it is done.
             const cloth::DrapeResult r = cloth::simulate_drape(m_spec->preset.material(), m_spec->setup, opt, m_spec->preset.model);
             st = r.status;
             if (st.outcome != cloth::SolverStatus::Outcome::Cancelled) m_sys->x = r.x;

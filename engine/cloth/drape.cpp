@@ -242,7 +242,8 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
 DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt, const ModelOptions& mopt)
 {
     auto sys = make_drape_system(fabric, setup, mopt);
-    const bool continuation = ropt.integrator == Integrator::Static && !fabric.grid_springs && setup.grid > 40;
+    // The coarsest level is grid 41 (7.5 mm cells on 300 mm): see below.
+    const bool continuation = ropt.integrator == Integrator::Static && !fabric.grid_springs && setup.grid > 41;
     SolverStatus pre;
     if (continuation) {
         // Intermediate levels have an odd grid: a node then sits on the axis, the
@@ -251,18 +252,30 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         // energy depends weakly on that turn, and Newton drifts along it: cotton
         // starter at grid 100, the grid-50 level turned 18 degrees over 627
         // iterations, the grid-51 level took 96 (the whole drape 1,108 -> 500
-        // Newton iterations, D 58.254 -> 58.256 %). The coarsest level stays 25:
-        // it picks the fold branch (27 gave 7 folds instead of 8 on that case).
+        // Newton iterations, D 58.254 -> 58.256 %).
         //
-        // The levels are one nested set for every target, 25, 41, 81, 161 (the
-        // largest below the target): the fold branch is chosen on grid 25 and carried
-        // through the same levels whatever the target, so grids 61 and 81 show the
-        // branch grid 41 shows. With a level halfway to each target (61 -> 31) the
-        // cotton starter came out with 7 folds at grid 61 and 8 at 41 and 81
-        // (D 52.6 / 56.2 / 56.6 %), although the 8-fold state exists at 61 (56.1 %).
+        // The levels are one nested set for every target, 41, 81, 161, 321 (the
+        // largest below the target): the fold branch is chosen where a drape
+        // from flat at grid 41 chooses it and carried through the same levels
+        // whatever the target, so grids 61 and 81 show the branch grid 41 shows.
+        // With a level halfway to each target (61 -> 31) the cotton starter came
+        // out with 7 folds at grid 61 and 8 at 41 and 81. The coarsest level was
+        // 25 until 2026-11-30: a 12.5 mm mesh picked branches the finer meshes do
+        // not keep - the denim starter with the crest-corrected stencils came to
+        // rest at grid 25 and 41 in an uneven 6-fold state (D 72.7 % at 41) that
+        // relaxed to an even one at 61 (74.1 %), while the drape from flat at 41
+        // made 5 folds (70.1 %) of lower energy at 41 and at 61
+        // (docs/model-discrepancy.md section 19).
+        //
+        // The same levels on a prescribed fold branch (fold_mode n, what the fits
+        // drape on). Grid 25 kept a 5-fold lift of the DL-A09 fit's preset that
+        // grid 41 from flat loses (7 folds), but the set-a fits with grid 25 as
+        // the coarsest level on the branch starts (and 41 from random starts)
+        // were slower per drape (3.4 s against 1.8-2.3 s) and as good or worse
+        // on every count (section 19).
         DrapeSetup coarse = setup;
-        coarse.grid = 25;
-        for (int level = 41; level < setup.grid; level = 2 * level - 1) coarse.grid = level;
+        coarse.grid = 41;
+        for (int level = 81; level < setup.grid; level = 2 * level - 1) coarse.grid = level;
         RestOptions co = ropt;
         co.residual = std::max(ropt.residual, 1e-4); // the fine solve polishes
         const DrapeResult rc = simulate_drape(fabric, coarse, co, mopt);

@@ -158,7 +158,10 @@ struct FitOptions {
     bool untilt_contours = false;
     /// Engine options of every simulation. edge_contact = false reproduces the
     /// vertex-only contact of the seed (and of Drapekit before issue 7), whose
-    /// coarse elements cut the pedestal rim.
+    /// coarse elements cut the pedestal rim. The library's default is the
+    /// engine's (plain bending stencils, what the unit tests' synthetic records
+    /// and the blind suite at grid 25 are made with); `drape fit`, bench_fit and
+    /// the demo set bending_correction (docs/model-discrepancy.md section 19).
     cloth::ModelOptions model_options;
 };
 

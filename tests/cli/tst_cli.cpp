@@ -329,6 +329,27 @@ private slots:
         QVERIFY(std::isfinite(rec["chi2"].toDouble()));
     }
 
+    /// `drape fit` fits with the crest-corrected bending stencils by default and
+    /// the preset says so; --plain-bending fits and writes the plain ones
+    /// (docs/model-discrepancy.md section 19). A coarse, short fit: only the flag.
+    void fitBendingStencilsDefault()
+    {
+        QTemporaryDir tmp;
+        for (const bool plain : {false, true}) {
+            const QString preset = tmp.path() + (plain ? "/plain.json" : "/corrected.json");
+            QStringList args{"fit", DRAPE_SOURCE_DIR "/examples/DL-A04", "--out", preset, "--channels", "dc", "--grid", "9", "--seeds", "1",
+                             "--local", "2", "--refine-grid", "0", "--no-uncertainty", "--quiet"};
+            if (plain) args << "--plain-bending";
+            const Out o = run(args);
+            QVERIFY2(o.code == 0, qPrintable(o.err));
+            QFile f(preset);
+            QVERIFY(f.open(QIODevice::ReadOnly));
+            const QJsonObject model = QJsonDocument::fromJson(f.readAll()).object()["model"].toObject();
+            QVERIFY2(model.contains("bending_correction"), preset.toUtf8().constData());
+            QCOMPARE(model["bending_correction"].toBool(), !plain);
+        }
+    }
+
     /// A fit with nothing to fit in a record is refused before fitting, and
     /// nothing is written (it wrote a preset "fitted" to nothing).
     void fitWithoutUsableRecordIsRefused()

@@ -290,7 +290,7 @@ void DrapeWorker::runStatic(long maxNewton)
     try {
         cloth::SolverStatus st;
         const bool fresh = pristine() && maxNewton < 0;
-        if (fresh && m_spec->shape == Drape::Disc && m_spec->setup.grid > 40 && !m_spec->preset.is_seed()) {
+        if (fresh && m_spec->shape == Drape::Disc && m_spec->setup.grid >= cloth::kCoarsestLevel && !m_spec->preset.is_seed()) {
             // The drapemeter from its start, on grid 41 or finer: the engine's
             // own drape (finer than 41: grid 41 first, then this one), exactly
             // what `drape simulate` runs. Shown when it is done.

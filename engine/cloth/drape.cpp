@@ -77,9 +77,8 @@ void perturb(Positions& X, const DrapeSetup& setup)
         for (int i = 0; i < X.rows(); ++i) X(i, 2) += setup.perturbation * lift(i) / mx;
 }
 
-/// Interpolates positions of a coarse grid disc onto a finer one through their
-/// shared material coordinates (barycentric in the containing or nearest coarse
-/// triangle, extrapolating linearly at the hem).
+} // namespace
+
 Positions interpolate_positions(const ClothMesh& coarse, const Positions& xc, const ClothMesh& fine)
 {
     const double cell = std::max(coarse.grid.hu, coarse.grid.hv);
@@ -140,8 +139,6 @@ Positions interpolate_positions(const ClothMesh& coarse, const Positions& xc, co
     }
     return out;
 }
-
-} // namespace
 
 std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const DrapeSetup& setup, const ModelOptions& mopt)
 {
@@ -242,8 +239,7 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
 DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt, const ModelOptions& mopt)
 {
     auto sys = make_drape_system(fabric, setup, mopt);
-    // The coarsest level is grid 41 (7.5 mm cells on 300 mm): see below.
-    const bool continuation = ropt.integrator == Integrator::Static && !fabric.grid_springs && setup.grid > 41;
+    const bool continuation = ropt.integrator == Integrator::Static && !fabric.grid_springs && setup.grid > kCoarsestLevel;
     SolverStatus pre;
     if (continuation) {
         // Intermediate levels have an odd grid: a node then sits on the axis, the
@@ -274,8 +270,8 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         // were slower per drape (3.4 s against 1.8-2.3 s) and as good or worse
         // on every count (section 19).
         DrapeSetup coarse = setup;
-        coarse.grid = 41;
-        for (int level = 81; level < setup.grid; level = 2 * level - 1) coarse.grid = level;
+        coarse.grid = kCoarsestLevel;
+        for (int level = 2 * kCoarsestLevel - 1; level < setup.grid; level = 2 * level - 1) coarse.grid = level;
         RestOptions co = ropt;
         co.residual = std::max(ropt.residual, 1e-4); // the fine solve polishes
         const DrapeResult rc = simulate_drape(fabric, coarse, co, mopt);

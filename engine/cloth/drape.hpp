@@ -93,10 +93,21 @@ struct DrapeResult {
 /// Measures a draped system (shadow, hem, slices) through the shared metric code.
 DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const MetricOptions& mopt = {});
 
+/// The coarsest level of simulate_drape's continuation (7.5 mm cells on 300 mm):
+/// the grid where a drape from flat chooses its fold branch for every finer grid
+/// (docs/model-discrepancy.md section 19).
+inline constexpr int kCoarsestLevel = 41;
+
+/// Interpolates positions of a coarse grid disc onto a finer one through their
+/// shared material coordinates (barycentric in the containing or nearest coarse
+/// triangle, extrapolating linearly at the hem): how a rest state is carried to
+/// the next level of the continuation.
+Positions interpolate_positions(const ClothMesh& coarse, const Positions& xc, const ClothMesh& fine);
+
 /// Simulates a drape to rest and measures it. For the static solver with a
-/// grid finer than 41 this solves the largest of the levels 41, 81, 161, 321
-/// below it first and interpolates (continuation): the cold start stays fast,
-/// and every finer grid shows the fold branch grid 41 takes from flat.
+/// grid finer than kCoarsestLevel (41) this solves the largest of the levels 41,
+/// 81, 161, 321 below it first and interpolates (continuation): the cold start
+/// stays fast, and every finer grid shows the fold branch grid 41 takes from flat.
 DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt = {},
                            const ModelOptions& mopt = {});
 

@@ -6,12 +6,14 @@
 // beside every row (the machine is shared).
 //
 //   build/bin/bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]
-//   build/bin/bench_drape --starters [--grids 41,61,81,101] [--plain]
+//   build/bin/bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F]
 //
 // --starters (issue 14): D, folds, wall time and Newton iterations of every
 // starter fabric draped from flat (300 / 150 mm, seed 1, its own model options;
 // --plain: without the crest-corrected bending stencils) at each grid, one
-// drape at a time, with the spread of D and of the fold count over the grids.
+// drape at a time, with the spread of D and of the fold count over the grids;
+// laid as `drape simulate` lays them (FabricPreset::laying: the starters at
+// once; --laying F: first under F g, e.g. 0.4, the drape lab's).
 #include "engine/cloth/drape.hpp"
 #include "engine/fabric/seed_format.hpp"
 #include "engine/library/starter.hpp"
@@ -107,10 +109,10 @@ void print(const std::string& name, const Row& r)
 } // namespace
 
 /// The starters under refinement: one row per starter, one column per grid.
-int starters_table(const std::vector<int>& grids, bool plain)
+int starters_table(const std::vector<int>& grids, bool plain, double laying)
 {
-    std::printf("starters draped from flat, 300 / 150 mm, seed 1%s; D [%%] (folds), wall [s], Newton iterations\n\n",
-                plain ? ", plain bending stencils (--plain)" : ", the presets' own model options");
+    std::printf("starters draped from flat, 300 / 150 mm, seed 1, %s%s; D [%%] (folds), wall [s], Newton iterations\n\n",
+                laying > 0 ? ("laid under " + std::to_string(laying).substr(0, 4) + " g first").c_str() : "laid as each preset says", plain ? ", plain bending stencils (--plain)" : ", the presets' own model options");
     std::printf("| starter |");
     for (int g : grids) std::printf(" grid %d |", g);
     std::printf(" spread of D | folds | load avg |\n|---|");
@@ -128,6 +130,7 @@ int starters_table(const std::vector<int>& grids, bool plain)
             setup.sample_diameter = 0.30;
             setup.disc_diameter = 0.15;
             setup.grid = g;
+            setup.laying_load = laying > 0 ? laying : p.laying(); // `drape simulate`'s default
             const Row r = in_child([&] { // `drape simulate`'s budget: 1,000 Newton iterations per level
                 return to_row(simulate_drape(p.material(), setup, {}, p.model), 0);
             });
@@ -151,10 +154,19 @@ int main(int argc, char** argv)
 {
     double rk4_limit = 900, tol = 1e-6;
     bool quick = false, static_only = false, starters = false, plain = false, grids_given = false;
+    double laying = 0; // 0: each preset's own (FabricPreset::laying: a starter at once)
     std::vector<int> grids = {41, 61, 81, 101};
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--starters")) starters = true;
         else if (!std::strcmp(argv[i], "--plain")) plain = true;
+        else if (!std::strcmp(argv[i], "--laying") && i + 1 < argc) {
+            grids_given = true; // a --starters option
+            laying = std::atof(argv[++i]);
+            if (!(laying > 0 && laying <= 1)) {
+                std::fprintf(stderr, "bench_drape: --laying: '%s' is not a fraction of gravity in (0, 1]\n", argv[i]);
+                return 2;
+            }
+        }
         else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) {
             grids_given = true;
             grids.clear();
@@ -174,7 +186,7 @@ int main(int argc, char** argv)
         else if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc) tol = std::atof(argv[++i]);
         else {
             std::fprintf(stderr, "usage: bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]\n"
-                                 "       bench_drape --starters [--grids 41,61,81,101] [--plain]\n");
+                                 "       bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F]\n");
             return 2;
         }
     }
@@ -183,10 +195,10 @@ int main(int argc, char** argv)
             std::fprintf(stderr, "bench_drape: --grids: no grid\n");
             return 2;
         }
-        return starters_table(grids, plain);
+        return starters_table(grids, plain, laying);
     }
     if (plain || grids_given) {
-        std::fprintf(stderr, "bench_drape: --grids and --plain go with --starters\n");
+        std::fprintf(stderr, "bench_drape: --grids, --plain and --laying go with --starters\n");
         return 2;
     }
     std::printf("tolerance: relative force residual %.0e; RK4 stops at %.0f s wall if not at rest\n\n", tol, rk4_limit);

@@ -45,6 +45,7 @@ int main(int argc, char** argv)
     std::vector<estimate::FitMethod> methods{estimate::FitMethod::Sensitivity, estimate::FitMethod::Nlopt};
     estimate::FitOptions base;
     base.model_options.bending_correction = true; // `drape fit`'s default (--plain: the plain stencils)
+    base.laying_load = cloth::kLabLaying;          // `drape fit`'s default
     cloth::FabricParams start = estimate::default_fit_start();
     try {
         for (int i = 1; i < argc; ++i) {

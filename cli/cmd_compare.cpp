@@ -37,6 +37,8 @@ preset against records it was not fitted to, or to see what a model change does.
   --branch B            where the drapes start: random (default; the seeded mix of modes, as
                         `drape predict`) or measured (an n-fold lift, n = the record's node count,
                         as `drape fit` drapes)
+  --laying F            random branch: the first rest under the fraction F of gravity, then all of
+                        it (default: the preset's provenance.laying_load, as drape simulate; else 1)
   --disc-grip           the specimen cannot slide on the disc top (large static friction)
   --vertex-contact-only contact at mesh vertices only (the seed's; coarse elements cut the rim)
   --json                print the comparison as JSON on stdout
@@ -49,7 +51,7 @@ model (the fit's before its drape-to-drape calibration, so chi2 differs from a f
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed) + std::set<std::string>{"--seeds", "--branch"},
+    Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed | kLaying) + std::set<std::string>{"--seeds", "--branch"},
            setup_switches(kDiscGrip) + std::set<std::string>{"--json", "--quiet", "--vertex-contact-only"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const fabric::FabricPreset preset = load_fabric_flags(a);
@@ -59,6 +61,7 @@ int run(const std::vector<std::string>& argv)
     const int grid300 = a.get_int("--grid", 25, 9, 200);
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
+    const double laying = a.get_double_in("--laying", preset.laying(), 1e-3, 1.0);
     const bool json_out = a.has("--json"), quiet = a.has("--quiet") || json_out;
     estimate::FoldBranch branch = estimate::FoldBranch::Random;
     try {
@@ -85,6 +88,7 @@ int run(const std::vector<std::string>& argv)
         for (int s = 0; s < seeds; ++s) {
             cloth::DrapeSetup setup = m.setup(grid, seed0 + static_cast<std::uint64_t>(s));
             if (folds > 0) setup = cloth::on_fold_branch(setup, folds);
+            else setup.laying_load = laying; // laid as the lab lays it
             setup.disc_grip = a.has("--disc-grip");
             cloth::RestOptions ro;
             if (!quiet) std::fprintf(stderr, "%s: seed %d/%d (grid %d)...\n", m.id.c_str(), s + 1, seeds, grid);

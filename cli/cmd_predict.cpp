@@ -33,6 +33,10 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
                         diameter when the preset carries provenance, within 9..201, else 31)
   --seed K              perturbation seed (default 1)
   --folds N             start on an N-fold branch (a 5 mm N-fold lift; default: the seeded mix)
+  --laying F            how the specimen is laid: it first rests under the fraction F of gravity, then
+                        under all of it (default: the preset's provenance.laying_load, what its fit
+                        assumed of its records' lab - drape fit: 0.4 -, else 1 = the whole load at
+                        once; 1 with --folds)
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr)";
 
@@ -54,6 +58,7 @@ int run(const std::vector<std::string>& argv)
         preset.set_params(p);
     }
     cloth::DrapeSetup defaults;
+    defaults.laying_load = preset.laying(); // a fitted preset is laid as its records' lab laid them
     defaults.sample_diameter = a.get_length("--sample-diameter", defaults.sample_diameter);
     // Same mesh density as the fit (the fit's bias is then the same): the fit's
     // grid scaled with the diameter.

@@ -47,6 +47,10 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --seed K              perturbation seed (default 1)
   --folds N             start on an N-fold branch (an N-fold lift of 5 mm, N in 2..16; default: the
                         seeded mix of modes 2..16, 1 mm)
+  --laying F            how the specimen is laid: it first rests under the fraction F of gravity, then
+                        under all of it (default: the preset's provenance.laying_load, what its fit
+                        assumed of its records' lab - drape fit: 0.4 -, else 1 = the whole load at
+                        once; 1 with --folds)
   --perturbation L      largest lift of the flat start's perturbation (at most 50mm)
   --out DIR             write summary.json, rest.obj, slices.csv, outline.csv and rest.png (the rest
                         state seen from the front and from above)
@@ -80,6 +84,7 @@ int run(const std::vector<std::string>& argv)
     fabric::FabricPreset preset = load_fabric_flags(a);
     cloth::DrapeSetup defaults;
     defaults.grid = 60;
+    defaults.laying_load = preset.laying(); // a fitted preset is laid as its records' lab laid them
     const cloth::DrapeSetup setup = parse_setup(a, defaults);
     cloth::RestOptions ro;
     try {

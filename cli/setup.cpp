@@ -20,7 +20,7 @@ constexpr FlagName kFlags[] = {
     {kPedestalHeight, "--pedestal-height", false}, {kEdgeRadius, "--edge-radius", false},
     {kGrid, "--grid", false},                      {kSeed, "--seed", false},
     {kFolds, "--folds", false},                    {kPerturbation, "--perturbation", false},
-    {kDiscGrip, "--disc-grip", true},
+    {kDiscGrip, "--disc-grip", true},              {kLaying, "--laying", false},
 };
 } // namespace
 
@@ -57,6 +57,8 @@ cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
     if (a.has("--folds")) s = cloth::on_fold_branch(s, a.get_int("--folds", 0, 2, 16));
     s.perturbation = a.get_length("--perturbation", s.perturbation);
     if (a.has("--disc-grip")) s.disc_grip = true;
+    if (a.has("--folds")) s.laying_load = 1.0; // a prescribed branch starts under the whole load
+    s.laying_load = a.get_double_in("--laying", s.laying_load, 1e-3, 1.0);
     s.validate();
     return s;
 }

@@ -23,7 +23,8 @@ enum SetupFlag : unsigned {
     kFolds = 1u << 6,          ///< --folds N
     kPerturbation = 1u << 7,   ///< --perturbation L
     kDiscGrip = 1u << 8,       ///< --disc-grip (a switch)
-    kAllSetup = (1u << 9) - 1,
+    kLaying = 1u << 9,         ///< --laying F (fraction of gravity of the first rest; DrapeSetup::laying_load)
+    kAllSetup = (1u << 10) - 1,
 };
 
 /// The value flags and switches of `which`, to merge into a command's Args.
@@ -34,7 +35,8 @@ std::set<std::string> operator+(std::set<std::string> a, const std::set<std::str
 
 /// The set-up from `defaults` with the flags present in `a` applied (lengths
 /// with units; --folds starts on the n-fold branch with the default lift,
-/// --perturbation then sets the lift). Bad values are UsageErrors naming the
+/// --perturbation then sets the lift; --folds without --laying lays the sheet at
+/// once, laying_load 1, so the prescribed branch is what it starts on). Bad values are UsageErrors naming the
 /// flag; the result is validated (ParameterError on an impossible set-up).
 cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup defaults);
 

@@ -419,9 +419,10 @@ void MainWindow::fitFromRecord()
     const bool started = m_fitJob.start(tr("fit"), [records, result, where](widget::JobContext& ctx) {
         estimate::FitOptions o;
         // `drape fit`'s defaults: grid 41, the typical compression limit held and
-        // the crest-corrected bending stencils.
+        // the crest-corrected bending stencils, the lab's laying from flat.
         o.grid = 41;
         o.model_options.bending_correction = true;
+        o.laying_load = cloth::kLabLaying;
         o.start = estimate::default_fit_start();
         o.cancel = ctx.cancelFlag();
         o.progress = [&ctx](const estimate::FitProgress& p) {

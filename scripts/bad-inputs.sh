@@ -185,6 +185,12 @@ case_ "simulate --sample-diameter -300mm" 1 "sample diameter" -- "$drape" simula
 case_ "simulate --disc-diameter 400mm" 1 "disc diameter" -- "$drape" simulate --fabric silk --disc-diameter 400mm --quiet
 case_ "simulate --pedestal-height 0" 1 "pedestal height" -- "$drape" simulate --fabric silk --pedestal-height 0 --quiet
 case_ "simulate --perturbation 1m" 1 "perturbation" -- "$drape" simulate --fabric silk --perturbation 1m --quiet
+case_ "simulate --laying 0" 2 "--laying" -- "$drape" simulate --fabric silk --laying 0 --quiet
+case_ "simulate --laying 1.5" 2 "--laying" -- "$drape" simulate --fabric silk --laying 1.5 --quiet
+case_ "simulate --laying nan" 2 "--laying" -- "$drape" simulate --fabric silk --laying nan --quiet
+case_ "predict --laying -0.3" 2 "--laying" -- "$drape" predict --fabric silk --laying -0.3 --quiet
+case_ "fit --laying 2" 2 "--laying" -- "$drape" fit "$src_record" --out "$tmp/fit.json" --laying 2 --quiet
+case_ "compare --laying 0" 2 "--laying" -- "$drape" compare "$src_record" --fabric silk --laying 0 --quiet
 case_ "simulate --set shear_N_m=inf" 2 "shear_N_m" -- "$drape" simulate --fabric silk --set shear_N_m=inf --quiet
 case_ "predict --areal-density -5" 2 "--areal-density" -- "$drape" predict --fabric silk --areal-density -5 --quiet
 case_ "predict --areal-density 1e300" 2 "--areal-density" -- "$drape" predict --fabric silk --areal-density 1e300 --quiet

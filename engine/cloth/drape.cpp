@@ -38,6 +38,8 @@ void DrapeSetup::validate() const
                              ") per specimen radius must be finite and shorter than 1 (the density would reach 0)");
     if (fold_mode != 0 && (fold_mode < 2 || fold_mode > 16))
         throw ParameterError("fold mode = " + std::to_string(fold_mode) + " must be 0 (seeded mix) or a fold count in [2, 16]");
+    if (!(laying_load > 0) || laying_load > 1)
+        throw ParameterError("laying load = " + format_double(laying_load) + " must be a fraction of gravity in (0, 1]");
     for (double d : slice_depths)
         if (!(d > 0) || !std::isfinite(d)) throw ParameterError("slice depth " + format_double(d) + " m must be positive");
 }
@@ -281,10 +283,26 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         }
         pre = rc.status;
     }
+    const bool laying = !continuation && ropt.integrator == Integrator::Static && setup.laying_load < 1;
+    if (laying) {
+        // The first rest under part of the load (DrapeSetup::laying_load), then
+        // the whole load from there.
+        const Eigen::Vector3d g = sys->model().gravity;
+        sys->model().gravity = setup.laying_load * g;
+        RestOptions lo = ropt;
+        lo.residual = std::max(ropt.residual, 1e-4);
+        pre = run_to_rest(*sys, lo);
+        sys->model().gravity = g;
+        if (pre.outcome == SolverStatus::Outcome::Cancelled) {
+            DrapeResult m = measure_drape(*sys, setup);
+            m.status = pre;
+            return m;
+        }
+    }
     DrapeResult r;
     RestOptions fine = ropt;
     r.status = run_to_rest(*sys, fine);
-    if (continuation) {
+    if (continuation || laying) {
         r.status.steps += pre.steps;
         r.status.newton_iterations += pre.newton_iterations;
         r.status.force_evaluations += pre.force_evaluations;

@@ -43,7 +43,10 @@ cloth::DrapeSetup Evaluator::setup_for(int r, std::uint64_t seed, bool on_branch
     // Mixed: the odd seeds (counted from the fit's seed) start from the random mix.
     const bool random_seed = m_opt.branch == FoldBranch::Mixed && ((seed - m_opt.seed) % 2 == 1);
     const int n = on_branch && !random_seed ? branch_of(r) : 0;
-    return n > 0 ? cloth::on_fold_branch(s, n, m_opt.branch_lift_m) : s;
+    if (n > 0) return cloth::on_fold_branch(s, n, m_opt.branch_lift_m);
+    cloth::DrapeSetup laid = s;
+    laid.laying_load = m_opt.laying_load;
+    return laid;
 }
 
 int Evaluator::branch_of(int r) const

@@ -135,6 +135,12 @@ struct FitOptions {
     /// mix's) is lost on the way and the count comes out as from a random start;
     /// 20 mm is far outside the linear range and folds break up. See docs/estimate.md.
     double branch_lift_m = cloth::kFoldBranchLift;
+    /// DrapeSetup::laying_load of the drapes that start from the random mix (the
+    /// `cold_*` report, records without a node count, the odd seeds of Mixed):
+    /// how the lab lays a specimen. The n-fold starts are laid at once (1), so
+    /// the branch is what they start on. 1 here (the library's default);
+    /// `drape fit` passes cloth::kLabLaying unless --laying.
+    double laying_load = 1.0;
     /// Measured branch: perturbation seeds draped from the random mix at the
     /// optimum, reported as `cold_*` (what `drape predict` shows).
     int random_start_seeds = 2;

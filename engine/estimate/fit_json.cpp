@@ -42,6 +42,9 @@ json fit_to_json(const FitResult& r)
     prov["fold_branch"] = to_string(r.options.branch);
     if (r.options.branch != FoldBranch::Random) prov["fold_branch_lift_m"] = r.options.branch_lift_m;
     provenance.details = prov;
+    // How the records' lab laid them (the from-flat drapes' first rest): the
+    // preset is laid so by drape simulate / predict (FabricPreset::laying).
+    provenance.laying_load = r.options.laying_load;
     preset.provenance = provenance;
 
     fabric::FitSummary summary;

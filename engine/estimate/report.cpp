@@ -446,7 +446,11 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
         md << "The fit's simulations start from the rest state of the best point so far (warm)"
            << (on_branch ? " or on the measured fold branch" : "")
            << ". Draped from flat with the random mix of modes, as `drape predict`, `drape compare` and the widget drape it (mean of "
-           << r.records.front().cold_seeds << " perturbation seeds), the preset gives"
+           << r.records.front().cold_seeds << " perturbation seeds"
+           << (r.options.laying_load < 1 ? ", laid under " + num(r.options.laying_load, "%.2f") +
+                                               " g first as the records' lab is assumed to lay them (`--laying`, written into the preset)"
+                                         : std::string(", the whole load at once"))
+           << "), the preset gives"
            << (on_branch ? " (the fold count a random start picks can differ from the record's: a bifurcation, not a misfit)" : "")
            << ":\n\n"
            << "| record | D cold [%] | D error cold | nodes cold | node error cold |\n|---|---|---|---|---|\n";

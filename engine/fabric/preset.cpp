@@ -67,6 +67,7 @@ Provenance read_provenance(const JsonReader& r, const json& root)
             break;
         }
     if (j.contains("grid")) p.grid = r.integer(root, "provenance.grid", 5, 1000);
+    if (j.contains("laying_load")) p.laying_load = r.number_in(root, "provenance.laying_load", 1e-3, 1.0);
     if (j.contains("records") && j["records"].is_array())
         for (const auto& rec : j["records"]) {
             if (rec.is_string()) p.records.push_back(rec.get<std::string>());
@@ -81,6 +82,7 @@ json write_provenance(const Provenance& p)
     if (!p.tool.empty()) j[j.contains("kind") && !j.contains("tool") ? "kind" : "tool"] = p.tool;
     if (!p.date.empty()) j[j.contains("date") && !j.contains("date_utc") ? "date" : "date_utc"] = p.date;
     if (p.grid > 0) j["grid"] = p.grid;
+    if (p.laying_load > 0) j["laying_load"] = p.laying_load;
     if (!j.contains("records") && !p.records.empty()) j["records"] = p.records;
     return j;
 }

@@ -29,6 +29,12 @@ struct Provenance {
     std::string date;                ///< ISO 8601 date or time (UTC)
     int grid = 0;                    ///< nodes across the specimen of the simulations that made it (0 = unknown)
     std::vector<std::string> records;///< ids of the drape-test records it was fitted to
+    /// How the records' lab laid its specimens ("laying_load", a fraction of
+    /// gravity in (0, 1]: cloth::DrapeSetup::laying_load), as the fit assumed it
+    /// for its drapes from flat; 0 = not stated (presets before 2026-11-30, the
+    /// starters): laid at once. `drape simulate`, `predict` and the widget lay a
+    /// preset this way by default (laying_of).
+    double laying_load = 0;
     nlohmann::json details = nlohmann::json::object(); ///< everything else, verbatim
 };
 
@@ -79,6 +85,10 @@ struct FabricPreset {
     void set_params(const cloth::FabricParams& p);
     /// The file format it is written in: "drapekit-fabric" or "seed-19".
     std::string format() const { return is_seed() ? "seed-19" : "drapekit-fabric"; }
+    /// cloth::DrapeSetup::laying_load of a drapemeter drape of this preset from
+    /// flat: its records' lab's (Provenance::laying_load) when the fit stated
+    /// it, else 1 (the whole load at once).
+    double laying() const { return provenance && provenance->laying_load > 0 ? provenance->laying_load : 1.0; }
 };
 
 /// The built-in presets by name ("seed-table1": the seed paper's Table 1).

@@ -6,7 +6,7 @@
 #include "engine/core/error.hpp"
 #include "synthetic.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 #include <filesystem>
 #include <fstream>

@@ -3,7 +3,7 @@
 #include "engine/capture/measure.hpp"
 #include "engine/capture/report.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 #include <filesystem>
 #include <map>

@@ -11,7 +11,7 @@
 #include "synthetic.hpp"
 
 #include <QProcess>
-#include <QtTest>
+#include <QTest>
 
 #include <cstdlib>
 #include <filesystem>

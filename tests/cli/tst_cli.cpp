@@ -7,7 +7,7 @@
 #include <QProcess>
 #include <QStandardPaths>
 #include <QTemporaryDir>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 
@@ -339,14 +339,27 @@ private slots:
             const QString preset = tmp.path() + (plain ? "/plain.json" : "/corrected.json");
             QStringList args{"fit", DRAPE_SOURCE_DIR "/examples/DL-A04", "--out", preset, "--channels", "dc", "--grid", "9", "--seeds", "1",
                              "--local", "2", "--refine-grid", "0", "--no-uncertainty", "--quiet"};
-            if (plain) args << "--plain-bending";
+            if (plain) args << "--plain-bending" << "--laying" << "1";
             const Out o = run(args);
             QVERIFY2(o.code == 0, qPrintable(o.err));
             QFile f(preset);
             QVERIFY(f.open(QIODevice::ReadOnly));
-            const QJsonObject model = QJsonDocument::fromJson(f.readAll()).object()["model"].toObject();
+            const QJsonObject root = QJsonDocument::fromJson(f.readAll()).object();
+            const QJsonObject model = root["model"].toObject();
             QVERIFY2(model.contains("bending_correction"), preset.toUtf8().constData());
             QCOMPARE(model["bending_correction"].toBool(), !plain);
+            // The lab's laying the fit assumed (default 0.4, --laying) travels in the
+            // preset, and `drape simulate` lays the preset so unless told otherwise.
+            QCOMPARE(root["provenance"].toObject()["laying_load"].toDouble(), plain ? 1.0 : 0.4);
+            if (!plain) {
+                for (const QString laying : {"", "1"}) {
+                    QStringList sim{"simulate", "--fabric", preset, "--grid", "9", "--json", "--quiet"};
+                    if (!laying.isEmpty()) sim << "--laying" << laying;
+                    const Out s = run(sim);
+                    QVERIFY2(s.code == 0, qPrintable(s.err));
+                    QCOMPARE(QJsonDocument::fromJson(s.out.toUtf8()).object()["laying_load"].toDouble(), laying.isEmpty() ? 0.4 : 1.0);
+                }
+            }
         }
     }
 

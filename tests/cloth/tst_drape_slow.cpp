@@ -2,7 +2,7 @@
 // seed's Table 1 drape; D converges under grid refinement.
 #include "engine/cloth/drape.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 using namespace drape::cloth;
 

@@ -4,7 +4,7 @@
 #include "engine/cloth/system.hpp"
 
 #include <Eigen/Eigenvalues>
-#include <QtTest>
+#include <QTest>
 
 #include <numbers>
 #include <random>

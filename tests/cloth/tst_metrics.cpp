@@ -2,7 +2,7 @@
 #include "engine/core/error.hpp"
 #include "engine/cloth/metrics.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 #include <numbers>
 #include <random>

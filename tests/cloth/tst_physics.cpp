@@ -5,7 +5,7 @@
 #include "engine/cloth/solver.hpp"
 
 #include <Eigen/Eigenvalues>
-#include <QtTest>
+#include <QTest>
 
 #include <numbers>
 

@@ -6,7 +6,7 @@
 #include "engine/cloth/rest_sensitivity.hpp"
 #include "engine/core/error.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 

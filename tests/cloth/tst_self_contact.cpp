@@ -11,7 +11,7 @@
 #include "engine/cloth/system.hpp"
 
 #include <Eigen/Geometry>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 

@@ -3,7 +3,7 @@
 #include "engine/cloth/self_intersection.hpp"
 #include "engine/core/error.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 using namespace drape::cloth;
 using V = Eigen::Vector3d;

@@ -9,7 +9,7 @@
 #include "engine/core/units.hpp"
 
 #include <QTemporaryDir>
-#include <QtTest>
+#include <QTest>
 
 #include <atomic>
 #include <fstream>

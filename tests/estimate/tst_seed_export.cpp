@@ -2,7 +2,7 @@
 #include "engine/core/error.hpp"
 #include "engine/estimate/seed_export.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 using namespace drape;
 using cloth::Param;

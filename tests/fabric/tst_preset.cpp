@@ -6,7 +6,7 @@
 #include "engine/fabric/preset.hpp"
 
 #include <QTemporaryDir>
-#include <QtTest>
+#include <QTest>
 
 #include <fstream>
 
@@ -102,6 +102,7 @@ private slots:
         p.provenance = Provenance{};
         p.provenance->records = {"DL-A01"};
         p.provenance->grid = 41;
+        p.provenance->laying_load = 0.4;
         QTemporaryDir d;
         const std::string path = d.filePath("f.json").toStdString();
         save_fabric(p, path);
@@ -114,6 +115,10 @@ private slots:
         QVERIFY(back.provenance.has_value());
         QCOMPARE(back.provenance->records.at(0), std::string("DL-A01"));
         QCOMPARE(back.provenance->grid, 41);
+        QCOMPARE(back.provenance->laying_load, 0.4);
+        QCOMPARE(back.laying(), 0.4); // laid as its records' lab laid them
+        FabricPreset starter;
+        QCOMPARE(starter.laying(), 1.0); // no provenance: at once
         // The file carries the unit-suffixed keys.
         const json j = json::parse(read_file(path));
         QVERIFY(j["parameters"].contains("bend_warp_Nm"));
@@ -256,6 +261,19 @@ private slots:
         QVERIFY2(e.contains("fit.records[0].sample_diameter_m") && e.contains("outside"), qPrintable(e));
         j["fit"]["records"][0]["sample_diameter_m"] = 0.3;
         QCOMPARE(fabric_from_json(j, "p.json").fit->sample_diameter_m, 0.3);
+        // The lab's laying in the provenance: a fraction of gravity in (0, 1].
+        for (const json& bad : {json(0.0), json(1.5), json("0.4")}) {
+            j["provenance"] = {{"tool", "drape fit"}, {"laying_load", bad}};
+            e.clear();
+            try {
+                fabric_from_json(j, "p.json");
+            } catch (const drape::Error& ex) {
+                e = ex.what();
+            }
+            QVERIFY2(e.contains("provenance.laying_load") && e.contains("p.json"), qPrintable(e));
+        }
+        j["provenance"]["laying_load"] = 0.4;
+        QCOMPARE(fabric_from_json(j, "p.json").laying(), 0.4);
     }
 
     void failed_save_keeps_the_old_file()

@@ -1,7 +1,7 @@
 // Every input a fuzzer found (fuzz/regressions/TARGET/*, see docs/reliability.md)
 // replayed through the target's own code: it must end in a drape::Error or a
 // result that keeps the target's invariants (a violation aborts the test).
-#include <QtTest>
+#include <QTest>
 
 #include <cstdint>
 #include <filesystem>

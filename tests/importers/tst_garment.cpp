@@ -9,7 +9,7 @@
 #include "importers/garment_metrics.hpp"
 #include "importers/garment_scene.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 #include <atomic>
 #include <filesystem>

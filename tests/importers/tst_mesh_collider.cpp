@@ -9,7 +9,7 @@
 #include "importers/mesh_import.hpp"
 
 #include <Eigen/Geometry>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 #include <limits>

@@ -14,7 +14,7 @@
 
 #include <Eigen/Geometry>
 #include <QTemporaryDir>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 #include <cstdlib>

@@ -11,7 +11,7 @@
 #include <QFile>
 #include <QTemporaryDir>
 #include <Eigen/Geometry>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 #include <cstdint>

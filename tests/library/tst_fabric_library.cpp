@@ -7,7 +7,8 @@
 #include <sqlite3.h>
 
 #include <QTemporaryDir>
-#include <QtTest>
+#include <QTest>
+#include <QtCore/qfloat16.h> // QCOMPARE on json values considers the qfloat16 overload: complete it
 
 #include <filesystem>
 #include <fstream>

@@ -12,7 +12,7 @@
 #include <sqlite3.h>
 
 #include <QTemporaryDir>
-#include <QtTest>
+#include <QTest>
 
 #include <chrono>
 #include <csignal>

@@ -12,7 +12,8 @@
 #include <QRegularExpression>
 #include <QStandardPaths>
 #include <QTemporaryDir>
-#include <QtTest>
+#include <QTest>
+#include <QtCore/qfloat16.h> // QCOMPARE on json values considers the qfloat16 overload: complete it
 
 #include <cmath>
 

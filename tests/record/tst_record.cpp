@@ -3,7 +3,7 @@
 #include "engine/core/error.hpp"
 #include "engine/record/record.hpp"
 
-#include <QtTest>
+#include <QTest>
 
 #include <filesystem>
 #include <fstream>

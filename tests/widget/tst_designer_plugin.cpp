@@ -8,7 +8,7 @@
 #include <QSignalSpy>
 #include <QUiLoader>
 #include <QXmlStreamReader>
-#include <QtTest>
+#include <QTest>
 #include <QtUiPlugin/QDesignerCustomWidgetInterface>
 
 using drape::widget::DrapeController;

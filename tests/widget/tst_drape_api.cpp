@@ -18,7 +18,7 @@
 #include <QSignalSpy>
 #include <QTemporaryDir>
 #include <QTextStream>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 #include <numbers>

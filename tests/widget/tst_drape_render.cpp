@@ -8,7 +8,7 @@
 
 #include <QQuickWidget>
 #include <QSignalSpy>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 #include <numbers>

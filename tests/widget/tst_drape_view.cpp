@@ -17,7 +17,7 @@
 #include <QQuickItem>
 #include <QSignalSpy>
 #include <QTemporaryDir>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 

@@ -11,7 +11,7 @@
 #include "engine/cloth/drape.hpp"
 
 #include <QSignalSpy>
-#include <QtTest>
+#include <QTest>
 
 #include <cmath>
 

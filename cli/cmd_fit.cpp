@@ -73,7 +73,8 @@ as not identifiable.
                       count, an n-fold lift of the flat sheet), random (the seeded mix of modes, as
                       the preset drapes from flat) or mixed (even seeds measured, odd seeds random)
   --laying F          how the records' lab laid its specimens: the drapes from flat (the report's
-                      "from flat", records without a node count) first rest under the fraction F
+                      "from flat", records without a node count, every drape with --branch random,
+                      the odd seeds with mixed) first rest under the fraction F
                       of gravity, then under all of it (default 0.4: the drape lab's, chosen
                       leave-one-out on its set-a records; 1 = the whole load at once). Written
                       into the preset (provenance.laying_load): drape simulate and predict lay it so

@@ -36,7 +36,8 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
   --laying F            how the specimen is laid: it first rests under the fraction F of gravity, then
                         under all of it (default: the preset's provenance.laying_load, what its fit
                         assumed of its records' lab - drape fit: 0.4 -, else 1 = the whole load at
-                        once; 1 with --folds)
+                        once; 1 with --folds unless --laying is given). Static solver only: the
+                        dynamic integrators fall under the whole load
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr)";
 

@@ -50,7 +50,8 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --laying F            how the specimen is laid: it first rests under the fraction F of gravity, then
                         under all of it (default: the preset's provenance.laying_load, what its fit
                         assumed of its records' lab - drape fit: 0.4 -, else 1 = the whole load at
-                        once; 1 with --folds)
+                        once; 1 with --folds unless --laying is given). Static solver only: the
+                        dynamic integrators fall under the whole load
   --perturbation L      largest lift of the flat start's perturbation (at most 50mm)
   --out DIR             write summary.json, rest.obj, slices.csv, outline.csv and rest.png (the rest
                         state seen from the front and from above)

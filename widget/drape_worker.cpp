@@ -302,6 +302,11 @@ void DrapeWorker::runStatic(long maxNewton)
             // solve, exactly what `drape garment` runs (with its iteration budget).
             opt.max_newton = importers::garment_rest_options().max_newton;
             st = importers::settle_to_rest(*m_sys, opt);
+        } else if (fresh && m_spec->shape == Drape::Disc) {
+            // The drapemeter from its start on a grid below 41, on the shown
+            // system (live frames): laid as `drape simulate` lays it
+            // (DrapeSetup::laying_load: the preset's lab's), then at rest.
+            st = cloth::rest_from_flat(*m_sys, m_spec->setup, opt);
         } else {
             st = cloth::run_to_rest(*m_sys, opt);
         }

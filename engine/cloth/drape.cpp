@@ -238,6 +238,32 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
     return r;
 }
 
+SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const RestOptions& ropt)
+{
+    if (ropt.integrator != Integrator::Static || !(setup.laying_load < 1)) return run_to_rest(sys, ropt);
+    // The first rest under part of the load (DrapeSetup::laying_load), then the
+    // whole load from there.
+    const Eigen::Vector3d g = sys.model().gravity;
+    sys.model().gravity = setup.laying_load * g;
+    RestOptions lo = ropt;
+    lo.residual = std::max(ropt.residual, 1e-4); // the full load's solve polishes
+    SolverStatus pre;
+    try {
+        pre = run_to_rest(sys, lo);
+    } catch (...) {
+        sys.model().gravity = g;
+        throw;
+    }
+    sys.model().gravity = g;
+    if (pre.outcome == SolverStatus::Outcome::Cancelled) return pre;
+    SolverStatus st = run_to_rest(sys, ropt);
+    st.steps += pre.steps;
+    st.newton_iterations += pre.newton_iterations;
+    st.force_evaluations += pre.force_evaluations;
+    st.wall_seconds += pre.wall_seconds;
+    return st;
+}
+
 DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt, const ModelOptions& mopt)
 {
     auto sys = make_drape_system(fabric, setup, mopt);
@@ -283,30 +309,15 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         }
         pre = rc.status;
     }
-    const bool laying = !continuation && ropt.integrator == Integrator::Static && setup.laying_load < 1;
-    if (laying) {
-        // The first rest under part of the load (DrapeSetup::laying_load), then
-        // the whole load from there.
-        const Eigen::Vector3d g = sys->model().gravity;
-        sys->model().gravity = setup.laying_load * g;
-        RestOptions lo = ropt;
-        lo.residual = std::max(ropt.residual, 1e-4);
-        pre = run_to_rest(*sys, lo);
-        sys->model().gravity = g;
-        if (pre.outcome == SolverStatus::Outcome::Cancelled) {
-            DrapeResult m = measure_drape(*sys, setup);
-            m.status = pre;
-            return m;
-        }
-    }
     DrapeResult r;
-    RestOptions fine = ropt;
-    r.status = run_to_rest(*sys, fine);
-    if (continuation || laying) {
+    if (continuation) {
+        r.status = run_to_rest(*sys, ropt);
         r.status.steps += pre.steps;
         r.status.newton_iterations += pre.newton_iterations;
         r.status.force_evaluations += pre.force_evaluations;
         r.status.wall_seconds += pre.wall_seconds;
+    } else {
+        r.status = rest_from_flat(*sys, setup, ropt); // laid as the set-up says
     }
     DrapeResult m = measure_drape(*sys, setup);
     m.potential_energy = sys->potential_energy(sys->x);

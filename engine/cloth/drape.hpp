@@ -128,6 +128,15 @@ inline constexpr double kLabLaying = 0.4;
 /// the next level of the continuation.
 Positions interpolate_positions(const ClothMesh& coarse, const Positions& xc, const ClothMesh& fine);
 
+/// The drape of `sys` (made by make_drape_system for `setup`, at its start) to
+/// rest on its own mesh, laid as the set-up says: with the static solver and
+/// laying_load < 1 a first rest under that fraction of gravity (residual
+/// 1e-4 or the options', whichever is larger), then run_to_rest under the
+/// whole load; counters summed. Otherwise run_to_rest. What simulate_drape
+/// does below the continuation's coarsest level, and the widget on its own
+/// system (live frames).
+SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const RestOptions& ropt);
+
 /// Simulates a drape to rest and measures it. For the static solver with a
 /// grid finer than kCoarsestLevel (41) this solves the largest of the levels 41,
 /// 81, 161, 321 below it first and interpolates (continuation): the cold start

@@ -72,7 +72,9 @@ json drape_summary_json(const DrapeResult& r, const DrapeSetup& setup, Integrato
     j["seed"] = setup.seed;
     j["perturbation_m"] = setup.perturbation;
     j["fold_mode"] = setup.fold_mode; // 0: the seeded mix of modes; n: started on the n-fold branch
-    j["laying_load"] = setup.laying_load; // fraction of gravity of the first rest (1: the whole load at once)
+    // Fraction of gravity of the first rest (1: the whole load at once); the
+    // dynamic integrators fall under the whole load.
+    j["laying_load"] = integ == Integrator::Static ? setup.laying_load : 1.0;
     j["vertices"] = r.x.rows();
     return j;
 }

@@ -253,6 +253,8 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     if (options.grid < 9 || options.grid > 200) throw ParameterError("fit: grid = " + std::to_string(options.grid) + " is outside [9, 200]");
     if (!(options.branch_lift_m > 0) || options.branch_lift_m > 0.05)
         throw ParameterError("fit: branch lift = " + std::to_string(options.branch_lift_m) + " m is outside (0, 0.05]");
+    if (!(options.laying_load > 0) || options.laying_load > 1)
+        throw ParameterError("fit: laying load = " + std::to_string(options.laying_load) + " is outside (0, 1] (a fraction of gravity)");
     if (options.random_start_seeds < 0 || options.random_start_seeds > 16)
         throw ParameterError("fit: random_start_seeds = " + std::to_string(options.random_start_seeds) + " is outside [0, 16]");
     if (options.seeds_per_evaluation < 1 || options.seeds_per_evaluation > 16)

@@ -83,6 +83,7 @@ json write_provenance(const Provenance& p)
     if (!p.date.empty()) j[j.contains("date") && !j.contains("date_utc") ? "date" : "date_utc"] = p.date;
     if (p.grid > 0) j["grid"] = p.grid;
     if (p.laying_load > 0) j["laying_load"] = p.laying_load;
+    else j.erase("laying_load"); // not stated: laid at once
     if (!j.contains("records") && !p.records.empty()) j["records"] = p.records;
     return j;
 }

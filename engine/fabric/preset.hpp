@@ -33,7 +33,7 @@ struct Provenance {
     /// gravity in (0, 1]: cloth::DrapeSetup::laying_load), as the fit assumed it
     /// for its drapes from flat; 0 = not stated (presets before 2026-11-30, the
     /// starters): laid at once. `drape simulate`, `predict` and the widget lay a
-    /// preset this way by default (laying_of).
+    /// preset this way by default (FabricPreset::laying).
     double laying_load = 0;
     nlohmann::json details = nlohmann::json::object(); ///< everything else, verbatim
 };

@@ -244,7 +244,7 @@ void FabricLibrary::migrate()
 }
 
 std::int64_t FabricLibrary::put(const fabric::FabricPreset& in, const std::string& name_in, OnConflict on_conflict,
-                                ImportReport* report)
+                                ImportReport* report, const std::string& created)
 {
     const std::string& raw = name_in.empty() ? in.name : name_in;
     std::string name = normalize_name(raw);
@@ -304,9 +304,9 @@ std::int64_t FabricLibrary::put(const fabric::FabricPreset& in, const std::strin
     } else {
         Stmt s(m_db, m_path,
                "INSERT INTO fabrics (name, preset, format, composition, areal_density, drape_coefficient, fit_quality,"
-               " created, modified, revision) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?8, 1)");
+               " created, modified, revision) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?10, 1)");
         s.bind(1, name).bind(2, j.dump()).bind(3, d.format).bind(4, d.composition).bind(5, d.weight).bind(6, d.drape_percent);
-        s.bind(7, d.fit_quality).bind(8, now);
+        s.bind(7, d.fit_quality).bind(8, created.empty() ? now : created).bind(10, now);
         s.run();
         id = sqlite3_last_insert_rowid(m_db);
         if (report) ++report->added;
@@ -532,7 +532,11 @@ ImportReport FabricLibrary::import_all(const json& doc, const std::string& where
     }
     // Parse everything before touching the database, so a bad entry names
     // itself and nothing is written.
-    std::vector<std::pair<fabric::FabricPreset, std::string>> items;
+    struct Item {
+        fabric::FabricPreset preset;
+        std::string name, created;
+    };
+    std::vector<Item> items;
     for (std::size_t i = 0; i < list->size(); ++i) {
         const json& e = (*list)[i];
         const std::string w = where + ": fabrics[" + std::to_string(i) + "]";
@@ -543,11 +547,20 @@ ImportReport FabricLibrary::import_all(const json& doc, const std::string& where
             if (!e["name"].is_string()) throw ParameterError(w + ": field 'name' is not a string");
             name = e["name"].get<std::string>();
         }
-        items.emplace_back(fabric::fabric_from_json(wrapped ? e["preset"] : e, w), name);
+        // The exporting library's creation date travels with the fabric (an
+        // ISO 8601 UTC time as export_all writes it); anything else is refused.
+        std::string created;
+        if (wrapped && e.contains("created")) {
+            const json& c = e["created"];
+            if (!c.is_string() || !is_iso_date(c.get<std::string>()))
+                throw ParameterError(w + ": field 'created' = " + describe_json(c) + " is not an ISO 8601 date such as 2026-11-22T01:02:03Z");
+            created = c.get<std::string>();
+        }
+        items.push_back({fabric::fabric_from_json(wrapped ? e["preset"] : e, w), name, created});
     }
     ImportReport report;
     Transaction tx(m_db, m_path, true);
-    for (const auto& [p, name] : items) put(p, name, on_conflict, &report);
+    for (const auto& it : items) put(it.preset, it.name, on_conflict, &report, it.created);
     tx.commit();
     return report;
 }

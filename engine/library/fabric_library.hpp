@@ -131,8 +131,10 @@ private:
     /// The name a fabric called `name` is stored under (its normalised form
     /// when that is in the library, else `name` as given).
     std::string stored_name(const std::string& name) const;
+    /// `created`: the date a new row keeps (a bulk import's, from the
+    /// exporting library); empty = now.
     std::int64_t put(const fabric::FabricPreset& preset, const std::string& name, OnConflict on_conflict,
-                     ImportReport* report);
+                     ImportReport* report, const std::string& created = {});
 
     sqlite3* m_db = nullptr;
     std::string m_path;

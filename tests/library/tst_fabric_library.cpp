@@ -269,7 +269,21 @@ private slots:
         const ImportReport rep = b.import_all(doc, "doc");
         QCOMPARE(rep.added, 3);
         for (const char* n : {"One", "Two", "Three"}) QCOMPARE(b.get(n).preset_json, a.get(n).preset_json);
+        // The creation date travels with the fabric (it was "now" at import until
+        // 2026-11-30: the test passed only when both fell in the same second).
         QCOMPARE(b.get("One").created, a.get("One").created);
+        {
+            json bad = doc;
+            bad["fabrics"][1]["created"] = 42;
+            FabricLibrary c(tmp("bulk-c.sqlite"));
+            try {
+                c.import_all(bad, "bad.json");
+                QFAIL("no exception");
+            } catch (const ParameterError& e) {
+                QVERIFY2(QString(e.what()).contains("bad.json: fabrics[1]: field 'created' = number 42"), e.what());
+            }
+            QCOMPARE(c.count(), 0);
+        }
 
         // Conflicts: fail (nothing written), skip, rename, replace.
         json doc2 = doc;

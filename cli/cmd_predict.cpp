@@ -3,6 +3,7 @@
 #include "cli/checks.hpp"
 #include "cli/progress.hpp"
 #include "cli/setup.hpp"
+#include "engine/core/units.hpp"
 
 #include "engine/cloth/drape_io.hpp"
 #include "engine/core/error.hpp"
@@ -86,8 +87,9 @@ int run(const std::vector<std::string>& argv)
         j["bending_correction"] = preset.model.bending_correction; // as simulate's summary
         std::cout << dump_json(j) << "\n";
     } else {
-        std::printf("set-up             %.0f / %.0f mm (grid %d, seed %llu)\n", setup.sample_diameter * 1e3, setup.disc_diameter * 1e3,
-                    setup.grid, static_cast<unsigned long long>(setup.seed));
+        std::printf("set-up             %.0f / %.0f mm (grid %d, seed %llu%s)\n", setup.sample_diameter * 1e3, setup.disc_diameter * 1e3,
+                    setup.grid, static_cast<unsigned long long>(setup.seed),
+                    setup.laying_load < 1 ? (", laid under " + format_value(setup.laying_load) + " g first").c_str() : "");
         std::printf("drape coefficient  %.1f %%\n", r.metrics.drape_coefficient_percent);
         std::printf("nodes              %d\n", r.metrics.node_count);
         std::printf("hem height         %.1f .. %.1f mm (below the pedestal top)\n", r.hem.min_z * 1e3, r.hem.max_z * 1e3);

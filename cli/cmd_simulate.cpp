@@ -3,6 +3,7 @@
 #include "cli/checks.hpp"
 #include "cli/progress.hpp"
 #include "cli/setup.hpp"
+#include "engine/core/units.hpp"
 
 #include "engine/cloth/blas_threads.hpp"
 #include "engine/cloth/drape_io.hpp"
@@ -194,6 +195,9 @@ int run(const std::vector<std::string>& argv)
                     preset.model.self_collision ? "on" : "off");
         std::printf("solver             %s: %s, %ld steps, %ld force evaluations, %.2f s\n", to_string(ro.integrator).c_str(),
                     to_string(r.status.outcome).c_str(), r.status.steps, r.status.force_evaluations, r.status.wall_seconds);
+        if (ro.integrator == cloth::Integrator::Static && setup.laying_load < 1)
+            std::printf("laying             first at rest under %s g (the preset's lab; --laying 1: the whole load at once)\n",
+                        format_value(setup.laying_load).c_str());
         if (!r.status.message.empty()) std::printf("                   %s\n", r.status.message.c_str());
         if (!sens.empty()) std::printf("sensitivity        D change for +10 %% of each parameter (exact, at this rest state):\n");
         for (const auto& t : sens) {

@@ -153,14 +153,14 @@ int starters_table(const std::vector<int>& grids, bool plain, double laying)
 int main(int argc, char** argv)
 {
     double rk4_limit = 900, tol = 1e-6;
-    bool quick = false, static_only = false, starters = false, plain = false, grids_given = false;
+    bool quick = false, static_only = false, starters = false, plain = false, starters_option = false;
     double laying = 0; // 0: each preset's own (FabricPreset::laying: a starter at once)
     std::vector<int> grids = {41, 61, 81, 101};
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--starters")) starters = true;
         else if (!std::strcmp(argv[i], "--plain")) plain = true;
         else if (!std::strcmp(argv[i], "--laying") && i + 1 < argc) {
-            grids_given = true; // a --starters option
+            starters_option = true;
             laying = std::atof(argv[++i]);
             if (!(laying > 0 && laying <= 1)) {
                 std::fprintf(stderr, "bench_drape: --laying: '%s' is not a fraction of gravity in (0, 1]\n", argv[i]);
@@ -168,7 +168,7 @@ int main(int argc, char** argv)
             }
         }
         else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) {
-            grids_given = true;
+            starters_option = true;
             grids.clear();
             for (const char* c = argv[++i]; *c;) {
                 char* end = nullptr;
@@ -197,7 +197,7 @@ int main(int argc, char** argv)
         }
         return starters_table(grids, plain, laying);
     }
-    if (plain || grids_given) {
+    if (plain || starters_option) {
         std::fprintf(stderr, "bench_drape: --grids, --plain and --laying go with --starters\n");
         return 2;
     }

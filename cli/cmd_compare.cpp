@@ -61,7 +61,7 @@ int run(const std::vector<std::string>& argv)
     const int grid300 = a.get_int("--grid", 25, 9, 200);
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
-    const double laying = a.get_double_in("--laying", preset.laying(), 1e-3, 1.0);
+    const double laying = parse_laying(a, preset.laying());
     const bool json_out = a.has("--json"), quiet = a.has("--quiet") || json_out;
     estimate::FoldBranch branch = estimate::FoldBranch::Random;
     try {

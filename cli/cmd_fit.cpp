@@ -162,7 +162,7 @@ int run(const std::vector<std::string>& argv)
         throw UsageError("--refine-grid " + std::to_string(fo.refine_grid) + " must be above --grid " + std::to_string(fo.grid) + " (or 0)");
     fo.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     fo.seeds_per_evaluation = a.get_int("--seeds", 2, 1, 16);
-    fo.laying_load = a.get_double_in("--laying", cloth::kLabLaying, 1e-3, 1.0);
+    fo.laying_load = parse_laying(a, cloth::kLabLaying);
     fo.global_evaluations = a.get_int("--global", 0, 0, 100000);
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");

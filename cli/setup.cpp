@@ -46,6 +46,8 @@ std::set<std::string> operator+(std::set<std::string> a, const std::set<std::str
     return a;
 }
 
+double parse_laying(const Args& a, double fallback) { return a.get_double_in("--laying", fallback, 1e-3, 1.0); }
+
 cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
 {
     s.sample_diameter = a.get_length("--sample-diameter", s.sample_diameter);
@@ -58,7 +60,7 @@ cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
     s.perturbation = a.get_length("--perturbation", s.perturbation);
     if (a.has("--disc-grip")) s.disc_grip = true;
     if (a.has("--folds")) s.laying_load = 1.0; // a prescribed branch starts under the whole load
-    s.laying_load = a.get_double_in("--laying", s.laying_load, 1e-3, 1.0);
+    s.laying_load = parse_laying(a, s.laying_load);
     s.validate();
     return s;
 }

@@ -27,6 +27,10 @@ enum SetupFlag : unsigned {
     kAllSetup = (1u << 10) - 1,
 };
 
+/// `--laying F` (a fraction of gravity in [0.001, 1]; UsageError naming the
+/// flag otherwise), or `fallback` when absent: parse_setup, fit and compare.
+double parse_laying(const Args& a, double fallback);
+
 /// The value flags and switches of `which`, to merge into a command's Args.
 std::set<std::string> setup_value_flags(unsigned which);
 std::set<std::string> setup_switches(unsigned which);

@@ -257,10 +257,7 @@ SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const Res
     sys.model().gravity = g;
     if (pre.outcome == SolverStatus::Outcome::Cancelled) return pre;
     SolverStatus st = run_to_rest(sys, ropt);
-    st.steps += pre.steps;
-    st.newton_iterations += pre.newton_iterations;
-    st.force_evaluations += pre.force_evaluations;
-    st.wall_seconds += pre.wall_seconds;
+    st.add_work(pre);
     return st;
 }
 
@@ -312,10 +309,7 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
     DrapeResult r;
     if (continuation) {
         r.status = run_to_rest(*sys, ropt);
-        r.status.steps += pre.steps;
-        r.status.newton_iterations += pre.newton_iterations;
-        r.status.force_evaluations += pre.force_evaluations;
-        r.status.wall_seconds += pre.wall_seconds;
+        r.status.add_work(pre);
     } else {
         r.status = rest_from_flat(*sys, setup, ropt); // laid as the set-up says
     }

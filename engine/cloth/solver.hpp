@@ -26,6 +26,16 @@ struct SolverStatus {
     double sim_time = 0;         ///< [s] simulated time (dynamic)
     std::string message;
     bool converged() const { return outcome == Outcome::Converged; }
+    /// Adds the work of an earlier solve of the same drape (steps, Newton
+    /// iterations, force evaluations, wall time): a continuation's coarse level,
+    /// a laying rest.
+    void add_work(const SolverStatus& earlier)
+    {
+        steps += earlier.steps;
+        newton_iterations += earlier.newton_iterations;
+        force_evaluations += earlier.force_evaluations;
+        wall_seconds += earlier.wall_seconds;
+    }
     /// Time steps (dynamic) or Newton iterations (static).
     long integrator_steps() const { return newton_iterations > 0 && sim_time == 0 ? newton_iterations : steps; }
 };

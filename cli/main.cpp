@@ -10,6 +10,10 @@
 #include <exception>
 #include <iostream>
 
+#if defined(__GLIBC__)
+#include <malloc.h> // mallopt
+#endif
+
 // Defense in depth for the readers Drapekit does not control (assimp, through
 // `drape import` and the garment commands): one allocation of more than
 // kMaxAllocation is refused with std::bad_alloc, which assimp reports as a
@@ -70,6 +74,16 @@ void print_overview()
 int main(int argc, char** argv)
 {
     using namespace drape::cli;
+#if defined(__GLIBC__)
+    // Keep freed memory in the process. A photo measurement allocates and frees
+    // image buffers of several MB dozens of times; glibc maps each one afresh
+    // (mmap above its threshold, and trims the heap's top) and the next one
+    // faults in again page by page: on a virtual machine that was 44 % of
+    // `drape measure` (three test scenes 12.4 -> 7.0 s; a drape 8 %). The
+    // process keeps at most its own peak; a library host decides for itself.
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || args[0] == "--help" || args[0] == "-h") {
         print_overview();

@@ -52,7 +52,9 @@ public:
     /// depends on the fabric and the grid: 0.6 mm for the cos 2theta term of an
     /// isotropic fabric at grid 25, several mm with 4-5 folds at grid 17).
     /// Also drapes the preset from the random mix (`cold_*`). Re-scores the best
-    /// point with the new sigmas.
+    /// point with the new sigmas. The drapes run on parallel_seeds threads; with
+    /// FitOptions::term_sigmas given (which replace the calibrated ones) only the
+    /// cold_* drapes are drawn.
     void calibrate_spread(const Eigen::VectorXd& x, int extra);
     /// Objective for the optimizers: evaluates, keeps the best point and its rest states.
     double objective(const Eigen::VectorXd& x, Start from, const std::string& stage);
@@ -100,7 +102,8 @@ public:
 
 private:
     /// One cold drape of record r at p (seed, on the branch or not), measured.
-    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch);
+    /// Touches no member (the spread's drapes run on several threads).
+    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch) const;
 
     const std::vector<MeasuredDrape>& m_recs;
     const FitOptions& m_opt;

@@ -102,14 +102,27 @@ void assess_anisotropy(FitResult& out)
     a.separated = std::isfinite(half) && std::abs(d) > half;
 }
 
-/// The caller's progress callback with every stage name prefixed (a second fit
-/// run on behalf of the first: "refine ", "tie "); empty when there is none.
-std::function<void(const FitProgress&)> prefixed_progress(const FitOptions& options, std::string prefix)
+/// The caller's progress callback for one run of a fit that may run again
+/// ("refine ", "tie " prefix every stage of a run on behalf of the first): the
+/// counts continue from the runs before it (`before`: their evaluations,
+/// simulations, time), so the bar does not fall back to a few per cent with the
+/// whole fit's elapsed time behind it (the second run's first line said "about
+/// 49 min left" for a fit that ended a minute later). A run's own "done" is
+/// dropped: fit_fabric reports the fit's one "done". Empty when there is no callback.
+std::function<void(const FitProgress&)> continued_progress(const FitOptions& options, std::string prefix, const FitResult* before)
 {
     if (!options.progress) return nullptr;
-    return [&options, prefix = std::move(prefix)](const FitProgress& p) {
+    const int evals = before ? before->evaluations : 0;
+    const long sims = before ? before->simulations : 0;
+    const double secs = before ? before->wall_seconds : 0;
+    return [&options, prefix = std::move(prefix), evals, sims, secs](const FitProgress& p) {
+        if (p.stage == "done") return;
         FitProgress q = p;
         q.stage = prefix + p.stage;
+        q.evaluation += evals;
+        q.planned += evals;
+        q.simulations += sims;
+        q.elapsed_s += secs;
         options.progress(q);
     };
 }
@@ -454,7 +467,9 @@ namespace {
 /// fit_at_grid, and again on options.refine_grid when the optimum is grid-bound.
 FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const FitOptions& options)
 {
-    FitResult coarse = fit_at_grid(records, options);
+    FitOptions first = options;
+    first.progress = continued_progress(options, "", nullptr);
+    FitResult coarse = fit_at_grid(records, first);
     if (!coarse.grid_bound || options.refine_grid == 0 || coarse.cancelled) return coarse;
     // The coarse optimum's bending is shorter than the mesh spacing: the mesh did
     // part of the bending's work, so the preset would not carry over. Fit again on
@@ -462,7 +477,7 @@ FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const F
     FitOptions fine = options;
     fine.grid = options.refine_grid;
     fine.start = coarse.params;
-    fine.progress = prefixed_progress(options, "refine ");
+    fine.progress = continued_progress(options, "refine ", &coarse);
     FitResult out = fit_at_grid(records, fine);
     FitResult::Refinement ref;
     ref.from_grid = options.grid;
@@ -499,7 +514,9 @@ FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const F
 
 } // namespace
 
-FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options)
+/// The free fit, refined where grid-bound, and its tied refit where warp and
+/// weft are not separated (fit_fabric reports the one "done").
+static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOptions& options)
 {
     if (options.refine_grid != 0 && (options.refine_grid <= options.grid || options.refine_grid > 200))
         throw ParameterError("fit: refine grid = " + std::to_string(options.refine_grid) + " must be 0 (off) or above the grid " +
@@ -536,7 +553,7 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     cloth::FabricParams start = free.params;
     start[Param::BendWarp] = start[Param::BendWeft] = std::sqrt(free.params[Param::BendWarp] * free.params[Param::BendWeft]);
     tied.start = start;
-    tied.progress = prefixed_progress(options, "tie ");
+    tied.progress = continued_progress(options, "tie ", &free);
     FitResult t = fit_at_grid(records, tied);
     FitResult::Anisotropy an = a;
     an.refit = true;
@@ -567,6 +584,21 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     kept.options.term_sigmas.clear();
     kept.anisotropy = an;
     return kept;
+}
+
+FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options)
+{
+    FitResult out = fit_runs(records, options);
+    if (options.progress) {
+        FitProgress p;
+        p.stage = "done";
+        p.evaluation = p.planned = out.evaluations;
+        p.best_chi2 = out.chi2;
+        p.simulations = out.simulations;
+        p.elapsed_s = out.wall_seconds;
+        options.progress(p);
+    }
+    return out;
 }
 
 } // namespace drape::estimate

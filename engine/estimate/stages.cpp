@@ -246,7 +246,13 @@ bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Ei
             }
             // A gain below 0.2 in chi2 moves the parameters by a small fraction of
             // their 1-sigma (a change of 1 in chi2): within the drape-to-drape noise.
-            if (!accepted || gain < 0.2) return false;
+            // A fit worse than its noise model (chi2 / dof > 1, as before the spread
+            // is calibrated) has its 1-sigma at a change of chi2 / dof (the intervals
+            // scale the same way), so the threshold scales with it.
+            int fitted_terms = 0;
+            for (const auto& t : cur.terms) fitted_terms += t.fitted ? 1 : 0;
+            const double per_dof = cur.chi2 / std::max(1, fitted_terms - n);
+            if (!accepted || gain < 0.2 * std::max(1.0, per_dof)) return false;
         }
     } catch (const CancelledFit&) {
         if (ev.best_x().size() == x.size()) x = ev.best_x();

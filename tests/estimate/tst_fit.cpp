@@ -289,10 +289,22 @@ private slots:
         o.spread_seeds = 0;
         o.uncertainty = false;
         std::vector<std::string> stages;
+        // One bar for both runs: the counts go on from the coarse run (the refit's
+        // first line once said 3 % after the coarse run's 100 %), the evaluations
+        // never exceed the plan, and the fit's one "done" comes last.
+        int last_eval = 0, dones = 0;
+        bool monotone = true;
         o.progress = [&](const FitProgress& p) {
             if (stages.empty() || stages.back() != p.stage) stages.push_back(p.stage);
+            monotone = monotone && p.evaluation >= last_eval && p.evaluation <= p.planned;
+            last_eval = p.evaluation;
+            dones += p.stage == "done";
         };
         const FitResult r = fit_fabric({rec}, o);
+        QVERIFY(monotone);
+        QCOMPARE(dones, 1);
+        QCOMPARE(stages.back(), std::string("done"));
+        QCOMPARE(last_eval, r.evaluations);
         QCOMPARE(r.refinement.from_grid, 13);
         QCOMPARE(r.refinement.to_grid, 17);
         QVERIFY(r.refinement.coarse_chi2 > 0 && r.refinement.fine_chi2 > 0 && !r.refinement.reason.empty());

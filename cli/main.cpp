@@ -81,8 +81,10 @@ int main(int argc, char** argv)
     // faults in again page by page: on a virtual machine that was 44 % of
     // `drape measure` (three test scenes 12.4 -> 7.0 s; a drape 8 %). The
     // process keeps at most its own peak; a library host decides for itself.
-    mallopt(M_MMAP_THRESHOLD, 256 << 20);
-    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+    // (A glibc before 2.35 caps the threshold at 32 MB and refuses this; then the
+    // trim threshold is left alone too, which would switch off glibc's own
+    // raising of the threshold.)
+    if (mallopt(M_MMAP_THRESHOLD, 256 << 20) == 1) mallopt(M_TRIM_THRESHOLD, 512 << 20);
 #endif
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || args[0] == "--help" || args[0] == "-h") {

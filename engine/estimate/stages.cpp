@@ -248,10 +248,13 @@ bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Ei
             // their 1-sigma (a change of 1 in chi2): within the drape-to-drape noise.
             // A fit worse than its noise model (chi2 / dof > 1, as before the spread
             // is calibrated) has its 1-sigma at a change of chi2 / dof (the intervals
-            // scale the same way), so the threshold scales with it.
+            // scale the same way), so the threshold scales with it - taken after the
+            // step, and only with at least two terms per coordinate to spare (a fit
+            // of a few terms, e.g. D alone, drives chi2 towards 0 as before).
             int fitted_terms = 0;
             for (const auto& t : cur.terms) fitted_terms += t.fitted ? 1 : 0;
-            const double per_dof = cur.chi2 / std::max(1, fitted_terms - n);
+            const int dof = fitted_terms - n;
+            const double per_dof = dof >= 2 * n ? (cur.chi2 - gain) / dof : 1.0;
             if (!accepted || gain < 0.2 * std::max(1.0, per_dof)) return false;
         }
     } catch (const CancelledFit&) {

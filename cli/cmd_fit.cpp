@@ -210,6 +210,7 @@ int run(const std::vector<std::string>& argv)
     Progress progress("fit", quiet);
     if (!quiet)
         fo.progress = [&progress](const estimate::FitProgress& p) {
+            if (p.stage == "done") return; // progress.finish below says it, with the total time
             char detail[160];
             std::snprintf(detail, sizeof detail, "%-11s evaluation %d of at most %d, best chi2 %.1f, %ld simulations",
                           p.stage.c_str(), p.evaluation, p.planned, p.best_chi2, p.simulations);

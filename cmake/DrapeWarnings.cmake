@@ -9,8 +9,9 @@ function(drape_set_warnings target)
     # (engine/cloth/system.cpp compiles in 59 s with them, 27 s without; every
     # Eigen expression gets a null and an alignment check per reference) and
     # add little here: ASan reports a null dereference itself (SEGV at 0x0 with
-    # the stack; a reference bound to null without a read goes unseen), a misaligned access is no fault on x86-64 and the code does no
-    # type punning of buffers, and vptr checks polymorphic casts the core has none of.
+    # the stack; a reference bound to null without a read goes unseen), a
+    # misaligned access is no fault on x86-64 and the code does no type punning
+    # of buffers, and vptr checks polymorphic casts the core has none of.
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined
       -fno-sanitize=alignment,null,vptr -fno-omit-frame-pointer)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)

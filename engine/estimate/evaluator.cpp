@@ -163,11 +163,10 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     // ones, so the branch's drapes are only drawn where they are also the
     // report's cold_* (the fit's branch is the random mix).
     const bool sigmas_given = !m_opt.term_sigmas.empty();
-    std::vector<int> on_branch(static_cast<std::size_t>(R), extra);
+    auto branch_draws = [&](int r) { return sigmas_given && branch_of(r) != 0 ? 0 : extra; };
     std::vector<Job> jobs;
     for (int r = 0; r < R; ++r) {
-        if (sigmas_given && branch_of(r) != 0) on_branch[static_cast<std::size_t>(r)] = 0;
-        for (int k = 0; k < on_branch[static_cast<std::size_t>(r)]; ++k)
+        for (int k = 0; k < branch_draws(r); ++k)
             jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), true});
         if (branch_of(r) != 0)
             for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), false});
@@ -187,7 +186,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
         // drapes share its fold count); `cold_*` report the preset draped from
         // the random mix, as `drape predict` does - the same drapes when the fit
         // itself starts from the random mix.
-        const int mine = on_branch[static_cast<std::size_t>(r)];
+        const int mine = branch_draws(r);
         for (int k = 0; k < mine; ++k) draws.push_back(std::move(drawn[next++]));
         if (branch_of(r) == 0)
             cold.assign(draws.end() - mine, draws.end());

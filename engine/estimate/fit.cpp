@@ -107,16 +107,15 @@ void assess_anisotropy(FitResult& out)
 /// counts continue from the runs before it (`before`: their evaluations,
 /// simulations, time), so the bar does not fall back to a few per cent with the
 /// whole fit's elapsed time behind it (the second run's first line said "about
-/// 49 min left" for a fit that ended a minute later). A run's own "done" is
-/// dropped: fit_fabric reports the fit's one "done". Empty when there is no callback.
-std::function<void(const FitProgress&)> continued_progress(const FitOptions& options, std::string prefix, const FitResult* before)
+/// 49 min left" for a fit that ended a minute later). A run reports no "done" of
+/// its own: fit_fabric reports the fit's one. Empty when there is no callback.
+std::function<void(const FitProgress&)> continued_progress(const FitOptions& options, std::string prefix, const FitResult& before)
 {
     if (!options.progress) return nullptr;
-    const int evals = before ? before->evaluations : 0;
-    const long sims = before ? before->simulations : 0;
-    const double secs = before ? before->wall_seconds : 0;
+    const int evals = before.evaluations;
+    const long sims = before.simulations;
+    const double secs = before.wall_seconds;
     return [&options, prefix = std::move(prefix), evals, sims, secs](const FitProgress& p) {
-        if (p.stage == "done") return;
         FitProgress q = p;
         q.stage = prefix + p.stage;
         q.evaluation += evals;
@@ -448,16 +447,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     out.trace = ev.trace();
     out.seconds_per_simulation = ev.simulations() ? ev.sim_seconds() / ev.simulations() : 0.0;
     out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (options.progress) {
-        FitProgress p;
-        p.stage = "done";
-        p.evaluation = p.planned = ev.evaluations();
-        p.best_chi2 = out.chi2;
-        p.simulations = ev.simulations();
-        p.elapsed_s = out.wall_seconds;
-        options.progress(p);
-    }
-    return out;
+    return out; // fit_fabric reports the whole fit's "done"
 }
 
 } // namespace
@@ -467,9 +457,7 @@ namespace {
 /// fit_at_grid, and again on options.refine_grid when the optimum is grid-bound.
 FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const FitOptions& options)
 {
-    FitOptions first = options;
-    first.progress = continued_progress(options, "", nullptr);
-    FitResult coarse = fit_at_grid(records, first);
+    FitResult coarse = fit_at_grid(records, options);
     if (!coarse.grid_bound || options.refine_grid == 0 || coarse.cancelled) return coarse;
     // The coarse optimum's bending is shorter than the mesh spacing: the mesh did
     // part of the bending's work, so the preset would not carry over. Fit again on
@@ -477,7 +465,7 @@ FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const F
     FitOptions fine = options;
     fine.grid = options.refine_grid;
     fine.start = coarse.params;
-    fine.progress = continued_progress(options, "refine ", &coarse);
+    fine.progress = continued_progress(options, "refine ", coarse);
     FitResult out = fit_at_grid(records, fine);
     FitResult::Refinement ref;
     ref.from_grid = options.grid;
@@ -553,7 +541,7 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     cloth::FabricParams start = free.params;
     start[Param::BendWarp] = start[Param::BendWeft] = std::sqrt(free.params[Param::BendWarp] * free.params[Param::BendWeft]);
     tied.start = start;
-    tied.progress = continued_progress(options, "tie ", &free);
+    tied.progress = continued_progress(options, "tie ", free);
     FitResult t = fit_at_grid(records, tied);
     FitResult::Anisotropy an = a;
     an.refit = true;

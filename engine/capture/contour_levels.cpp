@@ -29,29 +29,29 @@ void detail::measure_contours(const record::Record& rec, const record::ContourSt
             continue;
         }
         const int max_h = std::min(120, (lv.points - 1) / 2 - 1);
-        lv.harmonics = cloth::choose_harmonics(p, rec.contour_sigma, max_h);
-        lv.fit = cloth::fourier_fit(p, lv.harmonics);
-        lv.residual_rms = cloth::fourier_residual_rms(p, lv.fit);
+        const cloth::FourierLeastSquares lsq(p, std::max(max_h, 0));
+        lv.harmonics = cloth::choose_harmonics(lsq, rec.contour_sigma);
+        lv.fit = lsq.fit(lv.harmonics);
+        lv.residual_rms = lsq.residual_rms(lv.fit);
         // Guard: the seed interpolates each contour by its Fourier series, so the
         // series must reproduce the points to the profiler's noise. Where the
         // BIC-like stop of choose_harmonics ends above it (fine wrinkles), add
         // harmonics until the residual is down to the noise (10 % margin for
         // the sigma's own uncertainty).
-        auto floor_ok = [&](int, double res) { return res <= 1.1 * rec.contour_sigma; };
-        if (!floor_ok(lv.harmonics, lv.residual_rms)) {
-            int lo = lv.harmonics, hi = max_h;
-            cloth::FourierSeries fhi = cloth::fourier_fit(p, hi);
-            if (floor_ok(hi, cloth::fourier_residual_rms(p, fhi))) {
+        auto floor_ok = [&](double res) { return res <= 1.1 * rec.contour_sigma; };
+        if (!floor_ok(lv.residual_rms)) {
+            int lo = lv.harmonics, hi = lsq.max_harmonics();
+            if (floor_ok(lsq.residual_rms(lsq.fit(hi)))) {
                 while (hi - lo > 1) {
                     const int mid = (lo + hi) / 2;
-                    if (floor_ok(mid, cloth::fourier_residual_rms(p, cloth::fourier_fit(p, mid))))
+                    if (floor_ok(lsq.residual_rms(lsq.fit(mid))))
                         hi = mid;
                     else
                         lo = mid;
                 }
                 lv.harmonics = hi;
-                lv.fit = cloth::fourier_fit(p, hi);
-                lv.residual_rms = cloth::fourier_residual_rms(p, lv.fit);
+                lv.fit = lsq.fit(hi);
+                lv.residual_rms = lsq.residual_rms(lv.fit);
             }
         }
         lv.mean_radius = lv.fit.a0;

@@ -86,47 +86,93 @@ double FourierSeries::magnitude(int k) const
 
 double FourierSeries::evaluate(double theta) const
 {
-    double s = a0;
-    for (int k = 1; k <= harmonics(); ++k)
-        s += a[static_cast<std::size_t>(k - 1)] * std::cos(k * theta) + b[static_cast<std::size_t>(k - 1)] * std::sin(k * theta);
+    // cos/sin of k*theta by rotation, not a sincos per term (find_nodes and
+    // the residuals evaluate 24-120 harmonics at 720 angles per contour).
+    const double c1 = std::cos(theta), s1 = std::sin(theta);
+    double ck = 1.0, sk = 0.0, s = a0;
+    for (int k = 1; k <= harmonics(); ++k) {
+        const double cn = ck * c1 - sk * s1;
+        sk = sk * c1 + ck * s1;
+        ck = cn;
+        s += a[static_cast<std::size_t>(k - 1)] * ck + b[static_cast<std::size_t>(k - 1)] * sk;
+    }
     return s;
 }
 
-FourierSeries fourier_fit(const RadialProfile& p, int harmonics)
+FourierLeastSquares::FourierLeastSquares(const RadialProfile& p, int max_harmonics)
 {
-    if (harmonics < 0) throw ParameterError("fourier_fit: harmonics = " + std::to_string(harmonics) + " < 0");
+    if (max_harmonics < 0)
+        throw ParameterError("fourier_fit: harmonics = " + std::to_string(max_harmonics) + " < 0");
     std::vector<int> rows;
     for (int k = 0; k < p.size(); ++k)
         if (!std::isnan(p.r[static_cast<std::size_t>(k)])) rows.push_back(k);
     const int m = static_cast<int>(rows.size());
     // Never fit more coefficients than samples allow (keep the system overdetermined).
-    harmonics = std::min(harmonics, std::max(0, (m - 1) / 2 - 1));
+    max_harmonics_ = std::min(max_harmonics, std::max(0, (m - 1) / 2 - 1));
+    const int cols = 2 * max_harmonics_ + 1;
+    basis_.resize(m, cols);
+    y_.resize(m);
+    for (int i = 0; i < m; ++i) {
+        const double th = p.theta(rows[static_cast<std::size_t>(i)]);
+        // cos/sin of k*theta by rotation (error grows like k * eps: 1e-14 at k = 120).
+        const double c1 = std::cos(th), s1 = std::sin(th);
+        double ck = 1.0, sk = 0.0;
+        basis_(i, 0) = 1.0;
+        for (int k = 1; k <= max_harmonics_; ++k) {
+            const double cn = ck * c1 - sk * s1;
+            sk = sk * c1 + ck * s1;
+            ck = cn;
+            basis_(i, 2 * k - 1) = ck;
+            basis_(i, 2 * k) = sk;
+        }
+        y_(i) = p.r[static_cast<std::size_t>(rows[static_cast<std::size_t>(i)])];
+    }
+    normal_ = basis_.transpose() * basis_;
+    rhs_ = basis_.transpose() * y_;
+}
+
+FourierSeries FourierLeastSquares::fit(int harmonics) const
+{
+    if (harmonics < 0) throw ParameterError("fourier_fit: harmonics = " + std::to_string(harmonics) + " < 0");
+    harmonics = std::min(harmonics, max_harmonics_);
     FourierSeries s;
     s.a.assign(static_cast<std::size_t>(harmonics), 0.0);
     s.b.assign(static_cast<std::size_t>(harmonics), 0.0);
-    if (m == 0) {
+    if (y_.size() == 0) {
         s.a0 = kNaN;
         return s;
     }
     const int cols = 2 * harmonics + 1;
-    Eigen::MatrixXd A(m, cols);
-    Eigen::VectorXd y(m);
-    for (int i = 0; i < m; ++i) {
-        const double th = p.theta(rows[static_cast<std::size_t>(i)]);
-        A(i, 0) = 1.0;
-        for (int k = 1; k <= harmonics; ++k) {
-            A(i, 2 * k - 1) = std::cos(k * th);
-            A(i, 2 * k) = std::sin(k * th);
-        }
-        y(i) = p.r[static_cast<std::size_t>(rows[static_cast<std::size_t>(i)])];
-    }
-    const Eigen::VectorXd c = (A.transpose() * A).ldlt().solve(A.transpose() * y);
+    const Eigen::VectorXd c = normal_.topLeftCorner(cols, cols).ldlt().solve(rhs_.head(cols));
     s.a0 = c(0);
     for (int k = 1; k <= harmonics; ++k) {
         s.a[static_cast<std::size_t>(k - 1)] = c(2 * k - 1);
         s.b[static_cast<std::size_t>(k - 1)] = c(2 * k);
     }
     return s;
+}
+
+double FourierLeastSquares::residual_rms(const FourierSeries& s) const
+{
+    const int m = static_cast<int>(y_.size());
+    if (m == 0) return kNaN;
+    if (s.harmonics() > max_harmonics_)
+        throw ParameterError("FourierLeastSquares::residual_rms: series of " + std::to_string(s.harmonics()) +
+                             " harmonics > " + std::to_string(max_harmonics_));
+    const int cols = 2 * s.harmonics() + 1;
+    Eigen::VectorXd c(cols);
+    c(0) = s.a0;
+    for (int k = 1; k <= s.harmonics(); ++k) {
+        c(2 * k - 1) = s.a[static_cast<std::size_t>(k - 1)];
+        c(2 * k) = s.b[static_cast<std::size_t>(k - 1)];
+    }
+    const Eigen::VectorXd res = y_ - basis_.leftCols(cols) * c;
+    return std::sqrt(res.squaredNorm() / m);
+}
+
+FourierSeries fourier_fit(const RadialProfile& p, int harmonics)
+{
+    return FourierLeastSquares(p, harmonics).fit(harmonics);
 }
 
 double fourier_residual_rms(const RadialProfile& p, const FourierSeries& s)
@@ -149,16 +195,21 @@ int choose_harmonics(const RadialProfile& p, double noise_sigma, int max_harmoni
     for (double r : p.r) m += !std::isnan(r);
     if (m < 8) return 0;
     if (max_harmonics < 0) max_harmonics = m / 3;
-    max_harmonics = std::min(max_harmonics, (m - 1) / 2 - 1);
+    return choose_harmonics(FourierLeastSquares(p, std::max(max_harmonics, 0)), noise_sigma);
+}
+
+int choose_harmonics(const FourierLeastSquares& lsq, double noise_sigma)
+{
+    const int m = lsq.hit_rays();
+    if (m < 8) return 0;
     // Smallest K whose residual variance is consistent with the noise: the
     // unbiased variance estimate RSS/(m - 2K - 1) within two standard errors of
     // sigma^2 (chi-square with m - 2K - 1 degrees of freedom). Falls back to the
     // BIC minimum when the noise is not reached (e.g. sigma under-declared).
     int best_bic_k = 0;
     double best_bic = std::numeric_limits<double>::infinity();
-    for (int K = 0; K <= max_harmonics; ++K) {
-        const FourierSeries s = fourier_fit(p, K);
-        const double rms = fourier_residual_rms(p, s);
+    for (int K = 0; K <= lsq.max_harmonics(); ++K) {
+        const double rms = lsq.residual_rms(lsq.fit(K));
         const double rss = rms * rms * m;
         const int dof = m - (2 * K + 1);
         if (dof <= 0) break;

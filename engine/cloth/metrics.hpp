@@ -42,11 +42,39 @@ struct FourierSeries {
 /// Least-squares Fourier fit of a profile (NaN rays ignored) with `harmonics` terms.
 FourierSeries fourier_fit(const RadialProfile& p, int harmonics);
 
+/// Least-squares Fourier fits of one profile for every number of harmonics up
+/// to a maximum. The fits are nested (K harmonics use the leading 2K+1 columns
+/// of one design matrix), so the basis and its normal matrix are built once;
+/// choosing K by trying each (choose_harmonics, the contour levels' noise
+/// floor) then costs one small factorisation per K instead of a new design
+/// matrix and product (m x (2K+1)^2 flops) each time. Same numbers as
+/// fourier_fit to rounding.
+class FourierLeastSquares {
+public:
+    /// `max_harmonics` is clamped as fourier_fit clamps (an overdetermined system).
+    FourierLeastSquares(const RadialProfile& p, int max_harmonics);
+    int max_harmonics() const { return max_harmonics_; }
+    int hit_rays() const { return static_cast<int>(y_.size()); }
+    /// The fit with min(harmonics, max_harmonics()) terms; a0 NaN without hit rays.
+    FourierSeries fit(int harmonics) const;
+    /// RMS of profile minus `s` over the hit rays [m] (s must have at most max_harmonics() terms).
+    double residual_rms(const FourierSeries& s) const;
+
+private:
+    int max_harmonics_ = 0;
+    Eigen::MatrixXd basis_; ///< hit ray x (1, cos 1th, sin 1th, ..., cos Kth, sin Kth)
+    Eigen::VectorXd y_;     ///< r of the hit rays
+    Eigen::MatrixXd normal_;
+    Eigen::VectorXd rhs_;
+};
+
 /// Chooses the number of harmonics from the data: the smallest K whose residual
 /// is consistent with the noise `noise_sigma` [m]; when no K up to
 /// `max_harmonics` (default: a third of the sampled rays) reaches it, the K
 /// with the best BIC. Reaching the noise takes priority over the BIC.
 int choose_harmonics(const RadialProfile& p, double noise_sigma, int max_harmonics = -1);
+/// The same choice over the fits `lsq` offers (K up to lsq.max_harmonics()).
+int choose_harmonics(const FourierLeastSquares& lsq, double noise_sigma);
 
 /// RMS of profile minus series over the hit rays [m].
 double fourier_residual_rms(const RadialProfile& p, const FourierSeries& s);

@@ -4,6 +4,8 @@
 
 #include <QTest>
 
+#include <Eigen/QR>
+
 #include <numbers>
 #include <random>
 
@@ -104,6 +106,58 @@ private slots:
         QVERIFY(!p.complete());
         const FourierSeries s = fourier_fit(p, 8);
         QVERIFY(std::abs(s.a0 - 0.1) < 1e-12 && std::abs(s.magnitude(4) - 0.01) < 1e-12);
+    }
+
+    // The nested fits (one basis for every K) against a reference solved here
+    // by QR on an explicit sin/cos design matrix, on a profile with gaps, up to
+    // the 100 harmonics the contour levels try; and evaluate()'s rotation
+    // recurrence against std::cos/std::sin at harmonic 100.
+    void nested_fourier_fits_match_a_reference()
+    {
+        std::mt19937 rng(3);
+        std::normal_distribution<double> N(0, 0.5e-3);
+        RadialProfile p;
+        for (int k = 0; k < 720; ++k) {
+            const double t = 2 * kPi * k / 720;
+            const bool gap = (k > 100 && k < 106) || k % 11 == 0; // a wider gap leaves 100 harmonics undetermined
+            p.r.push_back(gap ? std::numeric_limits<double>::quiet_NaN() : 0.1 + 0.01 * std::cos(5 * t) + 0.002 * std::sin(17 * t) + N(rng));
+        }
+        const FourierLeastSquares lsq(p, 100);
+        QCOMPARE(lsq.max_harmonics(), 100);
+        for (int K : {0, 1, 7, 40, 100}) {
+            std::vector<int> rows;
+            for (int k = 0; k < p.size(); ++k)
+                if (!std::isnan(p.r[static_cast<std::size_t>(k)])) rows.push_back(k);
+            Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), 2 * K + 1);
+            Eigen::VectorXd y(A.rows());
+            for (Eigen::Index i = 0; i < A.rows(); ++i) {
+                const double t = p.theta(rows[static_cast<std::size_t>(i)]);
+                A(i, 0) = 1;
+                for (int h = 1; h <= K; ++h) A(i, 2 * h - 1) = std::cos(h * t), A(i, 2 * h) = std::sin(h * t);
+                y(i) = p.r[static_cast<std::size_t>(rows[static_cast<std::size_t>(i)])];
+            }
+            const Eigen::VectorXd c = A.colPivHouseholderQr().solve(y);
+            const FourierSeries s = lsq.fit(K);
+            QCOMPARE(s.harmonics(), K);
+            QVERIFY2(std::abs(s.a0 - c(0)) < 1e-10, qPrintable(QString("K %1: a0 %2 vs %3").arg(K).arg(s.a0, 0, 'g', 15).arg(c(0), 0, 'g', 15)));
+            for (int h = 1; h <= K; ++h)
+                QVERIFY2(std::abs(s.a[static_cast<std::size_t>(h - 1)] - c(2 * h - 1)) < 1e-10 && std::abs(s.b[static_cast<std::size_t>(h - 1)] - c(2 * h)) < 1e-10,
+                         qPrintable(QString("K %1 harmonic %2").arg(K).arg(h)));
+            const double rms = std::sqrt((y - A * c).squaredNorm() / static_cast<double>(y.size()));
+            QVERIFY(std::abs(lsq.residual_rms(s) - rms) < 1e-12);
+            QVERIFY(std::abs(fourier_residual_rms(p, s) - rms) < 1e-12);
+            const FourierSeries direct = fourier_fit(p, K);
+            QVERIFY(std::abs(direct.a0 - s.a0) < 1e-12);
+        }
+        const FourierSeries s100 = lsq.fit(100);
+        for (double t : {0.3, 2.0, 5.9}) {
+            double ref = s100.a0;
+            for (int h = 1; h <= 100; ++h) ref += s100.a[static_cast<std::size_t>(h - 1)] * std::cos(h * t) + s100.b[static_cast<std::size_t>(h - 1)] * std::sin(h * t);
+            QVERIFY(std::abs(s100.evaluate(t) - ref) < 1e-12);
+        }
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, lsq.residual_rms(FourierLeastSquares(p, 120).fit(120)));
+        // choose_harmonics on the shared fits is the profile's own choice.
+        QCOMPARE(choose_harmonics(lsq, 0.5e-3), choose_harmonics(p, 0.5e-3, 100));
     }
 
     void mesh_shadow_and_slices()

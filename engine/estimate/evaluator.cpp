@@ -633,6 +633,8 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
     return out;
 }
 
+double Evaluator::elapsed_s() const { return std::chrono::duration<double>(Clock::now() - m_t0).count(); }
+
 void Evaluator::report(const std::string& stage)
 {
     if (m_evaluations > m_traced) {

@@ -95,6 +95,8 @@ public:
     long simulations() const { return m_simulations; }
     int evaluations() const { return m_evaluations; }
     double sim_seconds() const { return m_sim_seconds; }
+    /// Wall time since the evaluator was made [s] (the progress's and trace's clock).
+    double elapsed_s() const;
     long unconverged() const { return m_unconverged; }
     const std::vector<DrapeFeatures>& cold_features() const { return m_cold; }
     int cold_seeds(std::size_t r) const { return r < m_cold_seeds.size() ? m_cold_seeds[r] : 0; }

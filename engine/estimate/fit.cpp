@@ -249,10 +249,35 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
     }
 }
 
-/// One fit at options.grid: scan, global, local, mirror, spread, uncertainty.
-FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOptions& options)
+/// A run's candidate-effect tests, kept for later: they cost a re-solve per
+/// switch effect and seed (10 drapes on one record), and a run that a refit
+/// replaces (the grid-bound coarse run, the free run before its tie) needs none.
+/// Applied to the result kept from that run (FitResult as combine_runs made it):
+/// adds the tests' verdicts and their work and trace. Empty: nothing to run.
+/// `options`: the caller's (its progress callback; the counts continue the kept
+/// result's).
+using DeferredEffects = std::function<void(FitResult&, const FitOptions&)>;
+
+/// What a run's deferred work needs alive after fit_at_grid returns: the
+/// Evaluator holds references to the records and options it was made with.
+struct GridRunState {
+    std::vector<MeasuredDrape> records;
+    FitOptions options;
+    std::optional<Evaluator> ev;
+};
+
+
+/// One fit at options.grid: scan, global, local, mirror, spread, uncertainty,
+/// and the candidate-effect tests (options.effects) - run here, or handed back
+/// through `deferred` when the caller decides later which run it keeps.
+FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOptions& options_in, DeferredEffects* deferred = nullptr)
 {
-    std::vector<MeasuredDrape> records = records_in;
+    if (deferred) *deferred = nullptr;
+    auto state = std::make_shared<GridRunState>();
+    state->records = records_in;
+    state->options = options_in;
+    std::vector<MeasuredDrape>& records = state->records;
+    const FitOptions& options = state->options;
     for (auto& r : records) {
         r.recentre_contours = r.recentre_contours || options.recentre_contours;
         r.untilt_contours = r.untilt_contours || options.untilt_contours;
@@ -286,7 +311,8 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     cloth::FabricParams base = options.start.value_or(cloth::FabricParams{});
     if (options.model == ModelVariant::Baseline) base[Param::Friction] = 0.0; // the seed's frictionless disc
     base = params_for_record(base, records.front());
-    Evaluator ev(records, options, vars, base);
+    state->ev.emplace(records, options, vars, base);
+    Evaluator& ev = *state->ev;
 
     Eigen::VectorXd x(n);
     for (int i = 0; i < n; ++i) {
@@ -432,13 +458,44 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     }
     out.residual = analyse_residual(out.residuals, n + measurement_params);
     out.residual.exceeds_noise_by_residual = out.residual.exceeds_noise;
-    if (options.effects && !out.cancelled) {
-        try {
-            test_effects(ev, vars, x, best, J_opt, out);
-        } catch (const CancelledFit&) {
-            out.cancelled = true;
-        }
-    }
+    // The effect tests, now or for the caller to run on the result it keeps.
+    DeferredEffects effects;
+    if (options.effects && !out.cancelled)
+        effects = [state, vars = out.variables, x, best, J_opt](FitResult& kept, const FitOptions& caller) {
+            Evaluator& e = *state->ev;
+            const int evals0 = e.evaluations();
+            const long sims0 = e.simulations(), fact0 = e.factorisations(), back0 = e.back_substitutions();
+            const int jac0 = e.jacobians();
+            const double sim_s0 = e.sim_seconds(), elapsed0 = e.elapsed_s();
+            const std::size_t trace0 = e.trace().size();
+            // Progress and trace continue the kept result's counts and time (this
+            // run's evaluator may be behind it: a run after it was not kept).
+            FitResult before;
+            before.evaluations = kept.evaluations - evals0;
+            before.simulations = kept.simulations - sims0;
+            before.wall_seconds = kept.wall_seconds - elapsed0;
+            state->options.progress = continued_progress(caller, "", before);
+            try {
+                test_effects(e, vars, x, best, J_opt, kept);
+            } catch (const CancelledFit&) {
+                kept.cancelled = true;
+            }
+            state->options.progress = nullptr;
+            const double sim_seconds = kept.seconds_per_simulation * kept.simulations + (e.sim_seconds() - sim_s0);
+            for (std::size_t k = trace0; k < e.trace().size(); ++k) {
+                FitTraceEntry t = e.trace()[k];
+                t.evaluation += before.evaluations;
+                t.elapsed_s += before.wall_seconds;
+                kept.trace.push_back(std::move(t));
+            }
+            kept.evaluations += e.evaluations() - evals0;
+            kept.simulations += e.simulations() - sims0;
+            kept.factorisations += e.factorisations() - fact0;
+            kept.back_substitutions += e.back_substitutions() - back0;
+            kept.jacobians += e.jacobians() - jac0;
+            kept.wall_seconds += e.elapsed_s() - elapsed0;
+            kept.seconds_per_simulation = kept.simulations ? sim_seconds / kept.simulations : 0.0;
+        };
     out.evaluations = ev.evaluations();
     out.simulations = ev.simulations();
     out.factorisations = ev.factorisations();
@@ -447,6 +504,11 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     out.trace = ev.trace();
     out.seconds_per_simulation = ev.simulations() ? ev.sim_seconds() / ev.simulations() : 0.0;
     out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (deferred) {
+        *deferred = std::move(effects);
+    } else if (effects) {
+        effects(out, options_in);
+    }
     return out; // fit_fabric reports the whole fit's "done"
 }
 
@@ -455,10 +517,14 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
 namespace {
 
 /// fit_at_grid, and again on options.refine_grid when the optimum is grid-bound.
-FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const FitOptions& options)
+FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const FitOptions& options, DeferredEffects& effects)
 {
-    FitResult coarse = fit_at_grid(records, options);
-    if (!coarse.grid_bound || options.refine_grid == 0 || coarse.cancelled) return coarse;
+    DeferredEffects coarse_effects;
+    FitResult coarse = fit_at_grid(records, options, &coarse_effects);
+    if (!coarse.grid_bound || options.refine_grid == 0 || coarse.cancelled) {
+        effects = std::move(coarse_effects);
+        return coarse;
+    }
     // The coarse optimum's bending is shorter than the mesh spacing: the mesh did
     // part of the bending's work, so the preset would not carry over. Fit again on
     // the finer grid, from the coarse values (the scan re-finds the bending's decade).
@@ -466,7 +532,8 @@ FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const F
     fine.grid = options.refine_grid;
     fine.start = coarse.params;
     fine.progress = continued_progress(options, "refine ", coarse);
-    FitResult out = fit_at_grid(records, fine);
+    DeferredEffects fine_effects;
+    FitResult out = fit_at_grid(records, fine, &fine_effects);
     FitResult::Refinement ref;
     ref.from_grid = options.grid;
     ref.to_grid = fine.grid;
@@ -497,6 +564,7 @@ FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const F
     FitResult kept = combine_runs(coarse, out, ref.adopted, "refine ");
     kept.options.refine_grid = options.refine_grid;
     kept.refinement = ref;
+    effects = ref.adopted ? std::move(fine_effects) : std::move(coarse_effects);
     return kept;
 }
 
@@ -512,16 +580,22 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     if (!(options.typical_bending_anisotropy >= 1) || !std::isfinite(options.typical_bending_anisotropy))
         throw ParameterError("fit: typical bending anisotropy = " + std::to_string(options.typical_bending_anisotropy) +
                              " must be a finite factor >= 1");
-    FitResult free = fit_with_refinement(records, options);
+    DeferredEffects free_effects;
+    FitResult free = fit_with_refinement(records, options, free_effects);
     auto& a = free.anisotropy;
-    if (options.bending != BendingTie::Auto || free.cancelled || !a.assessed) return free;
+    // Only the kept run's candidate effects are tested (its tests run last).
+    auto finish = [&options](FitResult& kept, const DeferredEffects& effects) {
+        if (effects && !kept.cancelled) effects(kept, options);
+        return kept;
+    };
+    if (options.bending != BendingTie::Auto || free.cancelled || !a.assessed) return finish(free, free_effects);
     char buf[400];
     const double spread = std::max(a.ratio, 1.0 / a.ratio);
     if (a.separated || spread <= options.typical_bending_anisotropy) {
         std::snprintf(buf, sizeof buf, "warp/weft bending ratio %.2f (95 %%: %.2f..%.3g): %s", a.ratio, a.ratio_lower95, a.ratio_upper95,
                       a.separated ? "the data separate warp and weft" : "not separated by the data, within the typical range of woven fabrics; kept as fitted");
         a.reason = buf;
-        return free;
+        return finish(free, free_effects);
     }
     // Beyond the typical anisotropy and not separated: fit again with one bending
     // for warp and weft, from the free optimum's geometric mean, at the grid the
@@ -542,7 +616,8 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     start[Param::BendWarp] = start[Param::BendWeft] = std::sqrt(free.params[Param::BendWarp] * free.params[Param::BendWeft]);
     tied.start = start;
     tied.progress = continued_progress(options, "tie ", free);
-    FitResult t = fit_at_grid(records, tied);
+    DeferredEffects tied_effects;
+    FitResult t = fit_at_grid(records, tied, &tied_effects);
     FitResult::Anisotropy an = a;
     an.refit = true;
     an.free_chi2 = free.chi2;
@@ -571,7 +646,7 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     kept.options.bending = options.bending;
     kept.options.term_sigmas.clear();
     kept.anisotropy = an;
-    return kept;
+    return finish(kept, an.tied ? tied_effects : free_effects);
 }
 
 FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options)

@@ -200,6 +200,90 @@ void add_twist_stencil(ClothModel& m, const ClothMesh& mesh, int a, int b, int c
     add_stencil(m, 4, ids, w, 2 * Bt * hu * hv, 2 * cb * hu * hv, quartic);
 }
 
+/// Bending on a general triangle mesh: per triangle, the second derivatives
+/// x_uu, x_uv, x_vv (material coordinates) of the quadratic through the
+/// triangle's three vertices and the three across its edges (least squares
+/// over up to nine nearby vertices where the hem leaves fewer), as three
+/// stencils: energy A (Bu |x_uu|^2 + 2 Bt |x_uv|^2 + Bv |x_vv|^2) / 2 with
+/// Bt = sqrt(Bu Bv), the orthotropic plate the grid model discretises. Exact
+/// for every quadratic surface, so a bend costs the same whatever its direction
+/// and whatever the triangles' shapes. (The hinge stencil used until 2026-11-30
+/// - the second difference across each edge, a third of the hinge's area -
+/// gave 0.45 B on a disc of concentric rings and 0.34..0.95 B by direction on
+/// a square lattice split into triangles: docs/probes/lattice.cpp iso.)
+void add_triangle_curvature_stencils(ClothModel& m, const ClothMesh& mesh, const std::map<std::pair<int, int>, std::vector<int>>& edge_tris,
+                                     double Bu, double Bv, double cb)
+{
+    const int nt = static_cast<int>(mesh.F.rows());
+    std::vector<std::vector<int>> vertex_tris(static_cast<std::size_t>(mesh.vertex_count()));
+    for (int t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) vertex_tris[static_cast<std::size_t>(mesh.F(t, k))].push_back(t);
+    const double Bt = std::sqrt(Bu * Bv);
+    for (int t = 0; t < nt; ++t) {
+        const int tv[3] = {mesh.F(t, 0), mesh.F(t, 1), mesh.F(t, 2)};
+        const double A = material_area(mesh, {tv[0], tv[1], tv[2]});
+        if (!(A > 0)) continue;
+        const Eigen::Vector2d centre = (mesh.uv.row(tv[0]) + mesh.uv.row(tv[1]) + mesh.uv.row(tv[2])).transpose() / 3.0;
+        std::vector<int> pts(tv, tv + 3);
+        auto add_point = [&](int v) {
+            if (std::find(pts.begin(), pts.end(), v) == pts.end()) pts.push_back(v);
+        };
+        for (int e = 0; e < 3; ++e) {
+            const int a = std::min(tv[e], tv[(e + 1) % 3]), b = std::max(tv[e], tv[(e + 1) % 3]);
+            for (int u : edge_tris.at({a, b}))
+                if (u != t)
+                    for (int k = 0; k < 3; ++k) add_point(mesh.F(u, k));
+        }
+        // At the hem: the nearest vertices of the triangles around its corners,
+        // one at a time until the points fix a quadratic (on a regular lattice the
+        // first ones may lie on two lines, a conic).
+        std::vector<int> more;
+        for (int v : tv)
+            for (int u : vertex_tris[static_cast<std::size_t>(v)])
+                for (int k = 0; k < 3; ++k)
+                    if (std::find(pts.begin(), pts.end(), mesh.F(u, k)) == pts.end() && std::find(more.begin(), more.end(), mesh.F(u, k)) == more.end())
+                        more.push_back(mesh.F(u, k));
+        std::sort(more.begin(), more.end(), [&](int x, int y) {
+            return (mesh.uv.row(x).transpose() - centre).squaredNorm() < (mesh.uv.row(y).transpose() - centre).squaredNorm();
+        });
+        // z = c0 + c1 u + c2 v + a u^2 / 2 + b u v + c v^2 / 2 (u, v from the centre,
+        // in units of L for conditioning); a, b, c are rows of the pseudo-inverse.
+        const double L = std::sqrt(A);
+        auto design = [&] {
+            Eigen::MatrixXd P(static_cast<Eigen::Index>(pts.size()), 6);
+            for (Eigen::Index i = 0; i < P.rows(); ++i) {
+                const double u = (mesh.uv(pts[static_cast<std::size_t>(i)], 0) - centre.x()) / L;
+                const double v = (mesh.uv(pts[static_cast<std::size_t>(i)], 1) - centre.y()) / L;
+                P.row(i) << 1.0, u, v, 0.5 * u * u, u * v, 0.5 * v * v;
+            }
+            return P;
+        };
+        auto determined = [](const Eigen::JacobiSVD<Eigen::MatrixXd>& s) {
+            return s.singularValues().size() == 6 && s.singularValues()(5) > 1e-3 * s.singularValues()(0);
+        };
+        Eigen::JacobiSVD<Eigen::MatrixXd> svd;
+        std::size_t next = 0;
+        while (true) {
+            if (pts.size() >= 6) {
+                svd.compute(design(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+                if (determined(svd)) break;
+            }
+            if (next >= more.size() || static_cast<int>(pts.size()) >= BendStencil::kMax) break;
+            pts.push_back(more[next++]);
+        }
+        const int np = static_cast<int>(pts.size());
+        if (np < 6 || !determined(svd)) continue; // the points do not fix a quadratic
+        const auto& s = svd.singularValues();
+        const Eigen::MatrixXd pinv = svd.matrixV() * s.cwiseInverse().asDiagonal() * svd.matrixU().transpose(); // 6 x np
+        const double stiffness[3] = {Bu * A, 2 * Bt * A, Bv * A}, damping[3] = {cb * A, 2 * cb * A, cb * A};
+        for (int comp = 0; comp < 3; ++comp) {
+            double w[BendStencil::kMax];
+            for (int i = 0; i < np; ++i) w[i] = pinv(3 + comp, i) / (L * L);
+            add_stencil(m, np, pts.data(), w, stiffness[comp], damping[comp]);
+        }
+    }
+}
+
 } // namespace
 
 ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelOptions& opt)
@@ -307,27 +391,9 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
             const double c2 = d.x() * d.x() / len2, s2 = d.y() * d.y() / len2, L = std::sqrt(len2);
             m.springs.back().fc = compression_limit(Bu * c2 + Bv * s2, A / L, L, lb);
         }
-        if (tris.size() != 2 || !quadratic) continue;
-        // The lambda takes copies: clang before 16 cannot capture structured bindings.
-        auto opposite = [&, ea = a, eb = b](int t) {
-            for (int c = 0; c < 3; ++c)
-                if (mesh.F(t, c) != ea && mesh.F(t, c) != eb) return mesh.F(t, c);
-            return -1;
-        };
-        const int c = opposite(tris[0]), d = opposite(tris[1]);
-        const int ids[4] = {a, b, c, d};
-        const Eigen::Vector2d t = (Eigen::Vector2d(mesh.uv.row(b)) - Eigen::Vector2d(mesh.uv.row(a))).normalized();
-        const Eigen::Vector2d across(-t.y(), t.x());
-        double w[4];
-        // The second derivative across the hinge (q = s^2 / 2, s the offset across it).
-        if (!kernel_weights(mesh, ids, [&](double du, double dv) { const double s = du * across.x() + dv * across.y(); return 0.5 * s * s; }, w))
-            continue; // degenerate hinge (collinear material points)
-        const double c2 = across.x() * across.x(), s2 = across.y() * across.y();
-        const double Bphi = Bu * c2 + Bv * s2;
-        const double Ahinge = (tri_area(tris[0]) + tri_area(tris[1])) / 3.0;
-        add_stencil(m, 4, ids, w, Bphi * Ahinge, cb * Ahinge);
     }
-    m.description = "triangle mass-spring model (edge springs, quadratic hinge bending) from continuum parameters";
+    if (quadratic) add_triangle_curvature_stencils(m, mesh, edge_tris, Bu, Bv, cb);
+    m.description = "triangle mass-spring model (edge springs, per-triangle curvature bending) from continuum parameters";
     return m;
 }
 

@@ -59,15 +59,16 @@ struct Spring {
 
 /// Quadratic bending stencil (after Bergou, Wardetzky, Harmon, Zorin, Grinspun
 /// 2006, "A quadratic bending model for inextensible surfaces"): energy
-/// 1/2 k |sum_i w_i x_i|^2 over 3 nodes along a grid line or the 4 nodes of a
-/// triangle hinge. The weights sum to zero and annihilate every affine map of the
+/// 1/2 k |sum_i w_i x_i|^2 over 3 nodes along a grid line, the 4 of a grid
+/// cell, or the 6-9 nodes around a triangle of a general mesh (one stencil per
+/// second derivative x_uu, x_uv, x_vv). The weights sum to zero and annihilate every affine map of the
 /// flat rest shape, so the energy is zero when flat, rotation invariant, its
 /// Hessian is constant, and it resists bending linearly from the flat state.
 /// They are scaled so that sum_i w_i x_i is the curvature vector [1/m] for a
 /// cylindrical bend across the stencil.
 struct BendStencil {
     static constexpr int kMax = 9;
-    int n = 3;        ///< 3 (grid line), 4 (grid cell, triangle hinge), up to 9 (a grid's 3x3 block at the hem)
+    int n = 3;        ///< 3 (grid line), 4 (grid cell), up to 9 (a grid's 3x3 block at the hem; a triangle and its neighbours)
     int v[kMax] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
     double w[kMax] = {}; ///< [1/m^2]
     double k; ///< [N*m^3]: energy in J with weights in 1/m^2 and positions in m
@@ -110,7 +111,7 @@ struct ModelOptions {
     /// bending energy to about 4 % (7 % at 45 degrees) instead of 15 % short. Measured in docs/model-discrepancy.md
     /// section 18 (three of the four starters converge within 0.7 point over grids
     /// 41-81 with it); off by default until a set-a refit shows its held-out error.
-    /// Triangle-mesh hinges have none (a grid garment, the tablecloth, has it).
+    /// A general triangle mesh's stencils need none (exact for quadratic surfaces; a grid garment, the tablecloth, has it).
     /// Presets carry it as model.bending_correction.
     bool bending_correction = false;
 };

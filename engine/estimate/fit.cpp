@@ -255,8 +255,8 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
 /// Applied to the result kept from that run (FitResult as combine_runs made it):
 /// adds the tests' verdicts and their work and trace. Empty: nothing to run.
 /// `options`: the caller's (its progress callback; the counts continue the kept
-/// result's).
-using DeferredEffects = std::function<void(FitResult&, const FitOptions&)>;
+/// result's); `prefix`: the kept run's stage prefix ("tie ", "refine ", "").
+using DeferredEffects = std::function<void(FitResult&, const FitOptions&, const std::string& prefix)>;
 
 /// What a run's deferred work needs alive after fit_at_grid returns: the
 /// Evaluator holds references to the records and options it was made with.
@@ -461,7 +461,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     // The effect tests, now or for the caller to run on the result it keeps.
     DeferredEffects effects;
     if (options.effects && !out.cancelled)
-        effects = [state, vars = out.variables, x, best, J_opt](FitResult& kept, const FitOptions& caller) {
+        effects = [state, vars = out.variables, x, best, J_opt](FitResult& kept, const FitOptions& caller, const std::string& prefix) {
             Evaluator& e = *state->ev;
             const int evals0 = e.evaluations();
             const long sims0 = e.simulations(), fact0 = e.factorisations(), back0 = e.back_substitutions();
@@ -474,7 +474,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             before.evaluations = kept.evaluations - evals0;
             before.simulations = kept.simulations - sims0;
             before.wall_seconds = kept.wall_seconds - elapsed0;
-            state->options.progress = continued_progress(caller, "", before);
+            state->options.progress = continued_progress(caller, prefix, before);
             try {
                 test_effects(e, vars, x, best, J_opt, kept);
             } catch (const CancelledFit&) {
@@ -486,6 +486,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
                 FitTraceEntry t = e.trace()[k];
                 t.evaluation += before.evaluations;
                 t.elapsed_s += before.wall_seconds;
+                t.stage = prefix + t.stage;
                 kept.trace.push_back(std::move(t));
             }
             kept.evaluations += e.evaluations() - evals0;
@@ -507,7 +508,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     if (deferred) {
         *deferred = std::move(effects);
     } else if (effects) {
-        effects(out, options_in);
+        effects(out, options_in, "");
     }
     return out; // fit_fabric reports the whole fit's "done"
 }
@@ -564,7 +565,10 @@ FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const F
     FitResult kept = combine_runs(coarse, out, ref.adopted, "refine ");
     kept.options.refine_grid = options.refine_grid;
     kept.refinement = ref;
-    effects = ref.adopted ? std::move(fine_effects) : std::move(coarse_effects);
+    if (ref.adopted && fine_effects)
+        effects = [f = std::move(fine_effects)](FitResult& k, const FitOptions& o, const std::string& p) { f(k, o, p + "refine "); };
+    else
+        effects = std::move(coarse_effects);
     return kept;
 }
 
@@ -584,18 +588,20 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     FitResult free = fit_with_refinement(records, options, free_effects);
     auto& a = free.anisotropy;
     // Only the kept run's candidate effects are tested (its tests run last).
-    auto finish = [&options](FitResult& kept, const DeferredEffects& effects) {
-        if (effects && !kept.cancelled) effects(kept, options);
-        return kept;
+    auto finish = [&options](FitResult& kept, const DeferredEffects& effects, const std::string& prefix) {
+        if (effects && !kept.cancelled) effects(kept, options, prefix);
+        else if (effects) // cancelled: the cancel flag stops them; the report says so
+            kept.residual.unexplained = "candidate effects not tested: the fit was cancelled";
+        return std::move(kept);
     };
-    if (options.bending != BendingTie::Auto || free.cancelled || !a.assessed) return finish(free, free_effects);
+    if (options.bending != BendingTie::Auto || free.cancelled || !a.assessed) return finish(free, free_effects, "");
     char buf[400];
     const double spread = std::max(a.ratio, 1.0 / a.ratio);
     if (a.separated || spread <= options.typical_bending_anisotropy) {
         std::snprintf(buf, sizeof buf, "warp/weft bending ratio %.2f (95 %%: %.2f..%.3g): %s", a.ratio, a.ratio_lower95, a.ratio_upper95,
                       a.separated ? "the data separate warp and weft" : "not separated by the data, within the typical range of woven fabrics; kept as fitted");
         a.reason = buf;
-        return finish(free, free_effects);
+        return finish(free, free_effects, "");
     }
     // Beyond the typical anisotropy and not separated: fit again with one bending
     // for warp and weft, from the free optimum's geometric mean, at the grid the
@@ -646,7 +652,7 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     kept.options.bending = options.bending;
     kept.options.term_sigmas.clear();
     kept.anisotropy = an;
-    return finish(kept, an.tied ? tied_effects : free_effects);
+    return an.tied ? finish(kept, tied_effects, "tie ") : finish(kept, free_effects, "");
 }
 
 FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options)

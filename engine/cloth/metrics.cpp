@@ -17,6 +17,21 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
+/// Calls f(k, cos k theta, sin k theta) for k = 1..K, the terms by rotation
+/// instead of a sincos each (the error grows like k eps: 1e-14 at k = 120).
+template <class F>
+void for_each_harmonic(double theta, int K, F&& f)
+{
+    const double c1 = std::cos(theta), s1 = std::sin(theta);
+    double ck = 1.0, sk = 0.0;
+    for (int k = 1; k <= K; ++k) {
+        const double cn = ck * c1 - sk * s1;
+        sk = sk * c1 + ck * s1;
+        ck = cn;
+        f(k, ck, sk);
+    }
+}
+
 /// For the segment p-q, updates r[k] = max(r[k], distance along ray k to the
 /// crossing) for every ray the segment crosses. Rays are theta_k = 2 pi k / N
 /// from the origin. Works on the angular span of the segment, so the cost is
@@ -86,16 +101,11 @@ double FourierSeries::magnitude(int k) const
 
 double FourierSeries::evaluate(double theta) const
 {
-    // cos/sin of k*theta by rotation, not a sincos per term (find_nodes and
-    // the residuals evaluate 24-120 harmonics at 720 angles per contour).
-    const double c1 = std::cos(theta), s1 = std::sin(theta);
-    double ck = 1.0, sk = 0.0, s = a0;
-    for (int k = 1; k <= harmonics(); ++k) {
-        const double cn = ck * c1 - sk * s1;
-        sk = sk * c1 + ck * s1;
-        ck = cn;
+    // (find_nodes and the residuals evaluate 24-120 harmonics at 720 angles per contour.)
+    double s = a0;
+    for_each_harmonic(theta, harmonics(), [&](int k, double ck, double sk) {
         s += a[static_cast<std::size_t>(k - 1)] * ck + b[static_cast<std::size_t>(k - 1)] * sk;
-    }
+    });
     return s;
 }
 
@@ -113,18 +123,11 @@ FourierLeastSquares::FourierLeastSquares(const RadialProfile& p, int max_harmoni
     basis_.resize(m, cols);
     y_.resize(m);
     for (int i = 0; i < m; ++i) {
-        const double th = p.theta(rows[static_cast<std::size_t>(i)]);
-        // cos/sin of k*theta by rotation (error grows like k * eps: 1e-14 at k = 120).
-        const double c1 = std::cos(th), s1 = std::sin(th);
-        double ck = 1.0, sk = 0.0;
         basis_(i, 0) = 1.0;
-        for (int k = 1; k <= max_harmonics_; ++k) {
-            const double cn = ck * c1 - sk * s1;
-            sk = sk * c1 + ck * s1;
-            ck = cn;
+        for_each_harmonic(p.theta(rows[static_cast<std::size_t>(i)]), max_harmonics_, [&](int k, double ck, double sk) {
             basis_(i, 2 * k - 1) = ck;
             basis_(i, 2 * k) = sk;
-        }
+        });
         y_(i) = p.r[static_cast<std::size_t>(rows[static_cast<std::size_t>(i)])];
     }
     normal_ = basis_.transpose() * basis_;

@@ -202,8 +202,9 @@ void add_twist_stencil(ClothModel& m, const ClothMesh& mesh, int a, int b, int c
 
 /// Bending on a general triangle mesh: per triangle, the second derivatives
 /// x_uu, x_uv, x_vv (material coordinates) of the quadratic through the
-/// triangle's three vertices and the three across its edges (least squares
-/// over up to nine nearby vertices where the hem leaves fewer), as three
+/// triangle's three vertices and the three across its edges (at the hem, a
+/// seam of three or more panels, or where those fix a quadratic poorly: least
+/// squares over up to nine nearby vertices, the best-conditioned set), as three
 /// stencils: energy A (Bu |x_uu|^2 + 2 Bt |x_uv|^2 + Bv |x_vv|^2) / 2 with
 /// Bt = sqrt(Bu Bv), the orthotropic plate the grid model discretises. Exact
 /// for every quadratic surface, so a bend costs the same whatever its direction

@@ -126,14 +126,10 @@ std::function<void(const FitProgress&)> continued_progress(const FitOptions& opt
     };
 }
 
-/// `kept` (one of two fits of the same records, run one after the other) with the
-/// counts and time of both and one trace in the order they ran, the second's
-/// stages prefixed.
-FitResult combine_runs(const FitResult& first, const FitResult& second, bool keep_second, const std::string& prefix)
+/// Adds the work of `other` (another run of the fit, or the effect tests run
+/// after `kept`) to `kept`: its counts, wall time and simulation time.
+void add_work(FitResult& kept, const FitResult& other)
 {
-    FitResult kept = keep_second ? second : first;
-    const FitResult& other = keep_second ? first : second;
-    kept.options.progress = nullptr;
     const double sim_seconds = kept.seconds_per_simulation * kept.simulations + other.seconds_per_simulation * other.simulations;
     kept.wall_seconds += other.wall_seconds;
     kept.evaluations += other.evaluations;
@@ -141,6 +137,17 @@ FitResult combine_runs(const FitResult& first, const FitResult& second, bool kee
     kept.factorisations += other.factorisations;
     kept.back_substitutions += other.back_substitutions;
     kept.jacobians += other.jacobians;
+    kept.seconds_per_simulation = kept.simulations ? sim_seconds / kept.simulations : 0.0;
+}
+
+/// `kept` (one of two fits of the same records, run one after the other) with the
+/// counts and time of both and one trace in the order they ran, the second's
+/// stages prefixed.
+FitResult combine_runs(const FitResult& first, const FitResult& second, bool keep_second, const std::string& prefix)
+{
+    FitResult kept = keep_second ? second : first;
+    kept.options.progress = nullptr;
+    add_work(kept, keep_second ? first : second);
     std::vector<FitTraceEntry> t = first.trace;
     const int offset = t.empty() ? 0 : t.back().evaluation;
     const double t_off = t.empty() ? 0.0 : t.back().elapsed_s;
@@ -151,7 +158,6 @@ FitResult combine_runs(const FitResult& first, const FitResult& second, bool kee
         t.push_back(std::move(e));
     }
     kept.trace = std::move(t);
-    kept.seconds_per_simulation = kept.simulations ? sim_seconds / kept.simulations : 0.0;
     kept.cancelled = kept.cancelled || second.cancelled; // a cancelled second fit keeps the first, but the run was stopped
     return kept;
 }
@@ -267,12 +273,13 @@ struct GridRunState {
 };
 
 
-/// One fit at options.grid: scan, global, local, mirror, spread, uncertainty,
-/// and the candidate-effect tests (options.effects) - run here, or handed back
-/// through `deferred` when the caller decides later which run it keeps.
-FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOptions& options_in, DeferredEffects* deferred = nullptr)
+/// One fit at options.grid: scan, global, local, mirror, spread, uncertainty;
+/// its candidate-effect tests (options.effects) are handed back through
+/// `deferred` (empty when there are none to run) for the caller to run on the
+/// result it keeps.
+FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOptions& options_in, DeferredEffects& deferred)
 {
-    if (deferred) *deferred = nullptr;
+    deferred = nullptr;
     auto state = std::make_shared<GridRunState>();
     state->records = records_in;
     state->options = options_in;
@@ -458,10 +465,9 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     }
     out.residual = analyse_residual(out.residuals, n + measurement_params);
     out.residual.exceeds_noise_by_residual = out.residual.exceeds_noise;
-    // The effect tests, now or for the caller to run on the result it keeps.
-    DeferredEffects effects;
+    // The effect tests, for the caller to run on the result it keeps.
     if (options.effects && !out.cancelled)
-        effects = [state, vars = out.variables, x, best, J_opt](FitResult& kept, const FitOptions& caller, const std::string& prefix) {
+        deferred = [state, vars = out.variables, x, best, J_opt](FitResult& kept, const FitOptions& caller, const std::string& prefix) {
             Evaluator& e = *state->ev;
             const int evals0 = e.evaluations();
             const long sims0 = e.simulations(), fact0 = e.factorisations(), back0 = e.back_substitutions();
@@ -481,7 +487,6 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
                 kept.cancelled = true;
             }
             state->options.progress = nullptr;
-            const double sim_seconds = kept.seconds_per_simulation * kept.simulations + (e.sim_seconds() - sim_s0);
             for (std::size_t k = trace0; k < e.trace().size(); ++k) {
                 FitTraceEntry t = e.trace()[k];
                 t.evaluation += before.evaluations;
@@ -489,13 +494,15 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
                 t.stage = prefix + t.stage;
                 kept.trace.push_back(std::move(t));
             }
-            kept.evaluations += e.evaluations() - evals0;
-            kept.simulations += e.simulations() - sims0;
-            kept.factorisations += e.factorisations() - fact0;
-            kept.back_substitutions += e.back_substitutions() - back0;
-            kept.jacobians += e.jacobians() - jac0;
-            kept.wall_seconds += e.elapsed_s() - elapsed0;
-            kept.seconds_per_simulation = kept.simulations ? sim_seconds / kept.simulations : 0.0;
+            FitResult tests;
+            tests.evaluations = e.evaluations() - evals0;
+            tests.simulations = e.simulations() - sims0;
+            tests.factorisations = e.factorisations() - fact0;
+            tests.back_substitutions = e.back_substitutions() - back0;
+            tests.jacobians = e.jacobians() - jac0;
+            tests.wall_seconds = e.elapsed_s() - elapsed0;
+            tests.seconds_per_simulation = tests.simulations ? (e.sim_seconds() - sim_s0) / tests.simulations : 0.0;
+            add_work(kept, tests);
         };
     out.evaluations = ev.evaluations();
     out.simulations = ev.simulations();
@@ -505,11 +512,6 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     out.trace = ev.trace();
     out.seconds_per_simulation = ev.simulations() ? ev.sim_seconds() / ev.simulations() : 0.0;
     out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (deferred) {
-        *deferred = std::move(effects);
-    } else if (effects) {
-        effects(out, options_in, "");
-    }
     return out; // fit_fabric reports the whole fit's "done"
 }
 
@@ -521,7 +523,7 @@ namespace {
 FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const FitOptions& options, DeferredEffects& effects)
 {
     DeferredEffects coarse_effects;
-    FitResult coarse = fit_at_grid(records, options, &coarse_effects);
+    FitResult coarse = fit_at_grid(records, options, coarse_effects);
     if (!coarse.grid_bound || options.refine_grid == 0 || coarse.cancelled) {
         effects = std::move(coarse_effects);
         return coarse;
@@ -534,7 +536,7 @@ FitResult fit_with_refinement(const std::vector<MeasuredDrape>& records, const F
     fine.start = coarse.params;
     fine.progress = continued_progress(options, "refine ", coarse);
     DeferredEffects fine_effects;
-    FitResult out = fit_at_grid(records, fine, &fine_effects);
+    FitResult out = fit_at_grid(records, fine, fine_effects);
     FitResult::Refinement ref;
     ref.from_grid = options.grid;
     ref.to_grid = fine.grid;
@@ -623,7 +625,7 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     tied.start = start;
     tied.progress = continued_progress(options, "tie ", free);
     DeferredEffects tied_effects;
-    FitResult t = fit_at_grid(records, tied, &tied_effects);
+    FitResult t = fit_at_grid(records, tied, tied_effects);
     FitResult::Anisotropy an = a;
     an.refit = true;
     an.free_chi2 = free.chi2;

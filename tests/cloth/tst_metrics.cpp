@@ -24,6 +24,14 @@ Polygon2 star(double a, double b, int n, double phase = 0.0, int samples = 2000)
     }
     return p;
 }
+/// A profile of `rays` rays with r(k, theta) (NaN: no hit).
+template <class R>
+RadialProfile profile_of(int rays, R r)
+{
+    RadialProfile p;
+    for (int k = 0; k < rays; ++k) p.r.push_back(r(k, 2 * kPi * k / rays));
+    return p;
+}
 } // namespace
 
 class TestMetrics : public QObject {
@@ -84,11 +92,9 @@ private slots:
     {
         std::mt19937 rng(8);
         std::normal_distribution<double> N(0, 0.3e-3);
-        RadialProfile p;
-        for (int k = 0; k < 360; ++k) {
-            const double t = 2 * kPi * k / 360;
-            p.r.push_back(0.1 + 0.008 * std::cos(6 * t) + 0.003 * std::sin(2 * t) + 0.0015 * std::cos(11 * t + 1) + N(rng));
-        }
+        const RadialProfile p = profile_of(360, [&](int, double t) {
+            return 0.1 + 0.008 * std::cos(6 * t) + 0.003 * std::sin(2 * t) + 0.0015 * std::cos(11 * t + 1) + N(rng);
+        });
         const int K = choose_harmonics(p, 0.3e-3);
         QVERIFY2(K >= 11 && K <= 16, qPrintable(QString("chose %1 harmonics").arg(K)));
         const FourierSeries s = fourier_fit(p, K);
@@ -98,11 +104,9 @@ private slots:
 
     void fourier_fit_ignores_missing_rays()
     {
-        RadialProfile p;
-        for (int k = 0; k < 360; ++k) {
-            const double t = 2 * kPi * k / 360;
-            p.r.push_back(k % 7 == 0 ? std::numeric_limits<double>::quiet_NaN() : 0.1 + 0.01 * std::cos(4 * t));
-        }
+        const RadialProfile p = profile_of(360, [](int k, double t) {
+            return k % 7 == 0 ? std::numeric_limits<double>::quiet_NaN() : 0.1 + 0.01 * std::cos(4 * t);
+        });
         QVERIFY(!p.complete());
         const FourierSeries s = fourier_fit(p, 8);
         QVERIFY(std::abs(s.a0 - 0.1) < 1e-12 && std::abs(s.magnitude(4) - 0.01) < 1e-12);
@@ -116,18 +120,16 @@ private slots:
     {
         std::mt19937 rng(3);
         std::normal_distribution<double> N(0, 0.5e-3);
-        RadialProfile p;
-        for (int k = 0; k < 720; ++k) {
-            const double t = 2 * kPi * k / 720;
+        const RadialProfile p = profile_of(720, [&](int k, double t) {
             const bool gap = (k > 100 && k < 106) || k % 11 == 0; // a wider gap leaves 100 harmonics undetermined
-            p.r.push_back(gap ? std::numeric_limits<double>::quiet_NaN() : 0.1 + 0.01 * std::cos(5 * t) + 0.002 * std::sin(17 * t) + N(rng));
-        }
+            return gap ? std::numeric_limits<double>::quiet_NaN() : 0.1 + 0.01 * std::cos(5 * t) + 0.002 * std::sin(17 * t) + N(rng);
+        });
         const FourierLeastSquares lsq(p, 100);
         QCOMPARE(lsq.max_harmonics(), 100);
+        std::vector<int> rows;
+        for (int k = 0; k < p.size(); ++k)
+            if (!std::isnan(p.r[static_cast<std::size_t>(k)])) rows.push_back(k);
         for (int K : {0, 1, 7, 40, 100}) {
-            std::vector<int> rows;
-            for (int k = 0; k < p.size(); ++k)
-                if (!std::isnan(p.r[static_cast<std::size_t>(k)])) rows.push_back(k);
             Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), 2 * K + 1);
             Eigen::VectorXd y(A.rows());
             for (Eigen::Index i = 0; i < A.rows(); ++i) {

@@ -22,6 +22,20 @@ FabricParams undamped()
     p[Param::DampAir] = 0;
     return p;
 }
+
+/// The flat sheet X rolled isometrically onto a cylinder of radius R: arc
+/// length t = (x - origin) . dir along the unit in-plane direction `dir`.
+Positions rolled(const Positions& X, double R, const Eigen::Vector2d& dir, const Eigen::Vector2d& origin = Eigen::Vector2d::Zero())
+{
+    Positions Y = X;
+    for (int i = 0; i < Y.rows(); ++i) {
+        const double t = (X(i, 0) - origin.x()) * dir.x() + (X(i, 1) - origin.y()) * dir.y();
+        Y(i, 0) += (R * std::sin(t / R) - t) * dir.x();
+        Y(i, 1) += (R * std::sin(t / R) - t) * dir.y();
+        Y(i, 2) = R * (1 - std::cos(t / R));
+    }
+    return Y;
+}
 } // namespace
 
 class TestPhysics : public QObject {
@@ -313,15 +327,6 @@ private slots:
         QFETCH(double, r);
         QFETCH(bool, softening);
         const ClothMesh mesh = make_rectangle(0.06, 0.06, 61, 61);
-        auto rolled = [&](const ClothMesh& m) {
-            Positions X = m.X;
-            for (int i = 0; i < X.rows(); ++i) {
-                const double s = m.X(i, axis); // arc length along the bent axis
-                X(i, axis) = R * std::sin(s / R);
-                X(i, 2) = R * (1 - std::cos(s / R));
-            }
-            return X;
-        };
         auto bending_energy = [&](double radius) {
             FabricParams p = undamped();
             p[softening ? Param::BendSofteningRadius : Param::BendStiffeningRadius] = radius;
@@ -329,7 +334,7 @@ private slots:
             model.gravity.setZero();
             model.springs.clear(); // rolling is isometric; keep the bending energy alone
             ClothSystem s(mesh, model);
-            return s.potential_energy(rolled(mesh));
+            return s.potential_energy(rolled(mesh.X, R, axis == 0 ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1)));
         };
         const double e0 = bending_energy(0.0), er = bending_energy(r);
         QVERIFY(e0 > 0);
@@ -407,13 +412,7 @@ private slots:
         ClothSystem s(m, model);
         const double kappa = 2.0, R = 1 / kappa, ph = phi_deg * std::numbers::pi / 180;
         const Eigen::Vector2d dir(std::cos(ph), std::sin(ph));
-        Positions Y = m.X;
-        for (int i = 0; i < Y.rows(); ++i) {
-            const double t = (m.X(i, 0) - size / 2) * dir.x() + (m.X(i, 1) - size / 2) * dir.y();
-            Y(i, 0) += (R * std::sin(t / R) - t) * dir.x();
-            Y(i, 1) += (R * std::sin(t / R) - t) * dir.y();
-            Y(i, 2) = R * (1 - std::cos(t / R));
-        }
+        const Positions Y = rolled(m.X, R, dir, Eigen::Vector2d(size / 2, size / 2));
         const double c2 = dir.x() * dir.x(), s2 = dir.y() * dir.y();
         const double Bphi = p[Param::BendWarp] * c2 * c2 + 2 * std::sqrt(p[Param::BendWarp] * p[Param::BendWeft]) * c2 * s2 + p[Param::BendWeft] * s2 * s2;
         const double expected = 0.5 * Bphi * kappa * kappa * area;

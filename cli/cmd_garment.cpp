@@ -41,13 +41,14 @@ from the body's axis and its folds, vertices inside the body, self-intersections
   --out DIR             write rest.obj, summary.json and garment.png (front and top views)
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr
+  --trace               print every static-solver iteration on stderr (after the skirt's fall)
 
 Exit codes: 0 at rest, 1 bad input, 2 bad command line, 4 the solver did not reach rest.)";
 
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, fabric_flags() + std::set<std::string>{"--body", "--garment", "--unit", "--up", "--out", "--length", "--self-collision"},
-           {"--json", "--quiet"});
+           {"--json", "--quiet", "--trace"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     const auto body = a.get("--body");
     if (!body) throw UsageError("--body FILE is required (a mannequin mesh)");
@@ -84,6 +85,7 @@ int run(const std::vector<std::string>& argv)
     cloth::ClothSystem& sys = *scene.system;
     if (self_collision == "off") sys.model().self_contact_distance = 0;
     cloth::RestOptions ro = importers::garment_rest_options();
+    ro.trace = a.has("--trace");
     const bool tty = ::isatty(STDERR_FILENO);
     if (!quiet)
         ro.progress = [tty](const cloth::SolverStatus& st) {

@@ -6,7 +6,9 @@
 // (300/150 mm) three ways, at the mesh spacing of grid GRID:
 //   grid  - the product's disc (square lattice, orthotropic grid model);
 //   sqtri - the same square-lattice triangles through the general triangle
-//           model (edge springs, hinge bending: no lattice-aligned stencils);
+//           model (fibre-net membrane and per-triangle curvature stencils since
+//           2026-12-01; edge springs and hinge bending before: no lattice-aligned
+//           stencils);
 //   rings - concentric rings of near-equilateral triangles (no 4-fold
 //           symmetry; each ring turned by the golden angle), general model.
 // sqtri against rings isolates the mesh: same model, same spacing.

@@ -15,6 +15,27 @@ namespace drape::cloth {
 
 enum class SpringKind : unsigned char { StretchU, StretchV, Shear, FlexionU, FlexionV, Edge };
 
+/// The spring law of an extension x (see Spring): energy [J] and its first and
+/// second derivative in x, for stiffness k and compressive force limit fc.
+inline void spring_law(double x, double k, double fc, double& e, double& de, double& d2e)
+{
+    if (fc == 0 && x < 0) {
+        e = de = d2e = 0;
+        return;
+    }
+    const double x1 = -0.5 * fc / k;
+    if (fc > 0 && x < x1) {
+        const double h = 0.5 * fc, q = std::exp((x - x1) * k / h);
+        e = 0.5 * k * x1 * x1 - fc * (x - x1) + h * h / k * (q - 1);
+        de = -fc + h * q;
+        d2e = k * q;
+        return;
+    }
+    e = 0.5 * k * x * x;
+    de = k * x;
+    d2e = k;
+}
+
 /// Spring with a dashpot along it (Provot 1995). Energy 1/2 k x^2 in the extension
 /// x = |xi - xj| - rest, except in compression towards the strip's buckling load:
 /// with fc > 0 the compressive force approaches fc and never exceeds it, the
@@ -36,25 +57,31 @@ struct Spring {
     SpringKind kind;
     double fc = -1; ///< [N] compressive force limit; < 0: linear in compression too
     /// Energy [J], its first and second derivative in the length [N], [N/m].
-    void law(double length, double& e, double& de, double& d2e) const
+    void law(double length, double& e, double& de, double& d2e) const { spring_law(length - rest, k, fc, e, de, d2e); }
+};
+
+/// One fibre family of one triangle of a general mesh: the triangle's membrane
+/// (make_model) is the continuum of the grid's spring net - warp, weft and the two
+/// diagonals - so that a preset means the same on any mesh. The fibre's current
+/// vector is d = sum_a w_a x_a over the triangle's vertices (the deformation
+/// gradient applied to the fibre's material direction, times `rest`), its length
+/// |d| is `rest` when unstretched, and the energy is Spring's law of |d| - rest
+/// (linear, or with the compression limit fc: the sub-mesh buckling of the
+/// strip). Weights sum to zero: rigid motions cost nothing.
+struct MembraneFiber {
+    std::array<int, 3> v{-1, -1, -1};
+    std::array<double, 3> w{0, 0, 0}; ///< [1]
+    double rest; ///< [m]
+    double k;    ///< [N/m]
+    double d;    ///< [N*s/m]
+    double fc = -1; ///< [N]
+    /// The fibre's current vector at positions X.
+    template <class P>
+    Eigen::Vector3d vec(const P& X) const
     {
-        const double x = length - rest;
-        if (fc == 0 && x < 0) {
-            e = de = d2e = 0;
-            return;
-        }
-        const double x1 = -0.5 * fc / k;
-        if (fc > 0 && x < x1) {
-            const double h = 0.5 * fc, q = std::exp((x - x1) * k / h);
-            e = 0.5 * k * x1 * x1 - fc * (x - x1) + h * h / k * (q - 1);
-            de = -fc + h * q;
-            d2e = k * q;
-            return;
-        }
-        e = 0.5 * k * x * x;
-        de = k * x;
-        d2e = k;
+        return w[0] * X.row(v[0]).transpose() + w[1] * X.row(v[1]).transpose() + w[2] * X.row(v[2]).transpose();
     }
+    void law(double length, double& e, double& de, double& d2e) const { spring_law(length - rest, k, fc, e, de, d2e); }
 };
 
 /// Quadratic bending stencil (after Bergou, Wardetzky, Harmon, Zorin, Grinspun
@@ -151,6 +178,7 @@ struct HorizontalAnchor {
 
 struct ClothModel {
     std::vector<Spring> springs;
+    std::vector<MembraneFiber> fibers; ///< the membrane of a general triangle mesh (a grid's is its springs)
     std::vector<BendStencil> bends;
     Eigen::VectorXd mass;             ///< [kg] per vertex
     std::vector<char> pinned;         ///< per vertex
@@ -193,12 +221,11 @@ struct ClothModel {
 /// Hem nodes snapped onto the cut circle keep springs with their true rest
 /// lengths; bending stencils through them use the divided-difference weights
 /// of their true spacings along the grid line.
-/// General triangle meshes get one spring per edge, k = E A_adj / |e|^2 with
-/// A_adj the area of the edge's triangles and E the mean of warp and weft (exact
-/// for an equilateral lattice, whose shear stiffness is then 3E/8), and one
-/// 4-node bending stencil per interior edge, k = B(phi) (A1 + A2)/3 with
-/// B(phi) = B_u cos^2 phi + B_v sin^2 phi, phi the angle of the across-edge
-/// direction to the warp.
+/// General triangle meshes get the continuum of that spring net per triangle
+/// (MembraneFiber: warp, weft and both diagonals, the grid's moduli and
+/// compression limits; exact for affine deformations on any triangulation) and
+/// per-triangle curvature stencils for the orthotropic plate (x_uu, x_uv, x_vv of
+/// the quadratic through the triangle and its neighbours).
 ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelOptions& opt = {});
 
 /// A mass-spring grid given by its element constants instead of continuum

@@ -107,6 +107,13 @@ double Stepper::explicit_dt_limit() const
         dd(sp.i) += 2 * sp.d;
         dd(sp.j) += 2 * sp.d;
     }
+    for (const auto& fb : m.fibers) {
+        const double sw = std::abs(fb.w[0]) + std::abs(fb.w[1]) + std::abs(fb.w[2]);
+        for (int a = 0; a < 3; ++a) {
+            kk(fb.v[a]) += fb.k * std::abs(fb.w[a]) * sw;
+            dd(fb.v[a]) += fb.d * std::abs(fb.w[a]) * sw;
+        }
+    }
     for (const auto& b : m.bends) {
         double sw = 0;
         for (int a = 0; a < b.n; ++a) sw += std::abs(b.w[a]);

@@ -511,6 +511,11 @@ double ClothSystem::potential_energy(const Positions& X) const
         sp.law(l, es, de, d2e);
         e += es;
     }
+    for (const auto& fb : m_model.fibers) {
+        double es, de, d2e;
+        fb.law(fb.vec(X).norm(), es, de, d2e);
+        e += es;
+    }
     const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening;
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
@@ -559,6 +564,15 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         const Vec3 fi = -de / l * u;
         f.row(sp.i) += fi.transpose();
         f.row(sp.j) -= fi.transpose();
+    }
+    for (const auto& fb : m_model.fibers) {
+        const Vec3 u = fb.vec(X);
+        const double l = u.norm();
+        if (l <= 1e-300) continue;
+        double es, de, d2e;
+        fb.law(l, es, de, d2e);
+        const Vec3 fu = -de / l * u;
+        for (int a = 0; a < 3; ++a) f.row(fb.v[a]) += (fb.w[a] * fu).transpose();
     }
     const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening;
     for (const auto& b : m_model.bends) {
@@ -612,6 +626,15 @@ void ClothSystem::add_damping_forces(const Positions& X, const Positions& V, Pos
         f.row(sp.i) += fi.transpose();
         f.row(sp.j) -= fi.transpose();
     }
+    for (const auto& fb : m_model.fibers) {
+        if (fb.d == 0) continue;
+        Vec3 u = fb.vec(X);
+        const double l = u.norm();
+        if (l <= 1e-300) continue;
+        u /= l;
+        const double rate = fb.vec(V).dot(u);
+        for (int a = 0; a < 3; ++a) f.row(fb.v[a]) -= (fb.d * rate * fb.w[a] * u).transpose();
+    }
     for (const auto& b : m_model.bends) {
         if (b.d == 0) continue;
         Vec3 s = Vec3::Zero();
@@ -661,6 +684,9 @@ void HessianAssembler::build_pattern()
     };
     for (int i = 0; i < n; ++i) link(i, i);
     for (const auto& sp : m.springs) link(sp.i, sp.j);
+    for (const auto& fb : m.fibers)
+        for (int p = 0; p < 3; ++p)
+            for (int q = p + 1; q < 3; ++q) link(fb.v[p], fb.v[q]);
     for (const auto& b : m.bends)
         for (int p = 0; p < b.n; ++p)
             for (int q = p + 1; q < b.n; ++q) link(b.v[p], b.v[q]);
@@ -714,6 +740,11 @@ void HessianAssembler::build_pattern()
     }
     m_edge_blocks.reserve(s.edges().size());
     for (const auto& e : s.edges()) m_edge_blocks.push_back(block(e[0], e[1]));
+    m_fiber_blocks.clear();
+    m_fiber_blocks.reserve(3 * m.fibers.size());
+    for (const auto& fb : m.fibers)
+        for (int p = 0; p < 3; ++p)
+            for (int q = p + 1; q < 3; ++q) m_fiber_blocks.push_back(block(std::min(fb.v[p], fb.v[q]), std::max(fb.v[p], fb.v[q])));
 }
 
 bool HessianAssembler::has_block(int i, int j) const
@@ -787,6 +818,26 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.i)], K);
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.j)], K);
         add_off(m_spring_blocks[s], -K);
+    }
+    for (std::size_t s = 0; s < m.fibers.size(); ++s) {
+        const auto& fb = m.fibers[s];
+        Vec3 u = fb.vec(X);
+        const double l = u.norm();
+        if (l <= 1e-300) continue;
+        u /= l;
+        const Eigen::Matrix3d nn = u * u.transpose();
+        // As a spring's, in the fibre's vector d = sum w_a x_a; vertex blocks w_a w_b K.
+        double es, de, d2e;
+        fb.law(l, es, de, d2e);
+        double t = de / l;
+        if (project_springs && t < 0) t = 0;
+        Eigen::Matrix3d K = d2e * nn + t * (I - nn);
+        if (damping_scale != 0) K += damping_scale * fb.d * nn;
+        for (int p = 0; p < 3; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(fb.v[p])], fb.w[p] * fb.w[p] * K);
+        std::size_t b = 3 * s;
+        // Off-diagonal blocks are stored once, (min, max); K is symmetric.
+        for (int p = 0; p < 3; ++p)
+            for (int q = p + 1; q < 3; ++q, ++b) add_off(m_fiber_blocks[b], fb.w[p] * fb.w[q] * K);
     }
     const double beta = m.bend_stiffening, rho2 = m.bend_softening;
     for (std::size_t s = 0; s < m.bends.size(); ++s) {

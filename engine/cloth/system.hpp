@@ -194,6 +194,7 @@ private:
     std::vector<Block> m_bend_blocks;        // every stencil's pairs (p<q) in order 01,02,..,12,..; n(n-1)/2 each
     std::vector<std::size_t> m_bend_offset;  // per stencil: its first pair in m_bend_blocks
     std::vector<Block> m_edge_blocks;    // per mesh edge (ClothSystem::edges): off-diagonal block
+    std::vector<Block> m_fiber_blocks;   // per membrane fibre: its three off-diagonal blocks (pairs 01, 02, 12)
 };
 
 } // namespace drape::cloth

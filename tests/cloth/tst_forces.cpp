@@ -462,17 +462,24 @@ private slots:
 
     void projected_hessian_is_positive_semidefinite_data()
     {
+        QTest::addColumn<bool>("triangles");
         QTest::addColumn<double>("stiffening");
         QTest::addColumn<double>("softening");
-        QTest::newRow("linear bending") << 0.0 << 0.0;
-        QTest::newRow("stiffening bending") << 0.02 << 0.0;
-        QTest::newRow("softening bending") << 0.0 << 0.02;
+        QTest::addColumn<double>("buckling");
+        QTest::newRow("linear bending") << false << 0.0 << 0.0 << 0.0;
+        QTest::newRow("stiffening bending") << false << 0.02 << 0.0 << 0.0;
+        QTest::newRow("softening bending") << false << 0.0 << 0.02 << 0.0;
+        // The membrane fibres of a triangle mesh, compressed in the folded overhang.
+        QTest::newRow("triangle mesh") << true << 0.0 << 0.0 << 0.0;
+        QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << 0.03;
     }
     void projected_hessian_is_positive_semidefinite()
     {
+        QFETCH(bool, triangles);
         QFETCH(double, stiffening);
         QFETCH(double, softening);
-        auto s = bent_disc(false, 7, stiffening, softening);
+        QFETCH(double, buckling);
+        auto s = bent_disc(triangles, 7, stiffening, softening, buckling);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/true);
         const Eigen::MatrixXd Hd = Eigen::MatrixXd(Eigen::MatrixXd(H.matrix()).selfadjointView<Eigen::Upper>());
@@ -480,11 +487,18 @@ private slots:
         QVERIFY(es.eigenvalues().minCoeff() > -1e-8 * es.eigenvalues().maxCoeff());
     }
 
+    void damping_forces_match_damping_matrix_data()
+    {
+        QTest::addColumn<bool>("triangles");
+        QTest::newRow("grid") << false;
+        QTest::newRow("triangle mesh") << true;
+    }
     void damping_forces_match_damping_matrix()
     {
         // The implicit integrator uses D (dashpots + air) from the assembler; the
         // explicit ones use the damping forces. They must agree: f = -D v.
-        auto s = bent_disc(false, 9);
+        QFETCH(bool, triangles);
+        auto s = bent_disc(triangles, 9);
         std::mt19937 rng(1);
         std::normal_distribution<double> N(0, 0.1);
         Positions V(s->vertex_count(), 3);

@@ -36,6 +36,44 @@ Positions rolled(const Positions& X, double R, const Eigen::Vector2d& dir, const
     }
     return Y;
 }
+/// A size x size square of triangles with spacing h: 0 a square lattice split
+/// into triangles, 1 rows of equilateral triangles (every other row shifted by
+/// half a side), 2 the split lattice with its interior vertices moved by up to
+/// 30 % of the spacing.
+ClothMesh test_triangles(int kind, double size, double h, const Eigen::Vector3d& warp = Eigen::Vector3d::UnitX())
+{
+    Positions X;
+    Triangles F;
+    if (kind == 1) {
+        const int nx = static_cast<int>(size / h) + 1, ny = static_cast<int>(size / (h * std::sqrt(3.0) / 2)) + 1;
+        X.resize(nx * ny, 3);
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) X.row(i + nx * j) << i * h + (j % 2) * 0.5 * h, j * h * std::sqrt(3.0) / 2, 0.0;
+        std::vector<Eigen::Vector3i> tris;
+        for (int j = 0; j + 1 < ny; ++j)
+            for (int i = 0; i + 1 < nx; ++i) {
+                const int a = i + nx * j, b = a + 1, c = a + nx, d = c + 1;
+                if (j % 2 == 0) tris.emplace_back(a, b, c), tris.emplace_back(b, d, c);
+                else tris.emplace_back(a, d, c), tris.emplace_back(a, b, d);
+            }
+        F.resize(static_cast<Eigen::Index>(tris.size()), 3);
+        for (std::size_t t = 0; t < tris.size(); ++t) F.row(static_cast<Eigen::Index>(t)) = tris[t].transpose();
+    } else {
+        const int n = static_cast<int>(size / h) + 1;
+        const ClothMesh g = make_rectangle(size, size, n, n);
+        X = g.X;
+        F = g.F;
+        if (kind == 2) {
+            std::mt19937 rng(5);
+            std::uniform_real_distribution<double> U(-0.3 * h, 0.3 * h);
+            for (int i = 0; i < X.rows(); ++i)
+                if (X(i, 0) > 1e-9 && X(i, 0) < size - 1e-9 && X(i, 1) > 1e-9 && X(i, 1) < size - 1e-9) X(i, 0) += U(rng), X(i, 1) += U(rng);
+        }
+    }
+    return make_triangle_mesh(X, F, warp);
+}
+
+const char* lattice_name(int kind) { return kind == 0 ? "square lattice split" : kind == 1 ? "equilateral" : "jittered"; }
 } // namespace
 
 class TestPhysics : public QObject {
@@ -333,6 +371,7 @@ private slots:
             ClothModel model = make_model(mesh, p);
             model.gravity.setZero();
             model.springs.clear(); // rolling is isometric; keep the bending energy alone
+        model.fibers.clear();
             ClothSystem s(mesh, model);
             return s.potential_energy(rolled(mesh.X, R, axis == 0 ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1)));
         };
@@ -364,7 +403,7 @@ private slots:
         QTest::addColumn<double>("phi_deg");
         for (int m = 0; m < 3; ++m)
             for (double deg : {0.0, 30.0, 45.0, 70.0, 90.0, 135.0})
-                QTest::newRow(qPrintable(QString("%1, %2 deg").arg(m == 0 ? "square lattice split" : m == 1 ? "equilateral" : "jittered").arg(deg)))
+                QTest::newRow(qPrintable(QString("%1, %2 deg").arg(lattice_name(m)).arg(deg)))
                     << m << deg;
     }
     void triangle_mesh_bending_is_the_orthotropic_plate()
@@ -372,42 +411,14 @@ private slots:
         QFETCH(int, mesh);
         QFETCH(double, phi_deg);
         const double size = 0.1, h = 0.005;
-        Positions X;
-        Triangles F;
-        if (mesh == 1) {
-            // Rows of equilateral triangles, every other row shifted by half a side.
-            const int nx = static_cast<int>(size / h) + 1, ny = static_cast<int>(size / (h * std::sqrt(3.0) / 2)) + 1;
-            X.resize(nx * ny, 3);
-            for (int j = 0; j < ny; ++j)
-                for (int i = 0; i < nx; ++i) X.row(i + nx * j) << i * h + (j % 2) * 0.5 * h, j * h * std::sqrt(3.0) / 2, 0.0;
-            std::vector<Eigen::Vector3i> tris;
-            for (int j = 0; j + 1 < ny; ++j)
-                for (int i = 0; i + 1 < nx; ++i) {
-                    const int a = i + nx * j, b = a + 1, c = a + nx, d = c + 1;
-                    if (j % 2 == 0) tris.emplace_back(a, b, c), tris.emplace_back(b, d, c);
-                    else tris.emplace_back(a, d, c), tris.emplace_back(a, b, d);
-                }
-            F.resize(static_cast<Eigen::Index>(tris.size()), 3);
-            for (std::size_t t = 0; t < tris.size(); ++t) F.row(static_cast<Eigen::Index>(t)) = tris[t].transpose();
-        } else {
-            const int n = static_cast<int>(size / h) + 1;
-            const ClothMesh g = make_rectangle(size, size, n, n);
-            X = g.X;
-            F = g.F;
-            if (mesh == 2) { // interior vertices moved by up to 30 % of the spacing
-                std::mt19937 rng(5);
-                std::uniform_real_distribution<double> U(-0.3 * h, 0.3 * h);
-                for (int i = 0; i < X.rows(); ++i)
-                    if (X(i, 0) > 1e-9 && X(i, 0) < size - 1e-9 && X(i, 1) > 1e-9 && X(i, 1) < size - 1e-9) X(i, 0) += U(rng), X(i, 1) += U(rng);
-            }
-        }
-        const ClothMesh m = make_triangle_mesh(X, F);
+        const ClothMesh m = test_triangles(mesh, size, h);
         FabricParams p = undamped();
         p[Param::BendWarp] = 2e-5;
         p[Param::BendWeft] = 3e-6;
         ClothModel model = make_model(m, p);
         model.gravity.setZero();
         model.springs.clear(); // rolling is isometric; keep the bending energy alone
+        model.fibers.clear();
         const double area = m.area();
         ClothSystem s(m, model);
         const double kappa = 2.0, R = 1 / kappa, ph = phi_deg * std::numbers::pi / 180;
@@ -418,6 +429,69 @@ private slots:
         const double expected = 0.5 * Bphi * kappa * kappa * area;
         const double e = s.potential_energy(Y);
         QVERIFY2(std::abs(e / expected - 1) < 0.02, qPrintable(QString("E = %1 J, plate %2 J (ratio %3)").arg(e).arg(expected).arg(e / expected)));
+    }
+
+    /// The membrane of a general triangle mesh is the grid's (warp and weft
+    /// moduli Eu, Ev, shear modulus G), whatever the triangulation and however the
+    /// warp lies on the mesh: affine strains in the material frame cost the
+    /// continuum's energy, A Eu eps^2 / 2 along the warp, A Ev eps^2 / 2 along the
+    /// weft and A G gamma^2 / 2 in shear. (The edge springs used until 2026-12-01
+    /// had one isotropic modulus (Eu + Ev) / 2 and a shear stiffness near 3/8 of
+    /// it, whatever G.) And compressed past the buckling load, the warp's
+    /// compressive stress saturates at the Euler stress pi^2 Bu / lb^2.
+    void triangle_membrane_is_the_orthotropic_sheet_data()
+    {
+        QTest::addColumn<int>("mesh");
+        QTest::addColumn<double>("warp_deg");
+        for (int m = 0; m < 3; ++m)
+            for (double deg : {0.0, 30.0, 45.0, 110.0})
+                QTest::newRow(qPrintable(QString("%1, warp at %2 deg").arg(lattice_name(m)).arg(deg))) << m << deg;
+    }
+    void triangle_membrane_is_the_orthotropic_sheet()
+    {
+        QFETCH(int, mesh);
+        QFETCH(double, warp_deg);
+        const double a = warp_deg * std::numbers::pi / 180;
+        const ClothMesh m = test_triangles(mesh, 0.1, 0.005, Eigen::Vector3d(std::cos(a), std::sin(a), 0));
+        FabricParams p = undamped();
+        p[Param::StretchWarp] = 3000;
+        p[Param::StretchWeft] = 1800;
+        p[Param::Shear] = 60;
+        auto membrane_energy = [&](const FabricParams& q, const Eigen::Matrix<double, 3, 2>& Fd) {
+            ClothModel model = make_model(m, q);
+            model.gravity.setZero();
+            model.bends.clear(); // affine maps do not bend; the membrane alone
+            ClothSystem s(m, model);
+            Positions Y(m.vertex_count(), 3);
+            for (int i = 0; i < Y.rows(); ++i) Y.row(i) = (Fd * m.uv.row(i).transpose()).transpose();
+            return s.potential_energy(Y);
+        };
+        const double A = m.area(), eps = 1e-4;
+        Eigen::Matrix<double, 3, 2> Fd = Eigen::Matrix<double, 3, 2>::Identity();
+        Fd(0, 0) = 1 + eps; // along the warp (material u)
+        QVERIFY(std::abs(membrane_energy(p, Fd) / (0.5 * 3000 * eps * eps * A) - 1) < 1e-3);
+        Fd = Eigen::Matrix<double, 3, 2>::Identity();
+        Fd(1, 1) = 1 + eps; // along the weft
+        QVERIFY(std::abs(membrane_energy(p, Fd) / (0.5 * 1800 * eps * eps * A) - 1) < 1e-3);
+        Fd = Eigen::Matrix<double, 3, 2>::Identity();
+        Fd(0, 1) = 100 * eps; // simple shear, gamma = 0.01
+        const double e_shear = membrane_energy(p, Fd), want = 0.5 * 60 * 1e-4 * A;
+        QVERIFY2(std::abs(e_shear / want - 1) < 0.02, qPrintable(QString("shear energy %1 J, continuum %2 J").arg(e_shear).arg(want)));
+
+        // Compressed along the warp by 5 % with the least shear stiffness (the
+        // diagonals carry 1e-3 of the stress): the stress is the Euler stress of
+        // the buckling length, not Eu eps.
+        FabricParams q = p;
+        q[Param::Shear] = 0.01;
+        q[Param::BendWarp] = 2e-5;
+        q[Param::BucklingLength] = 0.02;
+        const double d = 1e-6;
+        Eigen::Matrix<double, 3, 2> Fp = Eigen::Matrix<double, 3, 2>::Identity(), Fm = Fp;
+        Fp(0, 0) = 0.95 + d;
+        Fm(0, 0) = 0.95 - d;
+        const double stress = (membrane_energy(q, Fp) - membrane_energy(q, Fm)) / (2 * d * A); // [N/m]
+        const double euler = std::numbers::pi * std::numbers::pi * 2e-5 / (0.02 * 0.02);
+        QVERIFY2(std::abs(-stress / euler - 1) < 0.01, qPrintable(QString("compressive stress %1 N/m, Euler %2 N/m").arg(-stress).arg(euler)));
     }
 
     /// Contact is checked on mesh edges, not only at vertices: a coarse sheet

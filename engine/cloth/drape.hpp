@@ -97,7 +97,7 @@ struct DrapeResult {
     Polygon2 outline;       ///< shadow outline [m]
     HemProfile hem;
     std::vector<Slice> slices;
-    double potential_energy = 0; ///< [J] of the rest state (springs, bending, gravity, contact): compares fold branches; set by simulate_drape(_from), not by measure_drape
+    double potential_energy = 0; ///< [J] of the rest state (springs or membrane, bending, gravity, contact): compares fold branches; set by simulate_drape(_from), not by measure_drape
 };
 
 /// Measures a draped system (shadow, hem, slices) through the shared metric code.

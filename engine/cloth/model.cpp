@@ -307,8 +307,9 @@ void add_triangle_curvature_stencils(ClothModel& m, const ClothMesh& mesh, const
 /// The membrane of a general triangle mesh: per triangle, the continuum of the
 /// grid's spring net (warp and weft springs, both diagonals), so that a preset
 /// stretches, shears and buckles the same on a garment's mesh as on the
-/// drapemeter's grid. Four fibre families in material directions 0, 90, +45 and
-/// -45 degrees to the warp, each with the energy density of its grid springs:
+/// drapemeter's grid. Four fibre families at 0, 90, +45 and -45 degrees to the
+/// warp in the triangle's rest plane (the mesh's own shape, so a panel imported
+/// curved rests in it), each with the energy density of its grid springs:
 /// warp max(Eu - G, Eu / 2) eps^2 / 2 (the diagonals carry G of Eu, as on the
 /// grid), weft likewise, each diagonal 2 G eps^2 / 2 (so that a shear gamma
 /// costs G gamma^2 / 2), eps the fibre's stretch |F e| - 1 under the triangle's
@@ -316,7 +317,10 @@ void add_triangle_curvature_stencils(ClothModel& m, const ClothMesh& mesh, const
 /// family saturates at the Euler stress pi^2 B / max(lb, L)^2 of a strip of the
 /// triangle's size L = sqrt(2 A) (sqrt(4 A) along the diagonals, bending
 /// sqrt(Bu Bv)), the grid's compression_limit with its cell. Exact for affine
-/// deformations on any triangulation, whatever the directions of its edges. (Until
+/// deformations on any triangulation, whatever the directions of its edges. As on
+/// the grid, the diagonals couple warp and weft: Eu is the warp modulus with the
+/// weft held (uniaxial, free weft: Eu - G^2 / Ev), and with G > Eu / 2 the warp's is
+/// Eu / 2 + G. (Until
 /// 2026-12-01: one isotropic spring per edge with E = (Eu + Ev) / 2, no shear
 /// parameter, shear stiffness about 3E / 8 - for the cotton starter about 1,200
 /// N/m against its 90.)
@@ -335,14 +339,34 @@ void add_triangle_membrane(ClothModel& m, const ClothMesh& mesh, const FabricPar
                                 {{0, 1}, std::max(Ev - G, 0.5 * Ev), cs, Bv, 1.0},
                                 {{r, r}, 2 * G, 2 * csh, std::sqrt(Bu * Bv), std::sqrt(2.0)},
                                 {{r, -r}, 2 * G, 2 * csh, std::sqrt(Bu * Bv), std::sqrt(2.0)}};
+    // The rest shape is the mesh's own (X), flat or not: a garment panel imported in
+    // its 3D shape is stress-free there, as the edge springs were. The warp is the
+    // direction in space along which u grows (least squares over the vertices: exact
+    // for make_triangle_mesh's projection), projected into each triangle's plane;
+    // the weft is at right angles to it in that plane.
+    Eigen::Vector3d warp3 = Eigen::Vector3d::UnitX();
+    {
+        Eigen::MatrixXd P(mesh.vertex_count(), 4);
+        P.leftCols<3>() = mesh.X;
+        P.col(3).setOnes();
+        const Eigen::Vector4d c = P.colPivHouseholderQr().solve(mesh.uv.col(0));
+        if (c.head<3>().allFinite() && c.head<3>().norm() > 0) warp3 = c.head<3>().normalized();
+    }
     m.fibers.reserve(4 * static_cast<std::size_t>(mesh.F.rows()));
     for (int t = 0; t < mesh.F.rows(); ++t) {
         const int v0 = mesh.F(t, 0), v1 = mesh.F(t, 1), v2 = mesh.F(t, 2);
-        Eigen::Matrix2d Dm;
-        Dm.col(0) = (mesh.uv.row(v1) - mesh.uv.row(v0)).transpose();
-        Dm.col(1) = (mesh.uv.row(v2) - mesh.uv.row(v0)).transpose();
+        const Eigen::Vector3d e1 = (mesh.X.row(v1) - mesh.X.row(v0)).transpose(), e2 = (mesh.X.row(v2) - mesh.X.row(v0)).transpose();
+        const Eigen::Vector3d nrm = e1.cross(e2);
+        if (!(nrm.norm() > 0)) continue; // a sliver with no area carries no membrane
+        const Eigen::Vector3d n = nrm.normalized();
+        Eigen::Vector3d a = warp3 - warp3.dot(n) * n;
+        if (a.norm() < 0.1) a = e1; // the triangle stands almost across the warp: any in-plane axis
+        a.normalize();
+        const Eigen::Vector3d b = n.cross(a);
+        Eigen::Matrix2d Dm; // the rest edges in the triangle's (warp, weft) frame
+        Dm << a.dot(e1), a.dot(e2), b.dot(e1), b.dot(e2);
         const double A = 0.5 * std::abs(Dm.determinant());
-        if (!(A > 0)) continue; // a sliver with no material area carries no membrane
+        if (!(A > 0)) continue;
         const Eigen::Matrix2d Dinv = Dm.inverse(); // rows: gradients of the shape functions of v1, v2
         const double h = std::sqrt(2 * A);
         for (const Family& fam : families) {

@@ -81,7 +81,7 @@ public:
     /// Per-vertex mass override [kg] (> 0). Contact stiffness follows the mass.
     void set_mass(int vertex, double mass);
 
-    /// Potential energy: springs, bending, gravity, contact penalty [J].
+    /// Potential energy: springs, membrane fibres, bending, gravity, contact, self-contact [J].
     double potential_energy(const Positions& X) const;
     double kinetic_energy(const Positions& V) const;
 

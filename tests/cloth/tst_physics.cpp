@@ -371,7 +371,6 @@ private slots:
             ClothModel model = make_model(mesh, p);
             model.gravity.setZero();
             model.springs.clear(); // rolling is isometric; keep the bending energy alone
-        model.fibers.clear();
             ClothSystem s(mesh, model);
             return s.potential_energy(rolled(mesh.X, R, axis == 0 ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1)));
         };
@@ -492,6 +491,60 @@ private slots:
         const double stress = (membrane_energy(q, Fp) - membrane_energy(q, Fm)) / (2 * d * A); // [N/m]
         const double euler = std::numbers::pi * std::numbers::pi * 2e-5 / (0.02 * 0.02);
         QVERIFY2(std::abs(-stress / euler - 1) < 0.01, qPrintable(QString("compressive stress %1 N/m, Euler %2 N/m").arg(-stress).arg(euler)));
+    }
+
+    /// A garment panel imported in its 3D shape - a quarter of a cylinder, a
+    /// closed tube (a sleeve) - is stress-free in that shape: the membrane's rest
+    /// state is the mesh's own, not its projection on a plane (the first version
+    /// of the fibre membrane measured the rest shape in the projected material
+    /// coordinates and pulled a tube with 800 N).
+    void triangle_membrane_rests_in_a_curved_rest_shape_data()
+    {
+        QTest::addColumn<double>("sweep");
+        QTest::newRow("quarter cylinder") << std::numbers::pi / 2;
+        QTest::newRow("tube") << 2 * std::numbers::pi;
+    }
+    void triangle_membrane_rests_in_a_curved_rest_shape()
+    {
+        QFETCH(double, sweep);
+        const bool closed = sweep > 6;
+        const int na = 24, nz = 10;
+        const double R = 0.06, len = 0.2;
+        const int cols = closed ? na : na + 1;
+        Positions X(cols * nz, 3);
+        for (int j = 0; j < nz; ++j)
+            for (int i = 0; i < cols; ++i) {
+                const double t = sweep * i / na;
+                X.row(i + cols * j) << R * std::cos(t), R * std::sin(t), len * j / (nz - 1);
+            }
+        std::vector<Eigen::Vector3i> tris;
+        for (int j = 0; j + 1 < nz; ++j)
+            for (int i = 0; i < na; ++i) {
+                const int a = i + cols * j, b = (i + 1) % cols + cols * j, c = a + cols, d = b + cols;
+                tris.emplace_back(a, b, d);
+                tris.emplace_back(a, d, c);
+            }
+        Triangles F(static_cast<Eigen::Index>(tris.size()), 3);
+        for (std::size_t t = 0; t < tris.size(); ++t) F.row(static_cast<Eigen::Index>(t)) = tris[t].transpose();
+        const ClothMesh m = make_triangle_mesh(X, F, Eigen::Vector3d::UnitZ());
+        FabricParams p = undamped();
+        p[Param::BucklingLength] = 0.0075;
+        ClothModel model = make_model(m, p);
+        model.gravity.setZero();
+        model.bends.clear(); // the membrane alone
+        QVERIFY(!model.fibers.empty());
+        const ClothSystem s(m, model);
+        Positions f;
+        s.conservative_forces(m.X, f);
+        const double weight = p[Param::AreaDensity] * 9.81 * m.area();
+        QVERIFY2(std::abs(s.potential_energy(m.X)) < 1e-12, qPrintable(QString("energy at rest %1 J").arg(s.potential_energy(m.X))));
+        QVERIFY2(f.rowwise().norm().maxCoeff() < 1e-9 * weight, qPrintable(QString("largest force at rest %1 N").arg(f.rowwise().norm().maxCoeff())));
+        // And it still resists: stretched 1 % along the axis (the warp here), the
+        // tube stores A Eu eps^2 / 2 (the diagonals' weft coupling held: weft unstretched).
+        Positions Y = m.X;
+        Y.col(2) *= 1.01;
+        const double want = 0.5 * p[Param::StretchWarp] * 1e-4 * m.area();
+        QVERIFY2(std::abs(s.potential_energy(Y) / want - 1) < 0.02, qPrintable(QString("%1 J against %2 J").arg(s.potential_energy(Y)).arg(want)));
     }
 
     /// Contact is checked on mesh edges, not only at vertices: a coarse sheet

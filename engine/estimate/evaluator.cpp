@@ -142,7 +142,35 @@ DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::ui
     return drape_features(sim, rec);
 }
 
-void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
+void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
+{
+    const cloth::FabricParams p = params_at(x);
+    const int R = static_cast<int>(m_recs.size());
+    m_cold.resize(static_cast<std::size_t>(R));
+    m_cold_seeds.resize(static_cast<std::size_t>(R), 0);
+    std::vector<std::pair<int, std::uint64_t>> jobs;
+    for (int r = 0; r < R; ++r)
+        if (branch_of(r) != 0)
+            for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.emplace_back(r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k));
+    if (jobs.empty()) return;
+    std::vector<DrapeFeatures> drawn(jobs.size());
+    const auto t0 = Clock::now();
+    const int nthreads = std::clamp(m_opt.parallel_seeds, 1, static_cast<int>(jobs.size()));
+    parallel_for(jobs.size(), nthreads, [&](std::size_t j) { drawn[j] = drape_cold(jobs[j].first, p, jobs[j].second, false); });
+    m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
+    m_simulations += static_cast<long>(jobs.size());
+    for (int r = 0; r < R; ++r) {
+        std::vector<DrapeFeatures> cold;
+        for (std::size_t j = 0; j < jobs.size(); ++j)
+            if (jobs[j].first == r) cold.push_back(std::move(drawn[j]));
+        if (cold.empty()) continue;
+        std::vector<double> closed;
+        m_cold[static_cast<std::size_t>(r)] = average_features(cold, &closed);
+        m_cold_seeds[static_cast<std::size_t>(r)] = static_cast<int>(cold.size());
+    }
+}
+
+void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra, bool from_flat)
 {
     const cloth::FabricParams p = params_at(x);
     const int S = std::max(1, m_opt.seeds_per_evaluation);
@@ -168,7 +196,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     for (int r = 0; r < R; ++r) {
         for (int k = 0; k < branch_draws(r); ++k)
             jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), true});
-        if (branch_of(r) != 0)
+        if (branch_of(r) != 0 && from_flat)
             for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), false});
     }
     std::vector<DrapeFeatures> drawn(jobs.size());
@@ -190,7 +218,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
         for (int k = 0; k < mine; ++k) draws.push_back(std::move(drawn[next++]));
         if (branch_of(r) == 0)
             cold.assign(draws.end() - mine, draws.end());
-        else
+        else if (from_flat)
             for (int k = 0; k < m_opt.random_start_seeds; ++k) cold.push_back(std::move(drawn[next++]));
         if (!cold.empty()) {
             std::vector<double> closed;

@@ -371,7 +371,10 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     if (!cancelled) cancelled = mirror_check(ev, vars, bend_vars, x, local / 2, local_start, options.seed + 2, lm);
     if (!cancelled && options.spread_seeds > 0 && ev.best_x().size() == n) {
         try {
-            ev.calibrate_spread(ev.best_x(), options.spread_seeds);
+            // The drapes from flat of the report's cold_* columns wait for the
+            // caller's choice of the run it keeps (a tied or refined refit may
+            // replace this one): deferred below.
+            ev.calibrate_spread(ev.best_x(), options.spread_seeds, /*from_flat=*/false);
             ev.report("spread");
         } catch (const CancelledFit&) {
             cancelled = true;
@@ -465,9 +468,12 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     }
     out.residual = analyse_residual(out.residuals, n + measurement_params);
     out.residual.exceeds_noise_by_residual = out.residual.exceeds_noise;
-    // The effect tests, for the caller to run on the result it keeps.
-    if (options.effects && !out.cancelled)
-        deferred = [state, vars = out.variables, x, best, J_opt](FitResult& kept, const FitOptions& caller, const std::string& prefix) {
+    // The drapes from flat and the effect tests, for the caller to run on the
+    // result it keeps.
+    const bool from_flat = options.spread_seeds > 0 && options.random_start_seeds > 0;
+    if ((options.effects || from_flat) && !out.cancelled)
+        deferred = [state, vars = out.variables, x, best, J_opt, from_flat, effects = options.effects](FitResult& kept, const FitOptions& caller,
+                                                                                                        const std::string& prefix) {
             Evaluator& e = *state->ev;
             const int evals0 = e.evaluations();
             const long sims0 = e.simulations(), fact0 = e.factorisations(), back0 = e.back_substitutions();
@@ -482,7 +488,19 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             before.wall_seconds = kept.wall_seconds - elapsed0;
             state->options.progress = continued_progress(caller, prefix, before);
             try {
-                test_effects(e, vars, x, best, J_opt, kept);
+                if (from_flat) {
+                    e.draw_from_flat(x);
+                    e.report("from flat");
+                    for (std::size_t r = 0; r < kept.records.size(); ++r) {
+                        RecordFit& rf = kept.records[r];
+                        if (r >= e.cold_features().size() || e.cold_seeds(r) == 0) continue;
+                        rf.cold_seeds = e.cold_seeds(r);
+                        rf.cold_features = e.cold_features()[r];
+                        rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+                        rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
+                    }
+                }
+                if (effects) test_effects(e, vars, x, best, J_opt, kept);
             } catch (const CancelledFit&) {
                 kept.cancelled = true;
             }
@@ -592,7 +610,7 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     // Only the kept run's candidate effects are tested (its tests run last).
     auto finish = [&options](FitResult& kept, const DeferredEffects& effects, const std::string& prefix) {
         if (effects && !kept.cancelled) effects(kept, options, prefix);
-        else if (effects) // cancelled: the cancel flag stops them; the report says so
+        else if (effects && options.effects) // cancelled: the cancel flag stops them; the report says so
             kept.residual.unexplained = "candidate effects not tested: the fit was cancelled";
         return std::move(kept);
     };

@@ -800,39 +800,35 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
             for (int a = 0; a < 3; ++a) val[bl.col[b] + a] += K(a, b);
     };
     const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-    for (std::size_t s = 0; s < m.springs.size(); ++s) {
-        const auto& sp = m.springs[s];
-        Vec3 u = X.row(sp.i) - X.row(sp.j);
+    // The stiffness of an axial element (a spring, a membrane fibre) of current
+    // vector u: E''(l) along it, E'(l) / l across it (negative in compression: the
+    // projected form drops it), and its dashpot along it. false: zero length.
+    auto axial = [&](Vec3 u, const auto& element, Eigen::Matrix3d& K) {
         const double l = u.norm();
-        if (l <= 1e-300) continue;
+        if (l <= 1e-300) return false;
         u /= l;
         const Eigen::Matrix3d nn = u * u.transpose();
-        // E''(l) along the spring, E'(l) / l across it (negative in compression:
-        // the projected form drops it).
         double es, de, d2e;
-        sp.law(l, es, de, d2e);
+        element.law(l, es, de, d2e);
         double t = de / l;
         if (project_springs && t < 0) t = 0;
-        Eigen::Matrix3d K = d2e * nn + t * (I - nn);
-        if (damping_scale != 0) K += damping_scale * sp.d * nn;
+        K = d2e * nn + t * (I - nn);
+        if (damping_scale != 0) K += damping_scale * element.d * nn;
+        return true;
+    };
+    for (std::size_t s = 0; s < m.springs.size(); ++s) {
+        const auto& sp = m.springs[s];
+        Eigen::Matrix3d K;
+        if (!axial(X.row(sp.i) - X.row(sp.j), sp, K)) continue;
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.i)], K);
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.j)], K);
         add_off(m_spring_blocks[s], -K);
     }
     for (std::size_t s = 0; s < m.fibers.size(); ++s) {
-        const auto& fb = m.fibers[s];
-        Vec3 u = fb.vec(X);
-        const double l = u.norm();
-        if (l <= 1e-300) continue;
-        u /= l;
-        const Eigen::Matrix3d nn = u * u.transpose();
         // As a spring's, in the fibre's vector d = sum w_a x_a; vertex blocks w_a w_b K.
-        double es, de, d2e;
-        fb.law(l, es, de, d2e);
-        double t = de / l;
-        if (project_springs && t < 0) t = 0;
-        Eigen::Matrix3d K = d2e * nn + t * (I - nn);
-        if (damping_scale != 0) K += damping_scale * fb.d * nn;
+        const auto& fb = m.fibers[s];
+        Eigen::Matrix3d K;
+        if (!axial(fb.vec(X), fb, K)) continue;
         for (int p = 0; p < 3; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(fb.v[p])], fb.w[p] * fb.w[p] * K);
         std::size_t b = 3 * s;
         // Off-diagonal blocks are stored once, (min, max); K is symmetric.

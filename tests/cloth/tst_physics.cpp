@@ -493,6 +493,54 @@ private slots:
         QVERIFY2(std::abs(-stress / euler - 1) < 0.01, qPrintable(QString("compressive stress %1 N/m, Euler %2 N/m").arg(-stress).arg(euler)));
     }
 
+    /// The membrane's dashpots dissipate what the grid's do: a uniform stretching
+    /// rate edot along the warp costs A (c_stretch + c_shear) edot^2 of power (the
+    /// warp fibres c_stretch edot^2, the two diagonals 2 c_shear (edot / 2)^2 each),
+    /// and along the weft the same with its own fibres; a rigid rotation costs
+    /// nothing. On every triangulation, whatever the warp's direction on the mesh.
+    void triangle_membrane_damping_is_the_grids()
+    {
+        for (int mesh = 0; mesh < 3; ++mesh) {
+            const ClothMesh m = test_triangles(mesh, 0.1, 0.005, Eigen::Vector3d(std::cos(0.4), std::sin(0.4), 0));
+            FabricParams p = undamped();
+            p[Param::DampStretch] = 0.05;
+            p[Param::DampShear] = 0.01;
+            ClothModel model = make_model(m, p);
+            model.bends.clear(); // the membrane's dashpots alone
+            const ClothSystem s(m, model);
+            // Velocities in space of the material rates: v = L (u, v) with L in the
+            // material frame, mapped through the mesh's own warp and weft axes (X =
+            // c + u e_u + v e_v, by least squares over the vertices).
+            Eigen::MatrixXd P(m.vertex_count(), 3);
+            P.col(0).setOnes();
+            P.rightCols<2>() = m.uv;
+            const Eigen::MatrixXd M = P.colPivHouseholderQr().solve(Eigen::MatrixXd(m.X));
+            const Eigen::Vector3d eu = M.row(1).transpose(), ev = M.row(2).transpose();
+            QVERIFY(std::abs(eu.norm() - 1) < 1e-9 && std::abs(ev.norm() - 1) < 1e-9 && std::abs(eu.dot(ev)) < 1e-9);
+            auto power = [&](const Eigen::Matrix2d& L) {
+                Positions V(m.vertex_count(), 3), f = Positions::Zero(m.vertex_count(), 3);
+                for (int i = 0; i < V.rows(); ++i) {
+                    const Eigen::Vector2d r = L * m.uv.row(i).transpose();
+                    V.row(i) = (r.x() * eu + r.y() * ev).transpose();
+                }
+                s.add_damping_forces(m.X, V, f);
+                return -(f.array() * V.array()).sum();
+            };
+            const double edot = 0.3, A = m.area();
+            Eigen::Matrix2d L = Eigen::Matrix2d::Zero();
+            L(0, 0) = edot;
+            const double warp = power(L), want = A * (0.05 + 0.01) * edot * edot;
+            QVERIFY2(std::abs(warp / want - 1) < 1e-6, qPrintable(QString("%1: warp %2 W against %3 W").arg(lattice_name(mesh)).arg(warp).arg(want)));
+            L.setZero();
+            L(1, 1) = edot;
+            QVERIFY(std::abs(power(L) / want - 1) < 1e-6);
+            L.setZero();
+            L(0, 1) = -edot;
+            L(1, 0) = edot; // a rigid rotation rate
+            QVERIFY(std::abs(power(L)) < 1e-12 * want);
+        }
+    }
+
     /// A garment panel imported in its 3D shape - a quarter of a cylinder, a
     /// closed tube (a sleeve) - is stress-free in that shape: the membrane's rest
     /// state is the mesh's own, not its projection on a plane (the first version

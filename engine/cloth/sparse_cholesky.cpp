@@ -24,8 +24,14 @@ namespace {
 /// instead of 59 ms at 23,004 unknowns (41 s of system time in a 113 s drape).
 /// The numerical work is BLAS, set to one thread at the first factorisation
 /// (single_threaded_blas: the same rounding in every drape); the regions are
-/// made inactive process-wide (the project has no other OpenMP code) unless the
-/// user chose through OMP_MAX_ACTIVE_LEVELS or OMP_THREAD_LIMIT.
+/// made inactive (the project has no other OpenMP code) unless the user chose
+/// through OMP_MAX_ACTIVE_LEVELS or OMP_THREAD_LIMIT - on every thread that
+/// factorises: OpenMP 5 made max-active-levels an ICV of each thread's data
+/// environment (libgomp keeps it per thread since GCC 11), so the setting made
+/// once, on the first thread, left a fit's worker threads opening CHOLMOD's
+/// regions with four threads each: a fit's two drapes at once took 24 ms per
+/// Newton iteration each instead of 12 (A03's preset from flat, seeds 1001 and
+/// 1003 on two threads: 9.3 s -> 5.4 s, the same iterations and rest states).
 ///
 /// Ordering: METIS nested dissection instead of CHOLMOD's default AMD (METIS is
 /// tried by default only when AMD's fill looks poor, and it did not here): on the
@@ -34,10 +40,14 @@ namespace {
 /// 50 ms instead of 15 ms.
 void configure_cholmod(Cholmod& llt)
 {
-    static std::once_flag once;
-    std::call_once(once, [] {
+    thread_local bool omp_configured = false;
+    if (!omp_configured) {
+        omp_configured = true;
         if (omp_set_max_active_levels && !std::getenv("OMP_MAX_ACTIVE_LEVELS") && !std::getenv("OMP_THREAD_LIMIT"))
             omp_set_max_active_levels(0);
+    }
+    static std::once_flag once;
+    std::call_once(once, [] {
         // The first factorisation rounds as every later one: OpenBLAS's default
         // thread count follows the machine, and a drape made before a command
         // or a fit called single_threaded_blas() (a test's synthetic record)

@@ -8,6 +8,9 @@
 
 #include <dlfcn.h>
 
+#include <cstdlib>
+#include <thread>
+
 using namespace drape::cloth;
 
 namespace {
@@ -40,6 +43,31 @@ private slots:
         const DrapeResult later = simulate_drape(FabricParams(), small(41));
         QCOMPARE(first.status.newton_iterations, later.status.newton_iterations);
         QVERIFY(first.x == later.x);
+    }
+
+    void a_worker_thread_factorises_without_openmp_regions()
+    {
+        // Debian's CHOLMOD opens OpenMP regions of four threads inside every
+        // supernodal factorisation; the solver makes them inactive. OpenMP 5 keeps
+        // that setting per thread, so it must be made on every thread that
+        // factorises, not once for the process: a fit's two drapes on two worker
+        // threads each took twice as long otherwise (futex waits in libgomp).
+        using GetLevels = int (*)();
+        auto get_levels = reinterpret_cast<GetLevels>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"));
+        if (!get_levels) QSKIP("no OpenMP runtime in the process (CHOLMOD built without it)");
+        if (std::getenv("OMP_MAX_ACTIVE_LEVELS") || std::getenv("OMP_THREAD_LIMIT")) QSKIP("the user chose OpenMP's levels");
+        QVERIFY(simulate_drape(FabricParams(), small(9)).status.converged()); // this thread first
+        int before = -1, after = -1;
+        bool converged = false;
+        std::thread worker([&] {
+            before = get_levels();
+            converged = simulate_drape(FabricParams(), small(9)).status.converged();
+            after = get_levels();
+        });
+        worker.join();
+        QVERIFY(before != 0); // a new thread starts with the runtime's default
+        QVERIFY(converged);
+        QCOMPARE(after, 0);
     }
 
     void static_drape_converges_and_is_plausible()

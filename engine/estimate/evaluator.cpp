@@ -170,7 +170,7 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
     }
 }
 
-void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra, bool from_flat)
+void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
 {
     const cloth::FabricParams p = params_at(x);
     const int S = std::max(1, m_opt.seeds_per_evaluation);
@@ -178,14 +178,11 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra, bool from_
     std::vector<std::vector<double>> values; // [term][draw]
     m_cold.assign(static_cast<std::size_t>(R), {});
     m_cold_seeds.assign(static_cast<std::size_t>(R), 0);
-    // The drapes from flat, all records' at once on the fit's threads (each is
-    // independent; alone they were a fifth of a fit's wall time): per record
-    // `extra` on the fit's branch, and where the fit's branch is not the random
-    // mix, random_start_seeds more from the mix for the report's cold_* columns.
+    // The drapes, all records' at once on the fit's threads (each is
+    // independent): per record `extra` on the fit's branch.
     struct Job {
         int r;
         std::uint64_t seed;
-        bool on_branch;
     };
     // Given sigmas (a tied refit takes the free fit's) replace the calibrated
     // ones, so the branch's drapes are only drawn where they are also the
@@ -193,16 +190,12 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra, bool from_
     const bool sigmas_given = !m_opt.term_sigmas.empty();
     auto branch_draws = [&](int r) { return sigmas_given && branch_of(r) != 0 ? 0 : extra; };
     std::vector<Job> jobs;
-    for (int r = 0; r < R; ++r) {
-        for (int k = 0; k < branch_draws(r); ++k)
-            jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), true});
-        if (branch_of(r) != 0 && from_flat)
-            for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), false});
-    }
+    for (int r = 0; r < R; ++r)
+        for (int k = 0; k < branch_draws(r); ++k) jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k)});
     std::vector<DrapeFeatures> drawn(jobs.size());
     const auto t0 = Clock::now();
     const int nthreads = std::clamp(m_opt.parallel_seeds, 1, std::max(1, static_cast<int>(jobs.size())));
-    parallel_for(jobs.size(), nthreads, [&](std::size_t j) { drawn[j] = drape_cold(jobs[j].r, p, jobs[j].seed, jobs[j].on_branch); });
+    parallel_for(jobs.size(), nthreads, [&](std::size_t j) { drawn[j] = drape_cold(jobs[j].r, p, jobs[j].seed, true); });
     m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
     m_simulations += static_cast<long>(jobs.size());
     std::size_t next = 0;
@@ -213,13 +206,10 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra, bool from_
         // The spread is measured on the fit's branch (the record and the fit's
         // drapes share its fold count); `cold_*` report the preset draped from
         // the random mix, as `drape predict` does - the same drapes when the fit
-        // itself starts from the random mix.
+        // itself starts from the random mix (draw_from_flat draws the others).
         const int mine = branch_draws(r);
         for (int k = 0; k < mine; ++k) draws.push_back(std::move(drawn[next++]));
-        if (branch_of(r) == 0)
-            cold.assign(draws.end() - mine, draws.end());
-        else if (from_flat)
-            for (int k = 0; k < m_opt.random_start_seeds; ++k) cold.push_back(std::move(drawn[next++]));
+        if (branch_of(r) == 0) cold.assign(draws.end() - mine, draws.end());
         if (!cold.empty()) {
             std::vector<double> closed;
             m_cold[static_cast<std::size_t>(r)] = average_features(cold, &closed);

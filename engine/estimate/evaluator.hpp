@@ -51,15 +51,14 @@ public:
     /// sigma to that spread where the default floor was optimistic (the spread
     /// depends on the fabric and the grid: 0.6 mm for the cos 2theta term of an
     /// isotropic fabric at grid 25, several mm with 4-5 folds at grid 17).
-    /// With `from_flat`, also drapes the preset from the random mix (`cold_*`)
-    /// where the fit's branch is another (where it is the random mix, the spread's
-    /// drapes are the cold_* ones); without, draw_from_flat does it later, for a run
-    /// that is kept. Re-scores the best point with the new sigmas. The drapes run on
-    /// parallel_seeds threads; with FitOptions::term_sigmas given (which replace the
-    /// calibrated ones) only the cold_* drapes are drawn.
-    void calibrate_spread(const Eigen::VectorXd& x, int extra, bool from_flat = true);
-    /// The cold_* drapes calibrate_spread(x, extra, false) left out: per record
-    /// on another branch than the random mix, random_start_seeds drapes from it.
+    /// Where the fit's branch is the random mix, the spread's drapes are the
+    /// report's cold_* ones; elsewhere draw_from_flat draws those later, for the
+    /// run that is kept. Re-scores the best point with the new sigmas. The drapes
+    /// run on parallel_seeds threads; with FitOptions::term_sigmas given (which
+    /// replace the calibrated ones) only the cold_* drapes are drawn.
+    void calibrate_spread(const Eigen::VectorXd& x, int extra);
+    /// The cold_* drapes calibrate_spread leaves out: per record on another
+    /// branch than the random mix, random_start_seeds drapes from it.
     void draw_from_flat(const Eigen::VectorXd& x);
     /// Objective for the optimizers: evaluates, keeps the best point and its rest states.
     double objective(const Eigen::VectorXd& x, Start from, const std::string& stage);

@@ -272,6 +272,15 @@ struct GridRunState {
     std::optional<Evaluator> ev;
 };
 
+/// Record r's drapes from flat (cold_*), where the evaluator drew them.
+void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r)
+{
+    if (r >= ev.cold_features().size() || ev.cold_seeds(r) == 0) return;
+    rf.cold_seeds = ev.cold_seeds(r);
+    rf.cold_features = ev.cold_features()[r];
+    rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+    rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
+}
 
 /// One fit at options.grid: scan, global, local, mirror, spread, uncertainty;
 /// its candidate-effect tests (options.effects) are handed back through
@@ -374,7 +383,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             // The drapes from flat of the report's cold_* columns wait for the
             // caller's choice of the run it keeps (a tied or refined refit may
             // replace this one): deferred below.
-            ev.calibrate_spread(ev.best_x(), options.spread_seeds, /*from_flat=*/false);
+            ev.calibrate_spread(ev.best_x(), options.spread_seeds);
             ev.report("spread");
         } catch (const CancelledFit&) {
             cancelled = true;
@@ -442,12 +451,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         rf.branch_folds = ev.branch_of(static_cast<int>(r));
         rf.dc_error_percent = rf.simulated_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
         rf.node_error = rf.simulated_features.node_count - rf.measured_features.node_count;
-        if (r < ev.cold_features().size() && ev.cold_seeds(r) > 0) {
-            rf.cold_seeds = ev.cold_seeds(r);
-            rf.cold_features = ev.cold_features()[r];
-            rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
-            rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
-        }
+        set_from_flat(rf, ev, r);
         if (!cancelled && !rf.simulations.empty() && rf.simulations.front().status.converged()) {
             // The sensitivity of D to each fitted parameter at the optimum: one
             // factorisation of the rest state's Hessian, no further drape.
@@ -491,14 +495,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
                 if (from_flat) {
                     e.draw_from_flat(x);
                     e.report("from flat");
-                    for (std::size_t r = 0; r < kept.records.size(); ++r) {
-                        RecordFit& rf = kept.records[r];
-                        if (r >= e.cold_features().size() || e.cold_seeds(r) == 0) continue;
-                        rf.cold_seeds = e.cold_seeds(r);
-                        rf.cold_features = e.cold_features()[r];
-                        rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
-                        rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
-                    }
+                    for (std::size_t r = 0; r < kept.records.size(); ++r) set_from_flat(kept.records[r], e, r);
                 }
                 if (effects) test_effects(e, vars, x, best, J_opt, kept);
             } catch (const CancelledFit&) {

@@ -88,11 +88,13 @@ Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
         ro.cancel = m_opt.cancel;
         ro.progress = nullptr;
         auto& out = e.sims[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)];
-        if (from == Start::Best && m_have_states)
+        if (from == Start::Best && m_have_states) {
+            ro.max_newton = std::min(ro.max_newton, m_opt.warm_max_newton);
             out = cloth::simulate_drape_from(pr, setup, m_states[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)], ro,
                                              m_opt.model_options);
-        else
+        } else {
             out = cloth::simulate_drape(pr, setup, ro, m_opt.model_options);
+        }
     });
     m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
     m_simulations += static_cast<long>(R * S);
@@ -247,7 +249,12 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
 double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::string& stage)
 {
     Evaluation e = evaluate(x, from);
-    if (e.chi2 < m_best.chi2) {
+    // A drape that did not come to rest is no drape of the model: its features
+    // describe a state the preset does not rest in, so it cannot replace a best
+    // point that is at rest, however low its chi2. (On DL-A05 a warm re-solve
+    // ran to the iteration cap, became the best point at a lower chi2 and the
+    // fit went on from its state.)
+    if (e.chi2 < m_best.chi2 && (e.at_rest() || !m_best.at_rest())) {
         m_best = e;
         m_best_x = x;
         m_states.assign(e.sims.size(), {});

@@ -21,6 +21,14 @@ struct Evaluation {
     std::vector<ResidualTerm> terms;
     std::vector<DrapeFeatures> features;               ///< seed-averaged, per record
     std::vector<std::vector<cloth::DrapeResult>> sims; ///< [record][seed]
+    /// Every drape came to rest (vacuously true before any drape).
+    bool at_rest() const
+    {
+        for (const auto& rs : sims)
+            for (const auto& s : rs)
+                if (!s.status.converged()) return false;
+        return true;
+    }
 };
 
 /// Thrown out of an evaluation when FitOptions::cancel is set.

@@ -230,7 +230,10 @@ bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Ei
                 if (!moves) return false; // converged: the step is below the coordinates' resolution
                 const double predicted = -(2 * g.dot(step) + step.dot(A * step));
                 const double before = cur.chi2;
-                const double after = ev.objective(xn, from, stage);
+                ev.objective(xn, from, stage);
+                // Taken when it became the best point: a lower chi2 from drapes that did
+                // not come to rest is no drape of the model (Evaluator::objective).
+                const double after = ev.best().chi2;
                 if (after < before) {
                     gain = before - after;
                     const double rho = predicted > 0 ? gain / predicted : 0.0;

@@ -254,7 +254,8 @@ double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::str
     // point that is at rest, however low its chi2. (On DL-A05 a warm re-solve
     // ran to the iteration cap, became the best point at a lower chi2 and the
     // fit went on from its state.)
-    if (e.chi2 < m_best.chi2 && (e.at_rest() || !m_best.at_rest())) {
+    const bool eligible = e.at_rest() || !m_best.at_rest();
+    if (e.chi2 < m_best.chi2 && eligible) {
         m_best = e;
         m_best_x = x;
         m_states.assign(e.sims.size(), {});
@@ -263,7 +264,7 @@ double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::str
         m_have_states = true;
     }
     report(stage);
-    return e.chi2;
+    return eligible ? e.chi2 : std::max(e.chi2, m_best.chi2);
 }
 
 namespace {

@@ -21,9 +21,11 @@ struct Evaluation {
     std::vector<ResidualTerm> terms;
     std::vector<DrapeFeatures> features;               ///< seed-averaged, per record
     std::vector<std::vector<cloth::DrapeResult>> sims; ///< [record][seed]
-    /// Every drape came to rest (vacuously true before any drape).
+    /// There are drapes and every one came to rest (false before any drape:
+    /// no best point yet).
     bool at_rest() const
     {
+        if (sims.empty()) return false;
         for (const auto& rs : sims)
             for (const auto& s : rs)
                 if (!s.status.converged()) return false;
@@ -68,7 +70,10 @@ public:
     /// The cold_* drapes calibrate_spread leaves out: per record on another
     /// branch than the random mix, random_start_seeds drapes from it.
     void draw_from_flat(const Eigen::VectorXd& x);
-    /// Objective for the optimizers: evaluates, keeps the best point and its rest states.
+    /// Objective for the optimizers: evaluates, keeps the best point and its rest
+    /// states. An evaluation with a drape not at rest never replaces a best point
+    /// at rest, and returns no less than the best chi2 then (the optimizers do not
+    /// centre on it).
     double objective(const Eigen::VectorXd& x, Start from, const std::string& stage);
     /// Calls FitOptions::progress with the state so far.
     /// Also appends the evaluation to the trace (once per evaluation).

@@ -229,7 +229,8 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
         }
         const Evaluation v = ev.evaluate_params(p, Start::Best);
         ev.report("effects");
-        cands[static_cast<std::size_t>(top)].verified_delta_chi2 = (best.chi2 - v.chi2) / s2; // on the scale of the test
+        if (v.at_rest()) // a drape not at rest verifies nothing
+            cands[static_cast<std::size_t>(top)].verified_delta_chi2 = (best.chi2 - v.chi2) / s2; // on the scale of the test
     }
     out.residual.candidates = cands;
     // A candidate beyond noise is a structured residual even when the total

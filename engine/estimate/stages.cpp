@@ -276,8 +276,8 @@ bool mirror_check(Evaluator& ev, const std::vector<FitVariable>& vars, const std
     if (std::abs(xs[bend_vars[0]] - xs[bend_vars[1]]) <= 0.05) return false;
     try {
         const double before = ev.best().chi2;
-        const double mirrored = ev.objective(xs, from, "mirror");
-        if (mirrored < before) {
+        ev.objective(xs, from, "mirror");
+        if (ev.best().chi2 < before) { // the mirrored point became the best (at rest)
             x = xs;
             if (lm) return levenberg_marquardt(ev, vars, x, {}, local, "local", from);
             return run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, from, "local", seed);

@@ -16,7 +16,7 @@ using namespace drape::estimate;
 using cloth::Param;
 
 namespace {
-constexpr int kGrid = 21;
+constexpr int kGrid = 41;
 
 cloth::FabricParams truth()
 {
@@ -77,8 +77,8 @@ private slots:
                 ++cases;
                 inside += (e.lower95 <= p[q] && p[q] <= e.upper95) ? 1 : 0;
             }
-            qInfo("  D error %+.2f, node error %+.2f, %ld simulations, %.2f s each", r.records[0].dc_error_percent, r.records[0].node_error,
-                  r.simulations, r.seconds_per_simulation);
+            qInfo("  D error %+.2f, node error %+.2f, %ld simulations, %.2f s each; %s%s", r.records[0].dc_error_percent, r.records[0].node_error,
+                  r.simulations, r.seconds_per_simulation, r.anisotropy.reason.c_str(), r.grid_bound ? "; grid-bound" : "");
             good_fits += (std::abs(r.records[0].dc_error_percent) < 2.0 && std::abs(r.records[0].node_error) <= 1.0) ? 1 : 0;
             if (seed == 11) first = r;
         }

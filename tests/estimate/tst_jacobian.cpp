@@ -123,18 +123,30 @@ private slots:
         QVERIFY(ev.best().at_rest());
         const double chi2_far = ev.best().chi2;
         // Near the truth from the far point's rest state: cut off, not at rest.
-        const double chi2_warm = ev.objective(near, Start::Best, "test");
+        const double returned = ev.objective(near, Start::Best, "test");
+        const double chi2_warm = ev.last().chi2;
         QVERIFY(!ev.last().at_rest());
         qInfo("chi2 at rest far from the truth %.1f, cut-off warm re-solve near it %.1f", chi2_far, chi2_warm);
         QVERIFY(chi2_warm < chi2_far); // lower, and still not taken
         QCOMPARE(ev.best().chi2, chi2_far);
         QVERIFY(ev.best_x() == far);
+        QVERIFY(returned >= chi2_far); // nor offered to an optimizer as an improvement
         // The same point from flat comes to rest and is taken.
         const double chi2_cold = ev.objective(near, Start::Cold, "test");
         QVERIFY(ev.last().at_rest());
         QVERIFY(chi2_cold < chi2_far);
         QCOMPARE(ev.best().chi2, chi2_cold);
         QVERIFY(ev.best_x() == near);
+
+        // Before any point at rest, one that is not is still the best so far
+        // (a fit whose drapes never come to rest ends there, not at its start).
+        FitOptions few = o;
+        few.rest.max_newton = 2;
+        Evaluator cut(recs, few, vars, truth);
+        cut.objective(far, Start::Cold, "test");
+        QVERIFY(!cut.last().at_rest());
+        QVERIFY(cut.best_x() == far);
+        QCOMPARE(cut.best().chi2, cut.last().chi2);
     }
 };
 

@@ -294,10 +294,7 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
     // Which variables the sensitivities serve: every parameter of the group
     // nonzero and inside its bounds (clamped coordinates do not move anything),
     // and every drape at rest.
-    bool all_at_rest = true;
-    for (const auto& rs : e.sims)
-        for (const auto& sim : rs) all_at_rest = all_at_rest && sim.status.converged();
-    std::vector<char> exact(static_cast<std::size_t>(n), all_at_rest ? 1 : 0);
+    std::vector<char> exact(static_cast<std::size_t>(n), e.at_rest() ? 1 : 0);
     for (int i = 0; i < n; ++i)
         for (Param q : m_vars[static_cast<std::size_t>(i)].params)
             if (!(p[q] > cloth::spec(q).lower) || !(p[q] < cloth::spec(q).upper) || !cloth::spec(q).affects_statics) exact[static_cast<std::size_t>(i)] = 0;
@@ -423,9 +420,7 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
     const int R = static_cast<int>(m_recs.size());
     const Eigen::Index rows = static_cast<Eigen::Index>(e.terms.size());
     std::vector<EffectSignature> out(lib.size());
-    bool all_at_rest = static_cast<int>(e.sims.size()) == R;
-    for (const auto& rs : e.sims)
-        for (const auto& sim : rs) all_at_rest = all_at_rest && sim.status.converged();
+    const bool all_at_rest = static_cast<int>(e.sims.size()) == R && e.at_rest();
     // Which effects can be made here, and their columns.
     std::vector<Param> sens_params; // parameters whose dx/dp the sensitivities give
     for (std::size_t k = 0; k < lib.size(); ++k) {

@@ -38,6 +38,27 @@ double column_error(Evaluator& ev, const Eigen::VectorXd& x, const Eigen::Matrix
     return std::sqrt(num / std::max(den, 1e-300));
 }
 
+/// A fabric of the tests' family: the given bendings, shear 20 N/m, 200 g/m^2.
+cloth::FabricParams fabric(double warp, double weft)
+{
+    cloth::FabricParams p;
+    p[Param::BendWarp] = warp;
+    p[Param::BendWeft] = weft;
+    p[Param::Shear] = 20;
+    p[Param::AreaDensity] = 0.2;
+    return p;
+}
+
+/// Fit options of one seed on one thread at `grid` (reproducible, one drape per evaluation).
+FitOptions one_seed(int grid)
+{
+    FitOptions o;
+    o.grid = grid;
+    o.seeds_per_evaluation = 1;
+    o.parallel_seeds = 1;
+    return o;
+}
+
 } // namespace
 
 class TestJacobian : public QObject {
@@ -55,17 +76,10 @@ private slots:
         QFETCH(int, model);
         QFETCH(double, buckling);
         const int grid = 25;
-        cloth::FabricParams truth;
-        truth[Param::BendWarp] = 2e-5;
-        truth[Param::BendWeft] = 8e-6;
-        truth[Param::Shear] = 20;
-        truth[Param::AreaDensity] = 0.2;
+        cloth::FabricParams truth = fabric(2e-5, 8e-6);
         truth[Param::BucklingLength] = buckling;
         const std::vector<MeasuredDrape> recs{test::synthetic_record(truth, test::drape_setup(0.30, 0.15, grid, 7))};
-        FitOptions o;
-        o.grid = grid;
-        o.seeds_per_evaluation = 1;
-        o.parallel_seeds = 1;
+        FitOptions o = one_seed(grid);
         o.model = static_cast<ModelVariant>(model);
         const auto vars = fit_variables(o.model);
         cloth::FabricParams base = truth;
@@ -97,16 +111,9 @@ private slots:
         // rest (a warm re-solve cut off at FitOptions::warm_max_newton) is no
         // drape of the model and must not replace a best point at rest.
         const int grid = 17;
-        cloth::FabricParams truth;
-        truth[Param::BendWarp] = 1e-5;
-        truth[Param::BendWeft] = 1e-5;
-        truth[Param::Shear] = 20;
-        truth[Param::AreaDensity] = 0.2;
+        const cloth::FabricParams truth = fabric(1e-5, 1e-5);
         const std::vector<MeasuredDrape> recs{test::synthetic_record(truth, test::drape_setup(0.30, 0.15, grid, 3))};
-        FitOptions o;
-        o.grid = grid;
-        o.seeds_per_evaluation = 1;
-        o.parallel_seeds = 1;
+        FitOptions o = one_seed(grid);
         o.warm_max_newton = 4; // no warm re-solve comes to rest
         const auto vars = fit_variables(o.model);
         Evaluator ev(recs, o, vars, truth);

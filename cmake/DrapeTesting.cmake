@@ -9,6 +9,16 @@ function(drape_add_test)
   endif()
   find_package(Qt6 REQUIRED COMPONENTS Core Test)
   add_executable(${T_NAME} ${T_SOURCES})
+  # A test without the `unit` label (the slow ones) is not part of `all`: the
+  # target `slow_tests` builds them (scripts/test.sh all does), so the unit
+  # run (CI) does not spend its two cores compiling what it will not run.
+  if(T_LABELS AND NOT "unit" IN_LIST T_LABELS)
+    set_target_properties(${T_NAME} PROPERTIES EXCLUDE_FROM_ALL ON)
+    if(NOT TARGET slow_tests)
+      add_custom_target(slow_tests)
+    endif()
+    add_dependencies(slow_tests ${T_NAME})
+  endif()
   set_target_properties(${T_NAME} PROPERTIES AUTOMOC ON)
   target_link_libraries(${T_NAME} PRIVATE Qt6::Test ${T_LIBS})
   target_compile_definitions(${T_NAME} PRIVATE

@@ -1,0 +1,82 @@
+// Issue 14's done-when for a fitted preset, as a user runs it: the bundled
+// example record fitted with `drape fit` (its defaults), then the preset draped
+// from flat with `drape simulate --grid G` at G = 41, 61, 81. A preset is a
+// fabric, not a mesh: D within 1 point and node counts within 1 of each other
+// over the grids, and within 2 points and 1 node of the record at every grid.
+// Measured data (examples/DL-A04, the lab's own D), not the engine's own truth.
+#include <QJsonArray>
+#include <QJsonDocument>
+#include <QJsonObject>
+#include <QProcess>
+#include <QTemporaryDir>
+#include <QTest>
+
+#include <algorithm>
+#include <cmath>
+
+class TestCliSlow : public QObject {
+    Q_OBJECT
+
+    struct Out {
+        int code = -1;
+        QByteArray out;
+        QString err;
+    };
+    static Out run(const QStringList& args)
+    {
+        QProcess p;
+        p.start(QCoreApplication::applicationDirPath() + "/../bin/drape", args);
+        Out r;
+        if (!p.waitForFinished(900000)) {
+            p.kill();
+            return r;
+        }
+        r.code = p.exitCode();
+        r.out = p.readAllStandardOutput();
+        r.err = QString::fromUtf8(p.readAllStandardError());
+        return r;
+    }
+
+private slots:
+    void fittedPresetDrapesTheRecordAtEveryGrid()
+    {
+        QTemporaryDir tmp;
+        QVERIFY(tmp.isValid());
+        const QString preset = tmp.filePath("fabric.json");
+        const Out fit = run({"fit", DRAPE_SOURCE_DIR "/examples/DL-A04", "--out", preset, "--json", "--quiet"});
+        QVERIFY2(fit.code == 0, qPrintable(fit.err));
+        const QJsonObject rec = QJsonDocument::fromJson(fit.out).object()["fit"].toObject()["records"].toArray().at(0).toObject();
+        const double measured_D = rec["measured_drape_coefficient_percent"].toDouble(NAN);
+        const int measured_nodes = static_cast<int>(std::lround(rec["measured_node_count"].toDouble(NAN)));
+        QVERIFY2(std::isfinite(measured_D) && measured_nodes > 0, fit.out.constData());
+        double lo = 1e9, hi = -1e9;
+        int nlo = 1000, nhi = -1;
+        for (const char* grid : {"41", "61", "81"}) {
+            const Out sim = run({"simulate", "--fabric", preset, "--sample-diameter", "300mm", "--disc-diameter", "150mm", "--grid", grid, "--json"});
+            QVERIFY2(sim.code == 0, qPrintable(QString("grid %1: exit %2, %3").arg(grid).arg(sim.code).arg(sim.err)));
+            const QJsonObject j = QJsonDocument::fromJson(sim.out).object();
+            QVERIFY2(j["converged"].toBool(), qPrintable(QString("grid %1 not at rest").arg(grid)));
+            const double D = j["drape_coefficient_percent"].toDouble(NAN);
+            const int nodes = j["node_count"].toInt(-1);
+            qInfo("grid %s: D = %.2f %% (record %.2f %%), %d nodes (record %d), %d Newton iterations", grid, D, measured_D, nodes, measured_nodes,
+                  j["newton_iterations"].toInt());
+            QVERIFY2(std::abs(D - measured_D) <= 2.0, qPrintable(QString("grid %1: D %2 % against the record's %3 %").arg(grid).arg(D).arg(measured_D)));
+            QVERIFY2(std::abs(nodes - measured_nodes) <= 1,
+                     qPrintable(QString("grid %1: %2 nodes against the record's %3").arg(grid).arg(nodes).arg(measured_nodes)));
+            lo = std::min(lo, D);
+            hi = std::max(hi, D);
+            nlo = std::min(nlo, nodes);
+            nhi = std::max(nhi, nodes);
+        }
+        qInfo("D spread over grids 41-81: %.2f points", hi - lo);
+        // Issue 14 is open on this line: the limp presets' laid drapes (8 folds)
+        // move by 1.2-1.5 points over grids 41-81 (this record 1.49, measured
+        // 2026-12-01). When the model meets it the test reports XPASS: drop this.
+        QEXPECT_FAIL("", "issue 14: D of a limp fitted preset moves by up to 1.5 points over grids 41-81", Continue);
+        QVERIFY2(hi - lo <= 1.0, qPrintable(QString("D spread %1 points over grids 41-81").arg(hi - lo)));
+        QVERIFY2(nhi - nlo <= 1, qPrintable(QString("node counts %1..%2 over grids 41-81").arg(nlo).arg(nhi)));
+    }
+};
+
+QTEST_GUILESS_MAIN(TestCliSlow)
+#include "tst_cli_slow.moc"

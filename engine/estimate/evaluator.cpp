@@ -386,14 +386,26 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
             continue;
         }
         if (!resolves) continue;
-        // A one-sided difference of warm re-solves, into the box.
+        // A one-sided difference of warm re-solves, into the box. From a rest state,
+        // a re-solve that did not come to rest is no drape of the model: its
+        // difference would be a slope of the solver's path. Then the other side;
+        // failing both, the column stays 0 (the parameter reads as not seen by the
+        // data, and its interval says so). Before any drape at rest (e not at rest)
+        // the differences are all the search has, and are kept as they are.
         const auto& v = m_vars[static_cast<std::size_t>(i)];
         double h = v.log_scale ? 0.05 : 0.02 * (v.upper - v.lower);
         Eigen::VectorXd xp = x;
         if (x[i] + h > v.upper) h = -h;
         xp[i] = x[i] + h;
-        const Evaluation ep = evaluate(xp, Start::Best);
+        Evaluation ep = evaluate(xp, Start::Best);
         report("jacobian");
+        if (e.at_rest() && !ep.at_rest() && x[i] - h >= v.lower && x[i] - h <= v.upper) {
+            h = -h;
+            xp[i] = x[i] + h;
+            ep = evaluate(xp, Start::Best);
+            report("jacobian");
+        }
+        if (e.at_rest() && !ep.at_rest()) continue;
         for (std::size_t k = 0; k < e.terms.size() && k < ep.terms.size(); ++k)
             if (keep_row(k) && std::isfinite(ep.terms[k].simulated) && std::isfinite(e.terms[k].simulated))
                 J(static_cast<Eigen::Index>(k), i) = (ep.terms[k].simulated - e.terms[k].simulated) / h / e.terms[k].sigma;

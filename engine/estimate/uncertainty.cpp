@@ -29,9 +29,18 @@ std::vector<double> coordinate_sigmas(Evaluator& ev, const std::vector<FitVariab
         ev.report("uncertainty");
         const Evaluation em = ev.evaluate(xm, Start::Best);
         ev.report("uncertainty");
+        // Only drapes at rest are drapes of the model: a side that did not come to
+        // rest is replaced by the optimum itself (a one-sided difference); with
+        // neither side at rest the column stays 0 and the parameter reads as not
+        // constrained, which is what such a fit can say about it.
+        const Evaluation* up = ep.at_rest() ? &ep : best.at_rest() ? &best : nullptr;
+        const Evaluation* dn = em.at_rest() ? &em : best.at_rest() ? &best : nullptr;
+        const double xu = ep.at_rest() ? xp[i] : x[i], xd = em.at_rest() ? xm[i] : x[i];
         for (std::size_t r = 0; r < rows.size(); ++r) {
             const auto k = static_cast<std::size_t>(rows[r]);
-            J(static_cast<Eigen::Index>(r), i) = (ep.terms[k].whitened() - em.terms[k].whitened()) / (xp[i] - xm[i]);
+            J(static_cast<Eigen::Index>(r), i) = up && dn && up != dn && xu != xd && k < up->terms.size() && k < dn->terms.size()
+                                                     ? (up->terms[k].whitened() - dn->terms[k].whitened()) / (xu - xd)
+                                                     : 0.0;
         }
     }
     return sigmas_from_jacobian(J, out);

@@ -132,14 +132,16 @@ Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
     return e;
 }
 
-DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch) const
+DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch, int grid) const
 {
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
     cloth::RestOptions ro = m_opt.rest;
     ro.cancel = m_opt.cancel;
     ro.progress = nullptr;
     const MeasuredDrape& rec = m_recs[static_cast<std::size_t>(r)];
-    const cloth::DrapeResult sim = cloth::simulate_drape(params_for_record(p, rec), setup_for(r, seed, on_branch), ro, m_opt.model_options);
+    cloth::DrapeSetup setup = setup_for(r, seed, on_branch);
+    if (grid > 0) setup.grid = grid;
+    const cloth::DrapeResult sim = cloth::simulate_drape(params_for_record(p, rec), setup, ro, m_opt.model_options);
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
     return drape_features(sim, rec);
 }
@@ -150,21 +152,34 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
     const int R = static_cast<int>(m_recs.size());
     m_cold.resize(static_cast<std::size_t>(R));
     m_cold_seeds.resize(static_cast<std::size_t>(R), 0);
-    std::vector<std::pair<int, std::uint64_t>> jobs;
+    m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
+    struct Job {
+        int r;
+        std::uint64_t seed;
+        int grid; // 0: the fit's
+    };
+    std::vector<Job> jobs;
+    // The finer grid's drapes first: each is the longest job (it lays the sheet
+    // on the continuation's coarsest level, then refines), so the two threads
+    // finish together.
+    const bool fine = m_opt.flat_check_grid > m_opt.grid && m_opt.random_start_seeds > 0;
+    for (int r = 0; r < R && fine; ++r)
+        if (branch_of(r) != 0) jobs.push_back({r, m_opt.seed + 1000, m_opt.flat_check_grid});
     for (int r = 0; r < R; ++r)
         if (branch_of(r) != 0)
-            for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.emplace_back(r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k));
+            for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), 0});
     if (jobs.empty()) return;
     std::vector<DrapeFeatures> drawn(jobs.size());
     const auto t0 = Clock::now();
     const int nthreads = std::clamp(m_opt.parallel_seeds, 1, static_cast<int>(jobs.size()));
-    parallel_for(jobs.size(), nthreads, [&](std::size_t j) { drawn[j] = drape_cold(jobs[j].first, p, jobs[j].second, false); });
+    parallel_for(jobs.size(), nthreads, [&](std::size_t j) { drawn[j] = drape_cold(jobs[j].r, p, jobs[j].seed, false, jobs[j].grid); });
     m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
     m_simulations += static_cast<long>(jobs.size());
     for (int r = 0; r < R; ++r) {
         std::vector<DrapeFeatures> cold;
         for (std::size_t j = 0; j < jobs.size(); ++j)
-            if (jobs[j].first == r) cold.push_back(std::move(drawn[j]));
+            if (jobs[j].r == r && jobs[j].grid > 0) m_cold_fine[static_cast<std::size_t>(r)] = std::move(drawn[j]);
+            else if (jobs[j].r == r) cold.push_back(std::move(drawn[j]));
         if (cold.empty()) continue;
         std::vector<double> closed;
         m_cold[static_cast<std::size_t>(r)] = average_features(cold, &closed);

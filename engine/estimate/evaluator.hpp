@@ -117,12 +117,16 @@ public:
     long unconverged() const { return m_unconverged; }
     const std::vector<DrapeFeatures>& cold_features() const { return m_cold; }
     int cold_seeds(std::size_t r) const { return r < m_cold_seeds.size() ? m_cold_seeds[r] : 0; }
+    const FitOptions& options() const { return m_opt; }
+    /// Record r's drape from flat on FitOptions::flat_check_grid (draw_from_flat); nullptr = not drawn.
+    const DrapeFeatures* cold_fine(std::size_t r) const { return r < m_cold_fine.size() && m_cold_fine[r] ? &*m_cold_fine[r] : nullptr; }
     void set_planned(int n) { m_planned = n; }
 
 private:
     /// One cold drape of record r at p (seed, on the branch or not), measured.
     /// Touches no member (the spread's drapes run on several threads).
-    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch) const;
+    /// grid > 0: on that grid instead of the fit's.
+    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch, int grid = 0) const;
 
     const std::vector<MeasuredDrape>& m_recs;
     const FitOptions& m_opt;
@@ -136,6 +140,7 @@ private:
     Evaluation m_best, m_last;
     std::vector<DrapeFeatures> m_cold; ///< per record: mean features of the random-start drapes
     std::vector<int> m_cold_seeds;     ///< per record: drapes behind m_cold (0 = none)
+    std::vector<std::optional<DrapeFeatures>> m_cold_fine; ///< per record: from flat on flat_check_grid
     Eigen::VectorXd m_last_x;
     Eigen::VectorXd m_best_x;
     std::vector<std::vector<cloth::Positions>> m_states;

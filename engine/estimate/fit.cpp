@@ -281,6 +281,12 @@ void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r)
     rf.cold_features = ev.cold_features()[r];
     rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
     rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
+    if (const DrapeFeatures* f = ev.cold_fine(r)) {
+        rf.cold_fine_grid = ev.options().flat_check_grid;
+        rf.cold_fine_features = *f;
+        rf.cold_fine_dc_error_percent = f->drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+        rf.cold_fine_node_error = f->node_count - rf.measured_features.node_count;
+    }
 }
 
 /// One fit at options.grid: scan, global, local, mirror, spread, uncertainty;

@@ -144,6 +144,11 @@ struct FitOptions {
     /// Measured branch: perturbation seeds draped from the random mix at the
     /// optimum, reported as `cold_*` (what `drape predict` shows).
     int random_start_seeds = 2;
+    /// Measured branch: the preset also draped from flat (the first of those
+    /// seeds) on this finer grid, reported as `cold_fine_*`: whether the preset
+    /// carries over to a CAD's finer mesh (issue 14/15). 0 = off (the library's
+    /// default; `drape fit` checks at 61 unless --flat-grid).
+    int flat_check_grid = 0;
     NoiseModel noise;
     /// Channels in the objective (dc, nodes, hem, contours); the others are
     /// held out: computed, reported and analysed as predictions, not fitted.
@@ -211,6 +216,11 @@ struct RecordFit {
     DrapeFeatures cold_features;
     double cold_dc_error_percent = 0;
     double cold_node_error = 0;
+    /// The same preset from flat (first seed) on FitOptions::flat_check_grid; 0 = not run.
+    int cold_fine_grid = 0;
+    DrapeFeatures cold_fine_features;
+    double cold_fine_dc_error_percent = 0;
+    double cold_fine_node_error = 0;
     /// Exact sensitivity of the first seed's drape coefficient at the optimum to
     /// each fitted parameter: D change [points] for +10 % of the parameter (dx/dp =
     /// H^-1 df/dp at its rest state, cloth/rest_sensitivity.hpp). Empty when the

@@ -453,11 +453,30 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
            << "), the preset gives"
            << (on_branch ? " (the fold count a random start picks can differ from the record's: a bifurcation, not a misfit)" : "")
            << ":\n\n"
-           << "| record | D cold [%] | D error cold | nodes cold | node error cold |\n|---|---|---|---|---|\n";
-        for (const auto& rf : r.records)
+           << "| record | D cold [%] | D error cold | nodes cold | node error cold |";
+        // The first seed again on a finer grid (FitOptions::flat_check_grid): does
+        // the preset carry over to a CAD's finer mesh?
+        const int fine = r.records.front().cold_fine_grid;
+        if (fine > 0) md << " D at grid " << fine << " [%] | D error | nodes | node error |";
+        md << "\n|---|---|---|---|---|" << (fine > 0 ? "---|---|---|---|" : "") << "\n";
+        for (const auto& rf : r.records) {
             md << "| " << rf.measured.id << " | " << num(rf.cold_features.drape_coefficient_percent, "%.1f") << " | "
                << num(rf.cold_dc_error_percent, "%+.1f") << " | " << num(rf.cold_features.node_count, "%.1f") << " | "
-               << num(rf.cold_node_error, "%+.1f") << " |\n";
+               << num(rf.cold_node_error, "%+.1f") << " |";
+            if (fine > 0) {
+                if (rf.cold_fine_grid > 0)
+                    md << " " << num(rf.cold_fine_features.drape_coefficient_percent, "%.1f") << " | " << num(rf.cold_fine_dc_error_percent, "%+.1f")
+                       << " | " << num(rf.cold_fine_features.node_count, "%.0f") << " | " << num(rf.cold_fine_node_error, "%+.0f") << " |";
+                else
+                    md << " - | - | - | - |";
+            }
+            md << "\n";
+        }
+        if (fine > 0)
+            md << "\nAt grid " << fine << " the first seed (grid " << r.options.grid
+               << " cells are " << num(r.records.front().measured.sample_diameter * 1e3 / std::max(1, r.options.grid - 1), "%.1f")
+               << " mm, grid " << fine << " " << num(r.records.front().measured.sample_diameter * 1e3 / std::max(1, fine - 1), "%.1f")
+               << " mm): a preset that is the fabric, not the fit's mesh, drapes alike on both (`drape simulate --grid " << fine << "`).\n";
         md << "\n";
     }
 

@@ -53,6 +53,7 @@ private slots:
         o.scan_evaluations = 6;
         o.global_evaluations = 4;
         o.local_evaluations = 20; // BOBYQA spends 2n + 1 = 7 on its first model
+        o.flat_check_grid = 25;
         const FitResult r = fit_fabric({rec}, o);
         QVERIFY(!r.cancelled);
         QVERIFY(r.simulations > 0 && r.seconds_per_simulation > 0);
@@ -64,6 +65,20 @@ private slots:
         QVERIFY(std::isfinite(r.records[0].cold_dc_error_percent) && r.records[0].cold_features.drape_coefficient_percent > 0);
         QVERIFY(std::abs(r.records[0].cold_dc_error_percent - (r.records[0].cold_features.drape_coefficient_percent -
                                                                r.records[0].measured_features.drape_coefficient_percent)) < 1e-12);
+        // And its first seed from flat on the finer check grid: the drape `drape
+        // simulate --grid 25` gives the preset (same seed, same laying).
+        const RecordFit& rf = r.records[0];
+        QCOMPARE(rf.cold_fine_grid, 25);
+        cloth::DrapeSetup fine = rec.setup(25, o.seed + 1000);
+        fine.laying_load = o.laying_load;
+        const cloth::DrapeResult direct = cloth::simulate_drape(r.params, fine, o.rest, o.model_options);
+        qInfo("from flat: grid 17 %.2f %% (%.1f nodes), grid 25 %.2f %% (%.0f nodes), direct %.2f %%", rf.cold_features.drape_coefficient_percent,
+              rf.cold_features.node_count, rf.cold_fine_features.drape_coefficient_percent, rf.cold_fine_features.node_count,
+              direct.metrics.drape_coefficient_percent);
+        QVERIFY(std::abs(rf.cold_fine_features.drape_coefficient_percent - direct.metrics.drape_coefficient_percent) < 1e-9);
+        QCOMPARE(rf.cold_fine_features.node_count, static_cast<double>(direct.metrics.node_count));
+        QVERIFY(std::abs(rf.cold_fine_dc_error_percent - (rf.cold_fine_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent)) <
+                1e-12);
         // The exact sensitivity of D to each fitted parameter at the optimum: one
         // entry per fitted parameter, stiffer bending drapes higher.
         QCOMPARE(r.records[0].d_drape_per_10_percent.size(), r.variables.size());

@@ -163,8 +163,9 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
     // on the continuation's coarsest level, then refines), so the two threads
     // finish together.
     const bool fine = m_opt.flat_check_grid > m_opt.grid && m_opt.random_start_seeds > 0;
-    for (int r = 0; r < R && fine; ++r)
-        if (branch_of(r) != 0) jobs.push_back({r, m_opt.seed + 1000, m_opt.flat_check_grid});
+    // Every record's (a record fitted from the random mix has its cold_* from
+    // the spread's draws, but no drape on the finer grid).
+    for (int r = 0; r < R && fine; ++r) jobs.push_back({r, m_opt.seed + 1000, m_opt.flat_check_grid});
     for (int r = 0; r < R; ++r)
         if (branch_of(r) != 0)
             for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), 0});
@@ -195,6 +196,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     std::vector<std::vector<double>> values; // [term][draw]
     m_cold.assign(static_cast<std::size_t>(R), {});
     m_cold_seeds.assign(static_cast<std::size_t>(R), 0);
+    m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
     // The drapes, all records' at once on the fit's threads (each is
     // independent): per record `extra` on the fit's branch.
     struct Job {

@@ -276,11 +276,12 @@ struct GridRunState {
 /// Record r's drapes from flat (cold_*), where the evaluator drew them.
 void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r)
 {
-    if (r >= ev.cold_features().size() || ev.cold_seeds(r) == 0) return;
-    rf.cold_seeds = ev.cold_seeds(r);
-    rf.cold_features = ev.cold_features()[r];
-    rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
-    rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
+    if (r < ev.cold_features().size() && ev.cold_seeds(r) > 0) {
+        rf.cold_seeds = ev.cold_seeds(r);
+        rf.cold_features = ev.cold_features()[r];
+        rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+        rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
+    }
     if (const DrapeFeatures* f = ev.cold_fine(r)) {
         rf.cold_fine_grid = ev.options().flat_check_grid;
         rf.cold_fine_features = *f;
@@ -605,6 +606,9 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     if (options.refine_grid != 0 && (options.refine_grid <= options.grid || options.refine_grid > 200))
         throw ParameterError("fit: refine grid = " + std::to_string(options.refine_grid) + " must be 0 (off) or above the grid " +
                              std::to_string(options.grid) + " and at most 200");
+    if (options.flat_check_grid < 0 || options.flat_check_grid > 200)
+        throw ParameterError("fit: flat check grid = " + std::to_string(options.flat_check_grid) +
+                             " must be 0 (off) or a grid of at most 200 (not above the fitted grid: not run)");
     if (!(options.typical_bending_anisotropy >= 1) || !std::isfinite(options.typical_bending_anisotropy))
         throw ParameterError("fit: typical bending anisotropy = " + std::to_string(options.typical_bending_anisotropy) +
                              " must be a finite factor >= 1");

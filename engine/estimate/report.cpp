@@ -456,7 +456,13 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
            << "| record | D cold [%] | D error cold | nodes cold | node error cold |";
         // The first seed again on a finer grid (FitOptions::flat_check_grid): does
         // the preset carry over to a CAD's finer mesh?
-        const int fine = r.records.front().cold_fine_grid;
+        int fine = 0;
+        double fine_diameter = 0;
+        for (const auto& rf : r.records)
+            if (rf.cold_fine_grid > fine) {
+                fine = rf.cold_fine_grid;
+                fine_diameter = rf.measured.sample_diameter;
+            }
         if (fine > 0) md << " D at grid " << fine << " [%] | D error | nodes | node error |";
         md << "\n|---|---|---|---|---|" << (fine > 0 ? "---|---|---|---|" : "") << "\n";
         for (const auto& rf : r.records) {
@@ -474,8 +480,8 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
         }
         if (fine > 0)
             md << "\nAt grid " << fine << " the first seed (grid " << r.options.grid
-               << " cells are " << num(r.records.front().measured.sample_diameter * 1e3 / std::max(1, r.options.grid - 1), "%.1f")
-               << " mm, grid " << fine << " " << num(r.records.front().measured.sample_diameter * 1e3 / std::max(1, fine - 1), "%.1f")
+               << " cells are " << num(fine_diameter * 1e3 / std::max(1, r.options.grid - 1), "%.1f")
+               << " mm, grid " << fine << " " << num(fine_diameter * 1e3 / std::max(1, fine - 1), "%.1f")
                << " mm): a preset that is the fabric, not the fit's mesh, drapes alike on both (`drape simulate --grid " << fine << "`).\n";
         md << "\n";
     }

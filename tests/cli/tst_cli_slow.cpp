@@ -27,13 +27,16 @@ class TestCliSlow : public QObject {
         QProcess p;
         p.start(QCoreApplication::applicationDirPath() + "/../bin/drape", args);
         Out r;
-        if (!p.waitForFinished(900000)) {
+        if (!p.waitForFinished(400000)) { // a fit takes under a minute, a grid-81 drape about 30 s
+            r.err = "drape " + args.join(' ') + ": " + (p.state() == QProcess::NotRunning ? p.errorString() : "no result within 400 s");
             p.kill();
+            p.waitForFinished();
             return r;
         }
-        r.code = p.exitCode();
+        if (p.exitStatus() != QProcess::NormalExit) r.err = "drape " + args.join(' ') + " crashed: ";
+        r.code = p.exitStatus() == QProcess::NormalExit ? p.exitCode() : -1;
         r.out = p.readAllStandardOutput();
-        r.err = QString::fromUtf8(p.readAllStandardError());
+        r.err += QString::fromUtf8(p.readAllStandardError());
         return r;
     }
 

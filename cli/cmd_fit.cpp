@@ -274,10 +274,11 @@ int run(const std::vector<std::string>& argv)
                             measured_text(has_dc ? rf.cold_dc_error_percent : NAN, "%+5.1f").c_str(), rf.cold_features.node_count,
                             measured_text(has_nodes ? rf.cold_node_error : NAN, "%+4.1f").c_str());
                 if (rf.cold_fine_grid > 0)
-                    std::printf("%-10s draped from flat on grid %d: D %5.1f %% (error %s)   nodes %4.0f (error %s)\n", rf.measured.id.c_str(),
+                    std::printf("%-10s draped from flat on grid %d: D %5.1f %% (error %s)   nodes %4.0f (error %s)%s\n", rf.measured.id.c_str(),
                                 rf.cold_fine_grid, rf.cold_fine_features.drape_coefficient_percent,
                                 measured_text(has_dc ? rf.cold_fine_dc_error_percent : NAN, "%+5.1f").c_str(), rf.cold_fine_features.node_count,
-                                measured_text(has_nodes ? rf.cold_fine_node_error : NAN, "%+4.0f").c_str());
+                                measured_text(has_nodes ? rf.cold_fine_node_error : NAN, "%+4.0f").c_str(),
+                                rf.cold_fine_converged ? "" : "   NOT AT REST (the solver's iteration limit)");
             }
         std::printf("\nchi2 %.1f for %d degrees of freedom; residual %s the measurement noise (contour RMS %.2f mm)\n", r.chi2, r.dof,
                     r.residual.exceeds_noise ? "EXCEEDS" : "is within", r.residual.rms_m * 1e3);

@@ -132,7 +132,7 @@ Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
     return e;
 }
 
-DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch, int grid) const
+DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch, int grid, bool* at_rest) const
 {
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
     cloth::RestOptions ro = m_opt.rest;
@@ -143,6 +143,7 @@ DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::ui
     if (grid > 0) setup.grid = grid;
     const cloth::DrapeResult sim = cloth::simulate_drape(params_for_record(p, rec), setup, ro, m_opt.model_options);
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
+    if (at_rest) *at_rest = sim.status.converged();
     return drape_features(sim, rec);
 }
 
@@ -153,6 +154,7 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
     m_cold.resize(static_cast<std::size_t>(R));
     m_cold_seeds.resize(static_cast<std::size_t>(R), 0);
     m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
+    m_cold_fine_at_rest.assign(static_cast<std::size_t>(R), 0);
     struct Job {
         int r;
         std::uint64_t seed;
@@ -171,16 +173,23 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
             for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), 0});
     if (jobs.empty()) return;
     std::vector<DrapeFeatures> drawn(jobs.size());
+    std::vector<char> rested(jobs.size(), 0);
     const auto t0 = Clock::now();
     const int nthreads = std::clamp(m_opt.parallel_seeds, 1, static_cast<int>(jobs.size()));
-    parallel_for(jobs.size(), nthreads, [&](std::size_t j) { drawn[j] = drape_cold(jobs[j].r, p, jobs[j].seed, false, jobs[j].grid); });
+    parallel_for(jobs.size(), nthreads, [&](std::size_t j) {
+        bool ok = false;
+        drawn[j] = drape_cold(jobs[j].r, p, jobs[j].seed, false, jobs[j].grid, &ok);
+        rested[j] = ok ? 1 : 0;
+    });
     m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
     m_simulations += static_cast<long>(jobs.size());
     for (int r = 0; r < R; ++r) {
         std::vector<DrapeFeatures> cold;
         for (std::size_t j = 0; j < jobs.size(); ++j)
-            if (jobs[j].r == r && jobs[j].grid > 0) m_cold_fine[static_cast<std::size_t>(r)] = std::move(drawn[j]);
-            else if (jobs[j].r == r) cold.push_back(std::move(drawn[j]));
+            if (jobs[j].r == r && jobs[j].grid > 0) {
+                m_cold_fine[static_cast<std::size_t>(r)] = std::move(drawn[j]);
+                m_cold_fine_at_rest[static_cast<std::size_t>(r)] = rested[j];
+            } else if (jobs[j].r == r) cold.push_back(std::move(drawn[j]));
         if (cold.empty()) continue;
         std::vector<double> closed;
         m_cold[static_cast<std::size_t>(r)] = average_features(cold, &closed);
@@ -197,6 +206,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     m_cold.assign(static_cast<std::size_t>(R), {});
     m_cold_seeds.assign(static_cast<std::size_t>(R), 0);
     m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
+    m_cold_fine_at_rest.assign(static_cast<std::size_t>(R), 0);
     // The drapes, all records' at once on the fit's threads (each is
     // independent): per record `extra` on the fit's branch.
     struct Job {

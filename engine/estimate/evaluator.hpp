@@ -120,13 +120,15 @@ public:
     const FitOptions& options() const { return m_opt; }
     /// Record r's drape from flat on FitOptions::flat_check_grid (draw_from_flat); nullptr = not drawn.
     const DrapeFeatures* cold_fine(std::size_t r) const { return r < m_cold_fine.size() && m_cold_fine[r] ? &*m_cold_fine[r] : nullptr; }
+    /// Whether that drape came to rest.
+    bool cold_fine_at_rest(std::size_t r) const { return r < m_cold_fine_at_rest.size() && m_cold_fine_at_rest[r]; }
     void set_planned(int n) { m_planned = n; }
 
 private:
     /// One cold drape of record r at p (seed, on the branch or not), measured.
     /// Touches no member (the spread's drapes run on several threads).
-    /// grid > 0: on that grid instead of the fit's.
-    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch, int grid = 0) const;
+    /// grid > 0: on that grid instead of the fit's. at_rest: whether it came to rest.
+    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch, int grid = 0, bool* at_rest = nullptr) const;
 
     const std::vector<MeasuredDrape>& m_recs;
     const FitOptions& m_opt;
@@ -141,6 +143,7 @@ private:
     std::vector<DrapeFeatures> m_cold; ///< per record: mean features of the random-start drapes
     std::vector<int> m_cold_seeds;     ///< per record: drapes behind m_cold (0 = none)
     std::vector<std::optional<DrapeFeatures>> m_cold_fine; ///< per record: from flat on flat_check_grid
+    std::vector<char> m_cold_fine_at_rest;                 ///< per record: that drape came to rest
     Eigen::VectorXd m_last_x;
     Eigen::VectorXd m_best_x;
     std::vector<std::vector<cloth::Positions>> m_states;

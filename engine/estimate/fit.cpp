@@ -284,6 +284,7 @@ void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r)
     }
     if (const DrapeFeatures* f = ev.cold_fine(r)) {
         rf.cold_fine_grid = ev.options().flat_check_grid;
+        rf.cold_fine_converged = ev.cold_fine_at_rest(r);
         rf.cold_fine_features = *f;
         rf.cold_fine_dc_error_percent = f->drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
         rf.cold_fine_node_error = f->node_count - rf.measured_features.node_count;

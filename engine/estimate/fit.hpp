@@ -218,6 +218,7 @@ struct RecordFit {
     double cold_node_error = 0;
     /// The same preset from flat (first seed) on FitOptions::flat_check_grid; 0 = not run.
     int cold_fine_grid = 0;
+    bool cold_fine_converged = false; ///< that drape came to rest (else its numbers describe a state it does not rest in)
     DrapeFeatures cold_fine_features;
     double cold_fine_dc_error_percent = 0;
     double cold_fine_node_error = 0;

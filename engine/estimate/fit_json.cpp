@@ -135,6 +135,7 @@ json fit_to_json(const FitResult& r)
                        {"cold_dc_error_percent", rf.cold_seeds ? json(rf.cold_dc_error_percent) : json(nullptr)},
                        {"cold_node_error", rf.cold_seeds ? json(rf.cold_node_error) : json(nullptr)},
                        {"cold_fine_grid", rf.cold_fine_grid ? json(rf.cold_fine_grid) : json(nullptr)},
+                       {"cold_fine_converged", rf.cold_fine_grid ? json(rf.cold_fine_converged) : json(nullptr)},
                        {"cold_fine_drape_coefficient_percent", rf.cold_fine_grid ? json(rf.cold_fine_features.drape_coefficient_percent) : json(nullptr)},
                        {"cold_fine_node_count", rf.cold_fine_grid ? json(rf.cold_fine_features.node_count) : json(nullptr)},
                        {"cold_fine_dc_error_percent", rf.cold_fine_grid ? json(rf.cold_fine_dc_error_percent) : json(nullptr)},

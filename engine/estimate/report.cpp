@@ -471,8 +471,9 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
                << num(rf.cold_node_error, "%+.1f") << " |";
             if (fine > 0) {
                 if (rf.cold_fine_grid > 0)
-                    md << " " << num(rf.cold_fine_features.drape_coefficient_percent, "%.1f") << " | " << num(rf.cold_fine_dc_error_percent, "%+.1f")
-                       << " | " << num(rf.cold_fine_features.node_count, "%.0f") << " | " << num(rf.cold_fine_node_error, "%+.0f") << " |";
+                    md << " " << num(rf.cold_fine_features.drape_coefficient_percent, "%.1f") << (rf.cold_fine_converged ? "" : " (not at rest)")
+                       << " | " << num(rf.cold_fine_dc_error_percent, "%+.1f") << " | " << num(rf.cold_fine_features.node_count, "%.0f") << " | "
+                       << num(rf.cold_fine_node_error, "%+.0f") << " |";
                 else
                     md << " - | - | - | - |";
             }

@@ -76,6 +76,8 @@ private slots:
               rf.cold_features.node_count, rf.cold_fine_features.drape_coefficient_percent, rf.cold_fine_features.node_count,
               direct.metrics.drape_coefficient_percent);
         QVERIFY(std::abs(rf.cold_fine_features.drape_coefficient_percent - direct.metrics.drape_coefficient_percent) < 1e-9);
+        QVERIFY(direct.status.converged());
+        QCOMPARE(rf.cold_fine_converged, direct.status.converged());
         QCOMPARE(rf.cold_fine_features.node_count, static_cast<double>(direct.metrics.node_count));
         QVERIFY(std::abs(rf.cold_fine_dc_error_percent - (rf.cold_fine_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent)) <
                 1e-12);

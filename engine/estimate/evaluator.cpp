@@ -154,7 +154,6 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
     m_cold.resize(static_cast<std::size_t>(R));
     m_cold_seeds.resize(static_cast<std::size_t>(R), 0);
     m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
-    m_cold_fine_at_rest.assign(static_cast<std::size_t>(R), 0);
     struct Job {
         int r;
         std::uint64_t seed;
@@ -185,11 +184,11 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
     m_simulations += static_cast<long>(jobs.size());
     for (int r = 0; r < R; ++r) {
         std::vector<DrapeFeatures> cold;
-        for (std::size_t j = 0; j < jobs.size(); ++j)
-            if (jobs[j].r == r && jobs[j].grid > 0) {
-                m_cold_fine[static_cast<std::size_t>(r)] = std::move(drawn[j]);
-                m_cold_fine_at_rest[static_cast<std::size_t>(r)] = rested[j];
-            } else if (jobs[j].r == r) cold.push_back(std::move(drawn[j]));
+        for (std::size_t j = 0; j < jobs.size(); ++j) {
+            if (jobs[j].r != r) continue;
+            if (jobs[j].grid > 0) m_cold_fine[static_cast<std::size_t>(r)] = FineDrape{std::move(drawn[j]), rested[j] != 0};
+            else cold.push_back(std::move(drawn[j]));
+        }
         if (cold.empty()) continue;
         std::vector<double> closed;
         m_cold[static_cast<std::size_t>(r)] = average_features(cold, &closed);
@@ -206,7 +205,6 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     m_cold.assign(static_cast<std::size_t>(R), {});
     m_cold_seeds.assign(static_cast<std::size_t>(R), 0);
     m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
-    m_cold_fine_at_rest.assign(static_cast<std::size_t>(R), 0);
     // The drapes, all records' at once on the fit's threads (each is
     // independent): per record `extra` on the fit's branch.
     struct Job {

@@ -118,10 +118,13 @@ public:
     const std::vector<DrapeFeatures>& cold_features() const { return m_cold; }
     int cold_seeds(std::size_t r) const { return r < m_cold_seeds.size() ? m_cold_seeds[r] : 0; }
     const FitOptions& options() const { return m_opt; }
+    /// A drape from flat on FitOptions::flat_check_grid, measured.
+    struct FineDrape {
+        DrapeFeatures features;
+        bool at_rest = false;
+    };
     /// Record r's drape from flat on FitOptions::flat_check_grid (draw_from_flat); nullptr = not drawn.
-    const DrapeFeatures* cold_fine(std::size_t r) const { return r < m_cold_fine.size() && m_cold_fine[r] ? &*m_cold_fine[r] : nullptr; }
-    /// Whether that drape came to rest.
-    bool cold_fine_at_rest(std::size_t r) const { return r < m_cold_fine_at_rest.size() && m_cold_fine_at_rest[r]; }
+    const FineDrape* cold_fine(std::size_t r) const { return r < m_cold_fine.size() && m_cold_fine[r] ? &*m_cold_fine[r] : nullptr; }
     void set_planned(int n) { m_planned = n; }
 
 private:
@@ -142,8 +145,7 @@ private:
     Evaluation m_best, m_last;
     std::vector<DrapeFeatures> m_cold; ///< per record: mean features of the random-start drapes
     std::vector<int> m_cold_seeds;     ///< per record: drapes behind m_cold (0 = none)
-    std::vector<std::optional<DrapeFeatures>> m_cold_fine; ///< per record: from flat on flat_check_grid
-    std::vector<char> m_cold_fine_at_rest;                 ///< per record: that drape came to rest
+    std::vector<std::optional<FineDrape>> m_cold_fine; ///< per record: from flat on flat_check_grid
     Eigen::VectorXd m_last_x;
     Eigen::VectorXd m_best_x;
     std::vector<std::vector<cloth::Positions>> m_states;

@@ -282,12 +282,12 @@ void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r)
         rf.cold_dc_error_percent = rf.cold_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
         rf.cold_node_error = rf.cold_features.node_count - rf.measured_features.node_count;
     }
-    if (const DrapeFeatures* f = ev.cold_fine(r)) {
+    if (const Evaluator::FineDrape* f = ev.cold_fine(r)) {
         rf.cold_fine_grid = ev.options().flat_check_grid;
-        rf.cold_fine_converged = ev.cold_fine_at_rest(r);
-        rf.cold_fine_features = *f;
-        rf.cold_fine_dc_error_percent = f->drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
-        rf.cold_fine_node_error = f->node_count - rf.measured_features.node_count;
+        rf.cold_fine_converged = f->at_rest;
+        rf.cold_fine_features = f->features;
+        rf.cold_fine_dc_error_percent = f->features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+        rf.cold_fine_node_error = f->features.node_count - rf.measured_features.node_count;
     }
 }
 

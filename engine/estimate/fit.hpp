@@ -144,8 +144,8 @@ struct FitOptions {
     /// Measured branch: perturbation seeds draped from the random mix at the
     /// optimum, reported as `cold_*` (what `drape predict` shows).
     int random_start_seeds = 2;
-    /// Measured branch: the preset also draped from flat (the first of those
-    /// seeds) on this finer grid, reported as `cold_fine_*`: whether the preset
+    /// The preset also draped from flat (the first of the random-start seeds, for
+    /// every record) on this finer grid, reported as `cold_fine_*`: whether the preset
     /// carries over to a CAD's finer mesh (issue 14/15). 0 = off (the library's
     /// default; `drape fit` checks at 61 unless --flat-grid).
     int flat_check_grid = 0;

@@ -14,10 +14,7 @@ function(drape_add_test)
   # run (CI) does not spend its two cores compiling what it will not run.
   if(T_LABELS AND NOT "unit" IN_LIST T_LABELS)
     set_target_properties(${T_NAME} PROPERTIES EXCLUDE_FROM_ALL ON)
-    if(NOT TARGET slow_tests)
-      add_custom_target(slow_tests)
-    endif()
-    add_dependencies(slow_tests ${T_NAME})
+    add_dependencies(slow_tests ${T_NAME}) # the target: CMakeLists.txt
   endif()
   set_target_properties(${T_NAME} PROPERTIES AUTOMOC ON)
   target_link_libraries(${T_NAME} PRIVATE Qt6::Test ${T_LIBS})

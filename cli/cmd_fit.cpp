@@ -54,6 +54,9 @@ as not identifiable.
                       cell in radius keeps its bending energy) and the preset says
                       model.bending_correction (docs/model-discrepancy.md sections 18-19);
                       --bending-correction (the default) is still accepted
+  --arc-membrane      the grid's springs measure the arc of their material line, not its chord
+                      (a fold crest no longer reads as compression); the preset then says
+                      model.arc_membrane. Off by default: docs/model-discrepancy.md section 24
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 41: 7.5 mm
@@ -136,7 +139,7 @@ int run(const std::vector<std::string>& argv)
 {
     Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--laying", "--flat-grid"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
-            "--bending-correction", "--plain-bending"});
+            "--bending-correction", "--plain-bending", "--arc-membrane"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
@@ -188,6 +191,9 @@ int run(const std::vector<std::string>& argv)
     if (a.has("--bending-correction") && a.has("--plain-bending"))
         throw UsageError("--bending-correction and --plain-bending: choose one");
     fo.model_options.bending_correction = !a.has("--plain-bending");
+    // Chords by default: with arcs alone the coarse grid's bending deficit at the
+    // rim shows (docs/model-discrepancy.md section 24).
+    fo.model_options.arc_membrane = a.has("--arc-membrane");
     if (const auto s = a.get("--start")) {
         const fabric::FabricPreset start = fabric::load_fabric(*s);
         fo.start = start.params; // a seed-19 preset starts from its continuum equivalent

@@ -85,6 +85,7 @@ int run(const std::vector<std::string>& argv)
     if (json) {
         nlohmann::json j = cloth::drape_summary_json(r, setup, ro.integrator);
         j["bending_correction"] = preset.model.bending_correction; // as simulate's summary
+        j["arc_membrane"] = preset.model.arc_membrane;
         std::cout << dump_json(j) << "\n";
     } else {
         std::printf("set-up             %.0f / %.0f mm (grid %d, seed %llu%s)\n", setup.sample_diameter * 1e3, setup.disc_diameter * 1e3,

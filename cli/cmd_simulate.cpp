@@ -67,6 +67,10 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
                         fits made since 2026-11-30 do)
   --plain-bending       the plain stencils even where the preset says model.bending_correction (to
                         compare; a preset drapes as it was fitted only with its own setting)
+  --arc-membrane        the grid's springs measure the arc of their material line, not its chord (a
+                        fold crest no longer reads as compression; docs/model-discrepancy.md section
+                        24); on too when the preset says model.arc_membrane (a fit with --arc-membrane)
+  --chord-membrane      the springs measure chords even where the preset says model.arc_membrane
   --self-collision      keep the cloth from passing through itself (a barrier one fabric thickness
                         wide; off by default: a drapemeter's folds stay open). The summary counts the
                         rest state's self-intersections either way
@@ -81,7 +85,7 @@ int run(const std::vector<std::string>& argv)
            fabric_flags() + setup_value_flags(kAllSetup) +
                std::set<std::string>{"--integrator", "--dt", "--tolerance", "--max-time", "--out", "--max-iterations", "--sensitivity"},
            setup_switches(kAllSetup) + std::set<std::string>{"--json", "--quiet", "--trace", "--vertex-contact-only", "--self-collision",
-                                                                 "--bending-correction", "--plain-bending"});
+                                                                 "--bending-correction", "--plain-bending", "--arc-membrane", "--chord-membrane"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");
     fabric::FabricPreset preset = load_fabric_flags(a);
     cloth::DrapeSetup defaults;
@@ -129,6 +133,12 @@ int run(const std::vector<std::string>& argv)
         preset.model.bending_correction = true;
     }
     if (a.has("--plain-bending")) preset.model.bending_correction = false;
+    if (a.has("--arc-membrane")) {
+        if (preset.seed) throw UsageError("--arc-membrane: a seed-19 preset's grid springs are its own constants");
+        if (a.has("--chord-membrane")) throw UsageError("--arc-membrane and --chord-membrane: choose one");
+        preset.model.arc_membrane = true;
+    }
+    if (a.has("--chord-membrane")) preset.model.arc_membrane = false;
     Progress progress("simulate", quiet);
     if (!quiet) ro.progress = progress.solver_callback(ro);
     cloth::single_threaded_blas(); // the same rounding as the widget, predict and garment: the same rest state
@@ -139,6 +149,7 @@ int run(const std::vector<std::string>& argv)
     const auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // the mesh topology
     summary["self_collision"] = preset.model.self_collision;
     summary["bending_correction"] = preset.model.bending_correction;
+    summary["arc_membrane"] = preset.model.arc_membrane;
     summary["self_intersections"] = cloth::self_intersections(r.x, sys->mesh().F).pairs;
     std::vector<cloth::DrapeMetricSensitivity> sens;
     if (!sens_params.empty() && r.status.converged()) {

@@ -30,16 +30,36 @@ using namespace drape;
 
 namespace {
 
-cloth::ClothMesh ring_disc(double diameter, int grid)
+/// rim_factor < 1: the spacing shrinks to rim_factor h0 between 65 and 90 mm from the
+/// centre (the bend over a 150 mm pedestal's rim and the folds' roots), tapering back to
+/// h0 over 15 mm on either side; rings placed at that spacing, each with as many nodes
+/// as its local spacing asks (RIMGRADE=f in the environment).
+cloth::ClothMesh ring_disc(double diameter, int grid, double rim_factor = 1.0)
 {
     const double R = diameter / 2, h0 = diameter / (grid - 1);
-    const int K = std::max(2, static_cast<int>(std::lround(R / h0)));
-    const double h = R / K;
+    auto spacing = [&](double r) {
+        const double lo = 0.065, hi = 0.090, taper = 0.015;
+        double b = 0;
+        if (r >= lo && r <= hi) b = 1;
+        else if (r > lo - taper && r < lo) b = (r - (lo - taper)) / taper;
+        else if (r > hi && r < hi + taper) b = ((hi + taper) - r) / taper;
+        return h0 * (1 - (1 - rim_factor) * b);
+    };
+    std::vector<double> radii;
+    for (double r = 0; r < R - 1e-9;) {
+        r += spacing(r + 0.5 * spacing(r));
+        radii.push_back(r);
+    }
+    // The last ring on the hem: the one nearer R taken, the rings scaled so that it lands there.
+    if (radii.size() > 1 && radii.back() - R > R - radii[radii.size() - 2]) radii.pop_back();
+    for (double& r : radii) r *= R / radii.back();
+    const int K = static_cast<int>(radii.size());
     std::vector<Eigen::Vector3d> X{Eigen::Vector3d::Zero()};
     std::vector<std::vector<int>> ring{{0}};
     const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
     for (int k = 1; k <= K; ++k) {
-        const double r = k * h;
+        const double r = radii[static_cast<std::size_t>(k - 1)];
+        const double h = spacing(r);
         const int n = std::max(6, static_cast<int>(std::lround(2 * std::numbers::pi * r / h)));
         std::vector<int> ids;
         for (int i = 0; i < n; ++i) {
@@ -138,7 +158,7 @@ void drape_on(const char* label, cloth::ClothMesh mesh, const fabric::FabricPres
 int main(int argc, char** argv)
 {
     if (argc < 4) {
-        std::fprintf(stderr, "usage: lattice PRESET GRID SEED [grid|sqtri|rings ...]\n");
+        std::fprintf(stderr, "usage: lattice PRESET GRID SEED [grid|sqtri|rings|graded ...]\n");
         return 2;
     }
     const auto p = fabric::load_fabric(argv[1]);
@@ -201,6 +221,9 @@ int main(int argc, char** argv)
             drape_on("sqtri", cloth::make_triangle_mesh(g.X, g.F), p, s);
         } else if (w == "rings") {
             drape_on("rings", ring_disc(s.sample_diameter, s.grid), p, s);
+        } else if (w == "graded") {
+            const double f = std::getenv("RIMGRADE") ? std::atof(std::getenv("RIMGRADE")) : 0.4;
+            drape_on("graded", ring_disc(s.sample_diameter, s.grid, f), p, s);
         }
     }
 }

@@ -56,8 +56,40 @@ struct Spring {
     double d;    ///< [N*s/m]
     SpringKind kind;
     double fc = -1; ///< [N] compressive force limit; < 0: linear in compression too
+    int arc = -1;   ///< index into ClothModel::arcs: the spring measures its material line's arc, not its chord; < 0: the chord
     /// Energy [J], its first and second derivative in the length [N], [N/m].
     void law(double length, double& e, double& de, double& d2e) const { spring_law(length - rest, k, fc, e, de, d2e); }
+};
+
+/// The arc of a spring's material line (ModelOptions::arc_membrane). A spring
+/// between two nodes of a bent sheet is the chord of the material line between
+/// them, shorter than the line by h^3 kappa^2 / 24 (h its length, kappa the line's
+/// curvature): a fold crest one cell in radius reads 4 % compression where the
+/// cloth has none, and past the compression limit's onset that costs work the
+/// continuum does not do, more on coarser meshes (the membrane locking of
+/// docs/model-discrepancy.md sections 15 and 24). With an arc the spring's length
+/// is the line's: |x_i - x_j| + c_0 |s_0|^2 + c_1 |s_1|^2, s_e = sum_a w_a x_a the
+/// second derivative of the positions along the spring's direction at its end e
+/// (the grid's central differences; least squares over the 3x3 block at the hem),
+/// c_e = rest^3 / 48 each (rest^3 / 24 on one end when the other has none). The
+/// weights annihilate affine maps: a flat sheet's springs are their chords.
+struct SpringArc {
+    int n[2] = {0, 0};
+    int v[2][9] = {{-1, -1, -1, -1, -1, -1, -1, -1, -1}, {-1, -1, -1, -1, -1, -1, -1, -1, -1}};
+    double w[2][9] = {};  ///< [1/m^2]
+    double c[2] = {0, 0}; ///< [m^3]
+    /// The spring's arc length, and the curvature vectors s_0, s_1, at positions X.
+    template <class P>
+    double length(const P& X, int i, int j, Eigen::Vector3d (&s)[2]) const
+    {
+        double L = (X.row(i) - X.row(j)).norm();
+        for (int e = 0; e < 2; ++e) {
+            s[e].setZero();
+            for (int a = 0; a < n[e]; ++a) s[e] += w[e][a] * X.row(v[e][a]).transpose();
+            L += c[e] * s[e].squaredNorm();
+        }
+        return L;
+    }
 };
 
 /// One fibre family of one triangle of a general mesh: the triangle's membrane
@@ -141,6 +173,11 @@ struct ModelOptions {
     /// A general triangle mesh's stencils need none (exact for quadratic surfaces; a grid garment, the tablecloth, has it).
     /// Presets carry it as model.bending_correction.
     bool bending_correction = false;
+    /// The grid's springs measure the arc of their material line, not its chord
+    /// (SpringArc): a fold's crest no longer reads as compression of the springs
+    /// across it. Grid meshes only (a general mesh's membrane fibres are per triangle).
+    /// Presets carry it as model.arc_membrane.
+    bool arc_membrane = false;
 };
 
 /// A horizontal tether of a material point to a place: energy 1/2 k |P (x - target)|^2
@@ -179,6 +216,7 @@ struct HorizontalAnchor {
 struct ClothModel {
     std::vector<Spring> springs;
     std::vector<MembraneFiber> fibers; ///< the membrane of a general triangle mesh (a grid's is its springs)
+    std::vector<SpringArc> arcs;       ///< Spring::arc's (ModelOptions::arc_membrane)
     std::vector<BendStencil> bends;
     Eigen::VectorXd mass;             ///< [kg] per vertex
     std::vector<char> pinned;         ///< per vertex

@@ -13,6 +13,57 @@ namespace drape::cloth {
 
 using Vec3 = Eigen::Vector3d;
 
+namespace {
+
+/// An arc spring's nodes (its two ends first, then its curvature weights' nodes,
+/// each once) and the gradient of its arc length in each (SpringArc).
+struct ArcTerm {
+    static constexpr int kMax = 2 + 2 * 9;
+    int n = 0;
+    int v[kMax];
+    double wgt[2][kMax] = {}; // the curvature weights of end e at node p
+    Vec3 g[kMax];             // dL / dx_v
+    double L = 0, l = 0;      // arc, chord
+    Vec3 u;                   // the chord's direction (i - j)
+    Vec3 s[2];
+    int slot(int x)
+    {
+        for (int p = 0; p < n; ++p)
+            if (v[p] == x) return p;
+        v[n] = x;
+        return n++;
+    }
+};
+
+/// The nodes of an arc spring in ArcTerm's order.
+void arc_nodes(const Spring& sp, const SpringArc& arc, ArcTerm& t)
+{
+    t.n = 0;
+    for (auto& w : t.wgt) std::fill(std::begin(w), std::end(w), 0.0);
+    t.slot(sp.i);
+    t.slot(sp.j);
+    for (int e = 0; e < 2; ++e)
+        for (int a = 0; a < arc.n[e]; ++a) t.wgt[e][t.slot(arc.v[e][a])] += arc.w[e][a];
+}
+
+/// false: zero chord.
+template <class P>
+bool arc_term(const Spring& sp, const SpringArc& arc, const P& X, ArcTerm& t)
+{
+    arc_nodes(sp, arc, t);
+    t.L = arc.length(X, sp.i, sp.j, t.s);
+    const Vec3 d = X.row(sp.i) - X.row(sp.j);
+    t.l = d.norm();
+    if (t.l <= 1e-300) return false;
+    t.u = d / t.l;
+    for (int p = 0; p < t.n; ++p) t.g[p] = 2 * (arc.c[0] * t.wgt[0][p] * t.s[0] + arc.c[1] * t.wgt[1][p] * t.s[1]);
+    t.g[0] += t.u;
+    t.g[1] -= t.u;
+    return true;
+}
+
+} // namespace
+
 ClothSystem::ClothSystem(ClothMesh mesh, ClothModel model) : m_mesh(std::move(mesh)), m_model(std::move(model))
 {
     const int n = m_mesh.vertex_count();
@@ -506,7 +557,13 @@ double ClothSystem::potential_energy(const Positions& X) const
     ProfileScope timer(profile ? &profile->energy : nullptr);
     double e = 0;
     for (const auto& sp : m_model.springs) {
-        const double l = (X.row(sp.i) - X.row(sp.j)).norm();
+        double l;
+        if (sp.arc >= 0) {
+            Vec3 s[2];
+            l = m_model.arcs[static_cast<std::size_t>(sp.arc)].length(X, sp.i, sp.j, s);
+        } else {
+            l = (X.row(sp.i) - X.row(sp.j)).norm();
+        }
         double es, de, d2e;
         sp.law(l, es, de, d2e);
         e += es;
@@ -556,6 +613,14 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
     ProfileScope timer(profile ? &profile->forces : nullptr);
     f.setZero(X.rows(), 3);
     for (const auto& sp : m_model.springs) {
+        if (sp.arc >= 0) {
+            ArcTerm t;
+            if (!arc_term(sp, m_model.arcs[static_cast<std::size_t>(sp.arc)], X, t)) continue;
+            double es, de, d2e;
+            sp.law(t.L, es, de, d2e);
+            for (int p = 0; p < t.n; ++p) f.row(t.v[p]) -= (de * t.g[p]).transpose();
+            continue;
+        }
         const Vec3 u = X.row(sp.i) - X.row(sp.j);
         const double l = u.norm();
         if (l <= 1e-300) continue;
@@ -683,7 +748,14 @@ void HessianAssembler::build_pattern()
         m_nbr[static_cast<std::size_t>(b)].push_back(a);
     };
     for (int i = 0; i < n; ++i) link(i, i);
-    for (const auto& sp : m.springs) link(sp.i, sp.j);
+    for (const auto& sp : m.springs) {
+        link(sp.i, sp.j);
+        if (sp.arc < 0) continue;
+        ArcTerm t;
+        arc_nodes(sp, m.arcs[static_cast<std::size_t>(sp.arc)], t);
+        for (int p = 0; p < t.n; ++p)
+            for (int q = p + 1; q < t.n; ++q) link(t.v[p], t.v[q]);
+    }
     for (const auto& fb : m.fibers)
         for (int p = 0; p < 3; ++p)
             for (int q = p + 1; q < 3; ++q) link(fb.v[p], fb.v[q]);
@@ -740,6 +812,16 @@ void HessianAssembler::build_pattern()
     }
     m_edge_blocks.reserve(s.edges().size());
     for (const auto& e : s.edges()) m_edge_blocks.push_back(block(e[0], e[1]));
+    m_arc_blocks.clear();
+    m_arc_offset.assign(m.springs.size(), 0);
+    for (std::size_t sp = 0; sp < m.springs.size(); ++sp) {
+        if (m.springs[sp].arc < 0) continue;
+        m_arc_offset[sp] = m_arc_blocks.size();
+        ArcTerm t;
+        arc_nodes(m.springs[sp], m.arcs[static_cast<std::size_t>(m.springs[sp].arc)], t);
+        for (int p = 0; p < t.n; ++p)
+            for (int q = p + 1; q < t.n; ++q) m_arc_blocks.push_back(block(std::min(t.v[p], t.v[q]), std::max(t.v[p], t.v[q])));
+    }
     m_fiber_blocks.clear();
     m_fiber_blocks.reserve(3 * m.fibers.size());
     for (const auto& fb : m.fibers)
@@ -818,6 +900,34 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
     };
     for (std::size_t s = 0; s < m.springs.size(); ++s) {
         const auto& sp = m.springs[s];
+        if (sp.arc >= 0) {
+            // E(L) with L the arc (SpringArc): E'' grad L grad L^T + E' hess L, where
+            // hess L = (I - u u^T) / l on the chord's ends (minus between them) plus
+            // 2 c_e w_p w_q I of each end's curvature; E' < 0 (compression) makes the
+            // second part negative, and the projected form drops it, as for a spring.
+            const SpringArc& arc = m.arcs[static_cast<std::size_t>(sp.arc)];
+            ArcTerm t;
+            if (!arc_term(sp, arc, X, t)) continue;
+            double es, de, d2e;
+            sp.law(t.L, es, de, d2e);
+            const double dl = project_springs && de < 0 ? 0.0 : de;
+            const Eigen::Matrix3d chord = dl / t.l * (I - t.u * t.u.transpose()) + damping_scale * sp.d * t.u * t.u.transpose();
+            auto Kpq = [&](int p, int q) {
+                Eigen::Matrix3d K = d2e * t.g[p] * t.g[q].transpose();
+                K.diagonal().array() += 2 * dl * (arc.c[0] * t.wgt[0][p] * t.wgt[0][q] + arc.c[1] * t.wgt[1][p] * t.wgt[1][q]);
+                if (p < 2 && q < 2) K += (p == q ? 1.0 : -1.0) * chord;
+                return K;
+            };
+            for (int p = 0; p < t.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(t.v[p])], Kpq(p, p));
+            std::size_t b = m_arc_offset[s];
+            for (int p = 0; p < t.n; ++p)
+                for (int q = p + 1; q < t.n; ++q, ++b) {
+                    // Off-diagonal blocks are stored once, rows of the smaller vertex.
+                    if (t.v[p] < t.v[q]) add_off(m_arc_blocks[b], Kpq(p, q));
+                    else add_off(m_arc_blocks[b], Kpq(q, p));
+                }
+            continue;
+        }
         Eigen::Matrix3d K;
         if (!axial(X.row(sp.i) - X.row(sp.j), sp, K)) continue;
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.i)], K);

@@ -195,6 +195,8 @@ private:
     std::vector<std::size_t> m_bend_offset;  // per stencil: its first pair in m_bend_blocks
     std::vector<Block> m_edge_blocks;    // per mesh edge (ClothSystem::edges): off-diagonal block
     std::vector<Block> m_fiber_blocks;   // per membrane fibre: its three off-diagonal blocks (pairs 01, 02, 12)
+    std::vector<Block> m_arc_blocks;     // every arc spring's node pairs (p < q in arc_nodes' order)
+    std::vector<std::size_t> m_arc_offset; // per spring: its first pair in m_arc_blocks (arc springs only)
 };
 
 } // namespace drape::cloth

@@ -244,6 +244,12 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
                                      " must be true or false");
             out.model.bending_correction = m["bending_correction"].get<bool>();
         }
+        // Absent in presets written before 2026-12-01: they were made with chords.
+        if (m.contains("arc_membrane")) {
+            if (!m["arc_membrane"].is_boolean())
+                throw ParameterError(where + ": field 'model.arc_membrane' = " + describe_json(m["arc_membrane"]) + " must be true or false");
+            out.model.arc_membrane = m["arc_membrane"].get<bool>();
+        }
         if (m.contains("contact_depth_m")) {
             if (!m["contact_depth_m"].is_number() || !(m["contact_depth_m"].get<double>() > 0) ||
                 !(m["contact_depth_m"].get<double>() < 0.01))
@@ -273,7 +279,8 @@ json fabric_to_json(const FabricPreset& preset)
         j["model"] = {{"bending", bending_name(preset.model.bending)},
                       {"contact_depth_m", preset.model.contact_depth},
                       {"edge_contact", preset.model.edge_contact},
-                      {"bending_correction", preset.model.bending_correction}};
+                      {"bending_correction", preset.model.bending_correction},
+                      {"arc_membrane", preset.model.arc_membrane}};
     }
     if (!preset.composition.empty()) j["composition"] = preset.composition;
     if (!preset.source.empty()) j["source"] = preset.source;

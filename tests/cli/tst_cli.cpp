@@ -1,6 +1,7 @@
 // The `drape` command as a user runs it: output locations checked before long
 // work, the shared set-up flags and --set, bad values refused by name, exit codes.
 #include <QDir>
+#include <QFile>
 #include <QJsonArray>
 #include <QJsonDocument>
 #include <QJsonObject>
@@ -127,6 +128,46 @@ private slots:
         bad = run(base + QStringList{"--set", "shear_N_m"});
         QCOMPARE(bad.code, 2);
         QVERIFY2(bad.err.contains("KEY=VALUE"), qPrintable(bad.err));
+    }
+
+    /// --arc-membrane drapes with springs that measure arcs and says so in the
+    /// summary; a preset that says model.arc_membrane drapes so unless
+    /// --chord-membrane; both at once, or arcs for a seed-19 preset's own springs,
+    /// are usage errors.
+    void membraneFlags()
+    {
+        QTemporaryDir tmp;
+        const QStringList base = {"simulate", "--fabric", DRAPE_SOURCE_DIR "/data/library/denim.json", "--grid", "15", "--json", "--quiet"};
+        const Out chord = run(base), arc = run(base + QStringList{"--arc-membrane"});
+        QVERIFY2(chord.code == 0 && arc.code == 0, qPrintable(chord.err + arc.err));
+        const QJsonObject c = QJsonDocument::fromJson(chord.out.toUtf8()).object(), a = QJsonDocument::fromJson(arc.out.toUtf8()).object();
+        QCOMPARE(c["arc_membrane"].toBool(), false);
+        QCOMPARE(a["arc_membrane"].toBool(), true);
+        QVERIFY2(a["drape_coefficient_percent"].toDouble() != c["drape_coefficient_percent"].toDouble(), "the arcs changed nothing");
+        // A preset that says it.
+        QFile in(DRAPE_SOURCE_DIR "/data/library/denim.json");
+        QVERIFY(in.open(QIODevice::ReadOnly));
+        QJsonObject preset = QJsonDocument::fromJson(in.readAll()).object();
+        QJsonObject model = preset["model"].toObject();
+        model["arc_membrane"] = true;
+        preset["model"] = model;
+        const QString path = tmp.filePath("arc.json");
+        QFile out(path);
+        QVERIFY(out.open(QIODevice::WriteOnly));
+        out.write(QJsonDocument(preset).toJson());
+        out.close();
+        QStringList from_preset = base;
+        from_preset[2] = path;
+        const Out p = run(from_preset), back = run(from_preset + QStringList{"--chord-membrane"});
+        QVERIFY2(p.code == 0 && back.code == 0, qPrintable(p.err + back.err));
+        QCOMPARE(QJsonDocument::fromJson(p.out.toUtf8()).object()["drape_coefficient_percent"].toDouble(), a["drape_coefficient_percent"].toDouble());
+        QCOMPARE(QJsonDocument::fromJson(back.out.toUtf8()).object()["drape_coefficient_percent"].toDouble(), c["drape_coefficient_percent"].toDouble());
+        Out bad = run(base + QStringList{"--arc-membrane", "--chord-membrane"});
+        QCOMPARE(bad.code, 2);
+        QVERIFY2(bad.err.contains("choose one"), qPrintable(bad.err));
+        bad = run({"simulate", "--fabric", "seed-table1", "--arc-membrane", "--quiet"});
+        QCOMPARE(bad.code, 2);
+        QVERIFY2(bad.err.contains("--arc-membrane") && bad.err.contains("seed-19"), qPrintable(bad.err));
     }
 
     /// The set-up flags mean the same in every command that takes them.

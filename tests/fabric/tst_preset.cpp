@@ -99,6 +99,7 @@ private slots:
         p.params = f;
         p.model.edge_contact = false;
         p.model.bending_correction = true;
+        p.model.arc_membrane = true;
         p.provenance = Provenance{};
         p.provenance->records = {"DL-A01"};
         p.provenance->grid = 41;
@@ -112,6 +113,7 @@ private slots:
         QCOMPARE(back.name, p.name);
         QCOMPARE(back.model.edge_contact, false);
         QCOMPARE(back.model.bending_correction, true);
+        QCOMPARE(back.model.arc_membrane, true);
         QVERIFY(back.provenance.has_value());
         QCOMPARE(back.provenance->records.at(0), std::string("DL-A01"));
         QCOMPARE(back.provenance->grid, 41);
@@ -195,9 +197,14 @@ private slots:
         QVERIFY2(e.contains("m.json") && e.contains("model.edge_contact") && e.contains("yes"), qPrintable(e));
         e = error_of<drape::ParameterError>(write(d, "m.json", R"({"format":"drapekit-fabric","parameters":{},"model":{"bending_correction":1}})"));
         QVERIFY2(e.contains("m.json") && e.contains("model.bending_correction") && e.contains("1"), qPrintable(e));
+        e = error_of<drape::ParameterError>(write(d, "m.json", R"({"format":"drapekit-fabric","parameters":{},"model":{"arc_membrane":"on"}})"));
+        QVERIFY2(e.contains("m.json") && e.contains("model.arc_membrane") && e.contains("on"), qPrintable(e));
         // A preset written before the key existed drapes with the plain stencils it was made with.
         QCOMPARE(load_fabric(write(d, "old.json", R"({"format":"drapekit-fabric","parameters":{},"model":{"edge_contact":true}})"))
                      .model.bending_correction,
+                 false);
+        // ... and with chords.
+        QCOMPARE(load_fabric(write(d, "old2.json", R"({"format":"drapekit-fabric","parameters":{},"model":{"edge_contact":true}})")).model.arc_membrane,
                  false);
         e = error_of<drape::ParameterError>(write(d, "n.json", R"({"format":"drapekit-fabric","parameters":{"bend_stiffening_radius_m":0.2}})"));
         QVERIFY2(e.contains("bend_stiffening_radius_m") && e.contains("outside"), qPrintable(e));

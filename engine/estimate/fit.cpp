@@ -444,8 +444,14 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             out.cancelled = true;
         }
     }
+    // The lever of the overhang's weight on the rim, (R^2 - a^2) / (2 a): the longest of the records'.
+    double rim_lever = 0;
+    for (const auto& rec : records) {
+        const double R = rec.sample_diameter / 2, a = rec.disc_diameter / 2;
+        if (a > 0 && R > a) rim_lever = std::max(rim_lever, (R * R - a * a) / (2 * a));
+    }
     parameter_estimates(out, vars, x, sigma, options.uncertainty,
-                        records.front().sample_diameter / std::max(1, options.grid - 1));
+                        records.front().sample_diameter / std::max(1, options.grid - 1), rim_lever);
     if (options.uncertainty && !out.cancelled) assess_anisotropy(out);
 
     // ---- per-record comparison ---------------------------------------------

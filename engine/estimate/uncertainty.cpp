@@ -82,7 +82,8 @@ std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J, FitResult& ou
 }
 
 void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
-                         const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m)
+                         const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m,
+                         double rim_lever_m)
 {
     const int n = static_cast<int>(vars.size());
     for (const auto& sp : cloth::param_table()) {
@@ -127,6 +128,23 @@ void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, c
                                   mesh_spacing_m * 1e3);
                     e.note = e.note.empty() ? buf : e.note + "; " + buf;
                     out.grid_bound = true;
+                }
+                // The bend over the pedestal's rim: the overhang hangs on the rim with the
+                // tension T = rho_A g (R^2 - a^2) / (2 a) per unit length, and an elastica
+                // under T bends over an edge with a radius of about sqrt(B / T). A mesh
+                // coarser than that stores too little of that bend's energy and the
+                // preset's D moves with the grid by a point or two (docs/model-discrepancy.md
+                // section 24: DL-A04's preset, 4.9 / 6.9 mm against 7.5 mm, spread 1.49 over
+                // grids 41-81). Said, not refitted: a finer grid halves it at several times the cost.
+                if (rim_lever_m > 0) {
+                    const double rim = std::sqrt(e.value / std::max(rho_g * rim_lever_m, 1e-12));
+                    if (rim < mesh_spacing_m) {
+                        char buf[240];
+                        std::snprintf(buf, sizeof buf,
+                                      "bend over the pedestal's rim about %.1f mm, below the fit's mesh spacing %.1f mm: not resolved, D may move with the grid",
+                                      rim * 1e3, mesh_spacing_m * 1e3);
+                        e.note = e.note.empty() ? buf : e.note + "; " + buf;
+                    }
                 }
             }
         } else if (sp.id == Param::AreaDensity || sp.id == Param::Thickness) {

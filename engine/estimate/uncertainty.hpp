@@ -24,6 +24,7 @@ std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J_terms, FitResu
 /// the optimum x and the coordinate sigmas. `mesh_spacing_m` is the fit's grid
 /// spacing: a fitted bending whose bending length is below it is grid-bound.
 void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
-                         const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m);
+                         const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m,
+                         double rim_lever_m = 0);
 
 } // namespace drape::estimate::detail

@@ -37,13 +37,7 @@ static Terms terms(cloth::ClothSystem& s, const cloth::Positions& x)
     t.total = s.potential_energy(x);
     for (int i = 0; i < x.rows(); ++i) t.gravity -= full.mass(i) * full.gravity.dot(x.row(i).transpose());
     for (const auto& sp : full.springs) {
-        double l;
-        if (sp.arc >= 0) {
-            Eigen::Vector3d c[2];
-            l = full.arcs[static_cast<std::size_t>(sp.arc)].length(x, sp.i, sp.j, c);
-        } else {
-            l = (x.row(sp.i) - x.row(sp.j)).norm();
-        }
+        const double l = full.spring_length(sp, x);
         double e, de, d2e;
         sp.law(l, e, de, d2e);
         (sp.kind == cloth::SpringKind::Shear ? t.shear : t.stretch) += e;

@@ -160,18 +160,13 @@ int node_curvature_weights(const ClothMesh& mesh, int i, int j, double a, double
     const double wu = a * a / (g.hu * g.hu), wv = b * b / (g.hv * g.hv), wx = 2 * a * b / (4 * g.hu * g.hv);
     int n = 0;
     bool ok = true;
-    auto put = [&](int di, int dj, double weight) {
+    auto put = [&](int di, int dj, double weight) { // each offset once: nine distinct nodes
         if (weight == 0) return;
         const int x = g.at(i + di, j + dj);
         if (x < 0 || !mesh.on_grid_line[static_cast<std::size_t>(x)]) {
             ok = false;
             return;
         }
-        for (int q = 0; q < n; ++q)
-            if (ids[q] == x) {
-                w[q] += weight;
-                return;
-            }
         ids[n] = x;
         w[n++] = weight;
     };
@@ -207,16 +202,23 @@ void add_spring_arcs(ClothModel& m, const ClothMesh& mesh, std::initializer_list
         Eigen::Vector2d d = (mesh.uv.row(sp.j) - mesh.uv.row(sp.i)).transpose();
         if (!(d.norm() > 0)) continue;
         d.normalize();
-        SpringArc arc;
         const int ends[2] = {sp.i, sp.j};
+        int ids[2][BendStencil::kMax], count[2] = {0, 0};
+        double w[2][BendStencil::kMax];
         for (int e = 0; e < 2; ++e) {
             const auto [ci, cj] = cell[static_cast<std::size_t>(ends[e])];
-            if (ci >= 0) arc.n[e] = node_curvature_weights(mesh, ci, cj, d.x(), d.y(), arc.v[e], arc.w[e]);
+            if (ci >= 0) count[e] = node_curvature_weights(mesh, ci, cj, d.x(), d.y(), ids[e], w[e]);
         }
-        const double c = sp.rest * sp.rest * sp.rest / 24;
-        const int have = (arc.n[0] > 0) + (arc.n[1] > 0);
+        const int have = (count[0] > 0) + (count[1] > 0);
         if (have == 0) continue;
-        for (int e = 0; e < 2; ++e) arc.c[e] = arc.n[e] > 0 ? c / have : 0.0;
+        SpringArc arc;
+        arc.slot(sp.i);
+        arc.slot(sp.j);
+        const double c = sp.rest * sp.rest * sp.rest / 24;
+        for (int e = 0; e < 2; ++e) {
+            arc.c[e] = count[e] > 0 ? c / have : 0.0;
+            for (int a = 0; a < count[e]; ++a) arc.w[e][arc.slot(ids[e][a])] = w[e][a];
+        }
         sp.arc = static_cast<int>(m.arcs.size());
         m.arcs.push_back(arc);
     }
@@ -468,6 +470,16 @@ void add_triangle_membrane(ClothModel& m, const ClothMesh& mesh, const FabricPar
 }
 
 } // namespace
+
+int SpringArc::slot(int x)
+{
+    for (int k = 0; k < n; ++k)
+        if (v[k] == x) return k;
+    // Each end's weights include the end itself: at most 2 + 2 (BendStencil::kMax - 1) nodes.
+    if (n == kMax) throw std::logic_error("SpringArc: more than " + std::to_string(kMax) + " nodes");
+    v[n] = x;
+    return n++;
+}
 
 ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelOptions& opt)
 {

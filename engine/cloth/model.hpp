@@ -61,37 +61,6 @@ struct Spring {
     void law(double length, double& e, double& de, double& d2e) const { spring_law(length - rest, k, fc, e, de, d2e); }
 };
 
-/// The arc of a spring's material line (ModelOptions::arc_membrane). A spring
-/// between two nodes of a bent sheet is the chord of the material line between
-/// them, shorter than the line by h^3 kappa^2 / 24 (h its length, kappa the line's
-/// curvature): a fold crest one cell in radius reads 4 % compression where the
-/// cloth has none, and past the compression limit's onset that costs work the
-/// continuum does not do, more on coarser meshes (the membrane locking of
-/// docs/model-discrepancy.md sections 15 and 24). With an arc the spring's length
-/// is the line's: |x_i - x_j| + c_0 |s_0|^2 + c_1 |s_1|^2, s_e = sum_a w_a x_a the
-/// second derivative of the positions along the spring's direction at its end e
-/// (the grid's central differences; least squares over the 3x3 block at the hem),
-/// c_e = rest^3 / 48 each (rest^3 / 24 on one end when the other has none). The
-/// weights annihilate affine maps: a flat sheet's springs are their chords.
-struct SpringArc {
-    int n[2] = {0, 0};
-    int v[2][9] = {{-1, -1, -1, -1, -1, -1, -1, -1, -1}, {-1, -1, -1, -1, -1, -1, -1, -1, -1}};
-    double w[2][9] = {};  ///< [1/m^2]
-    double c[2] = {0, 0}; ///< [m^3]
-    /// The spring's arc length, and the curvature vectors s_0, s_1, at positions X.
-    template <class P>
-    double length(const P& X, int i, int j, Eigen::Vector3d (&s)[2]) const
-    {
-        double L = (X.row(i) - X.row(j)).norm();
-        for (int e = 0; e < 2; ++e) {
-            s[e].setZero();
-            for (int a = 0; a < n[e]; ++a) s[e] += w[e][a] * X.row(v[e][a]).transpose();
-            L += c[e] * s[e].squaredNorm();
-        }
-        return L;
-    }
-};
-
 /// One fibre family of one triangle of a general mesh: the triangle's membrane
 /// (make_model) is the continuum of the grid's spring net - warp, weft and the two
 /// diagonals - so that a preset means the same on any mesh. The fibre's current
@@ -143,6 +112,44 @@ struct BendStencil {
     /// cell (hu, hv) is short by hu hv kappa^2 / 12 and needs 2 hu hv / 3, exact for a fold
     /// at 45 degrees to the grid, where the twist stencils carry the most energy. 0 = none.
     double quartic = 0;
+};
+
+/// The arc of a spring's material line (ModelOptions::arc_membrane). A spring
+/// between two nodes of a bent sheet is the chord of the material line between
+/// them, shorter than the line by h^3 kappa^2 / 24 (h its length, kappa the line's
+/// curvature): a fold crest one cell in radius reads 4 % compression where the
+/// cloth has none, and past the compression limit's onset that costs work the
+/// continuum does not do, more on coarser meshes (the membrane locking of
+/// docs/model-discrepancy.md sections 15 and 24). With an arc the spring's length
+/// is the line's: |x_i - x_j| + c_0 |s_0|^2 + c_1 |s_1|^2, s_e = sum_a w_a x_a the
+/// second derivative of the positions along the spring's direction at its end e
+/// (the grid's central differences; least squares over the 3x3 block at the hem),
+/// c_e = rest^3 / 48 each (rest^3 / 24 on one end when the other has none). The
+/// weights annihilate affine maps: a flat sheet's springs are their chords.
+/// The element's nodes are listed once (v[0], v[1] the spring's ends, then the other
+/// nodes of either end's weights: each end's weights include the end itself), so the
+/// forces and the Hessian's blocks go over one list made with the model.
+struct SpringArc {
+    static constexpr int kMax = 2 + 2 * (BendStencil::kMax - 1);
+    int n = 0;                   ///< nodes in v
+    int v[kMax] = {};
+    double w[2][kMax] = {};      ///< [1/m^2] end e's curvature weight at node v[k] (0: not in its stencil)
+    double c[2] = {0, 0};        ///< [m^3]
+    /// The position of node x in v, appended if new.
+    int slot(int x);
+    /// The spring's arc length, and the curvature vectors s_0, s_1, at positions X.
+    template <class P>
+    double length(const P& X, Eigen::Vector3d (&s)[2]) const
+    {
+        double L = (X.row(v[0]) - X.row(v[1])).norm();
+        for (int e = 0; e < 2; ++e) {
+            s[e].setZero();
+            for (int k = 0; k < n; ++k)
+                if (w[e][k] != 0) s[e] += w[e][k] * X.row(v[k]).transpose();
+            L += c[e] * s[e].squaredNorm();
+        }
+        return L;
+    }
 };
 
 enum class BendingModel { Quadratic, Flexion, Both };
@@ -244,6 +251,14 @@ struct ClothModel {
 
     int vertex_count() const { return static_cast<int>(mass.size()); }
     double total_mass() const { return mass.sum(); }
+    /// The length spring `sp` measures at positions X: its arc (Spring::arc) or its chord.
+    template <class P>
+    double spring_length(const Spring& sp, const P& X) const
+    {
+        if (sp.arc < 0) return (X.row(sp.i) - X.row(sp.j)).norm();
+        Eigen::Vector3d s[2];
+        return arcs[static_cast<std::size_t>(sp.arc)].length(X, s);
+    }
 };
 
 /// The mapping from continuum parameters to element constants (SI throughout).

@@ -15,48 +15,25 @@ using Vec3 = Eigen::Vector3d;
 
 namespace {
 
-/// An arc spring's nodes (its two ends first, then its curvature weights' nodes,
-/// each once) and the gradient of its arc length in each (SpringArc).
+/// An arc spring at positions X (SpringArc): its arc and chord, and the gradient
+/// of the arc in each of its nodes (SpringArc::v).
 struct ArcTerm {
-    static constexpr int kMax = 2 + 2 * 9;
-    int n = 0;
-    int v[kMax];
-    double wgt[2][kMax] = {}; // the curvature weights of end e at node p
-    Vec3 g[kMax];             // dL / dx_v
-    double L = 0, l = 0;      // arc, chord
-    Vec3 u;                   // the chord's direction (i - j)
+    Vec3 g[SpringArc::kMax]; // dL / dx_v
+    double L = 0, l = 0;     // arc, chord
+    Vec3 u;                  // the chord's direction (v[0] - v[1])
     Vec3 s[2];
-    int slot(int x)
-    {
-        for (int p = 0; p < n; ++p)
-            if (v[p] == x) return p;
-        v[n] = x;
-        return n++;
-    }
 };
-
-/// The nodes of an arc spring in ArcTerm's order.
-void arc_nodes(const Spring& sp, const SpringArc& arc, ArcTerm& t)
-{
-    t.n = 0;
-    for (auto& w : t.wgt) std::fill(std::begin(w), std::end(w), 0.0);
-    t.slot(sp.i);
-    t.slot(sp.j);
-    for (int e = 0; e < 2; ++e)
-        for (int a = 0; a < arc.n[e]; ++a) t.wgt[e][t.slot(arc.v[e][a])] += arc.w[e][a];
-}
 
 /// false: zero chord.
 template <class P>
-bool arc_term(const Spring& sp, const SpringArc& arc, const P& X, ArcTerm& t)
+bool arc_term(const SpringArc& arc, const P& X, ArcTerm& t)
 {
-    arc_nodes(sp, arc, t);
-    t.L = arc.length(X, sp.i, sp.j, t.s);
-    const Vec3 d = X.row(sp.i) - X.row(sp.j);
+    t.L = arc.length(X, t.s);
+    const Vec3 d = X.row(arc.v[0]) - X.row(arc.v[1]);
     t.l = d.norm();
     if (t.l <= 1e-300) return false;
     t.u = d / t.l;
-    for (int p = 0; p < t.n; ++p) t.g[p] = 2 * (arc.c[0] * t.wgt[0][p] * t.s[0] + arc.c[1] * t.wgt[1][p] * t.s[1]);
+    for (int p = 0; p < arc.n; ++p) t.g[p] = 2 * (arc.c[0] * arc.w[0][p] * t.s[0] + arc.c[1] * arc.w[1][p] * t.s[1]);
     t.g[0] += t.u;
     t.g[1] -= t.u;
     return true;
@@ -557,15 +534,8 @@ double ClothSystem::potential_energy(const Positions& X) const
     ProfileScope timer(profile ? &profile->energy : nullptr);
     double e = 0;
     for (const auto& sp : m_model.springs) {
-        double l;
-        if (sp.arc >= 0) {
-            Vec3 s[2];
-            l = m_model.arcs[static_cast<std::size_t>(sp.arc)].length(X, sp.i, sp.j, s);
-        } else {
-            l = (X.row(sp.i) - X.row(sp.j)).norm();
-        }
         double es, de, d2e;
-        sp.law(l, es, de, d2e);
+        sp.law(m_model.spring_length(sp, X), es, de, d2e);
         e += es;
     }
     for (const auto& fb : m_model.fibers) {
@@ -614,11 +584,12 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
     f.setZero(X.rows(), 3);
     for (const auto& sp : m_model.springs) {
         if (sp.arc >= 0) {
+            const SpringArc& arc = m_model.arcs[static_cast<std::size_t>(sp.arc)];
             ArcTerm t;
-            if (!arc_term(sp, m_model.arcs[static_cast<std::size_t>(sp.arc)], X, t)) continue;
+            if (!arc_term(arc, X, t)) continue;
             double es, de, d2e;
             sp.law(t.L, es, de, d2e);
-            for (int p = 0; p < t.n; ++p) f.row(t.v[p]) -= (de * t.g[p]).transpose();
+            for (int p = 0; p < arc.n; ++p) f.row(arc.v[p]) -= (de * t.g[p]).transpose();
             continue;
         }
         const Vec3 u = X.row(sp.i) - X.row(sp.j);
@@ -751,10 +722,9 @@ void HessianAssembler::build_pattern()
     for (const auto& sp : m.springs) {
         link(sp.i, sp.j);
         if (sp.arc < 0) continue;
-        ArcTerm t;
-        arc_nodes(sp, m.arcs[static_cast<std::size_t>(sp.arc)], t);
-        for (int p = 0; p < t.n; ++p)
-            for (int q = p + 1; q < t.n; ++q) link(t.v[p], t.v[q]);
+        const SpringArc& arc = m.arcs[static_cast<std::size_t>(sp.arc)];
+        for (int p = 0; p < arc.n; ++p)
+            for (int q = p + 1; q < arc.n; ++q) link(arc.v[p], arc.v[q]);
     }
     for (const auto& fb : m.fibers)
         for (int p = 0; p < 3; ++p)
@@ -817,10 +787,9 @@ void HessianAssembler::build_pattern()
     for (std::size_t sp = 0; sp < m.springs.size(); ++sp) {
         if (m.springs[sp].arc < 0) continue;
         m_arc_offset[sp] = m_arc_blocks.size();
-        ArcTerm t;
-        arc_nodes(m.springs[sp], m.arcs[static_cast<std::size_t>(m.springs[sp].arc)], t);
-        for (int p = 0; p < t.n; ++p)
-            for (int q = p + 1; q < t.n; ++q) m_arc_blocks.push_back(block(std::min(t.v[p], t.v[q]), std::max(t.v[p], t.v[q])));
+        const SpringArc& arc = m.arcs[static_cast<std::size_t>(m.springs[sp].arc)];
+        for (int p = 0; p < arc.n; ++p)
+            for (int q = p + 1; q < arc.n; ++q) m_arc_blocks.push_back(block(std::min(arc.v[p], arc.v[q]), std::max(arc.v[p], arc.v[q])));
     }
     m_fiber_blocks.clear();
     m_fiber_blocks.reserve(3 * m.fibers.size());
@@ -907,23 +876,23 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
             // second part negative, and the projected form drops it, as for a spring.
             const SpringArc& arc = m.arcs[static_cast<std::size_t>(sp.arc)];
             ArcTerm t;
-            if (!arc_term(sp, arc, X, t)) continue;
+            if (!arc_term(arc, X, t)) continue;
             double es, de, d2e;
             sp.law(t.L, es, de, d2e);
             const double dl = project_springs && de < 0 ? 0.0 : de;
             const Eigen::Matrix3d chord = dl / t.l * (I - t.u * t.u.transpose()) + damping_scale * sp.d * t.u * t.u.transpose();
             auto Kpq = [&](int p, int q) {
                 Eigen::Matrix3d K = d2e * t.g[p] * t.g[q].transpose();
-                K.diagonal().array() += 2 * dl * (arc.c[0] * t.wgt[0][p] * t.wgt[0][q] + arc.c[1] * t.wgt[1][p] * t.wgt[1][q]);
+                K.diagonal().array() += 2 * dl * (arc.c[0] * arc.w[0][p] * arc.w[0][q] + arc.c[1] * arc.w[1][p] * arc.w[1][q]);
                 if (p < 2 && q < 2) K += (p == q ? 1.0 : -1.0) * chord;
                 return K;
             };
-            for (int p = 0; p < t.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(t.v[p])], Kpq(p, p));
+            for (int p = 0; p < arc.n; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(arc.v[p])], Kpq(p, p));
             std::size_t b = m_arc_offset[s];
-            for (int p = 0; p < t.n; ++p)
-                for (int q = p + 1; q < t.n; ++q, ++b) {
+            for (int p = 0; p < arc.n; ++p)
+                for (int q = p + 1; q < arc.n; ++q, ++b) {
                     // Off-diagonal blocks are stored once, rows of the smaller vertex.
-                    if (t.v[p] < t.v[q]) add_off(m_arc_blocks[b], Kpq(p, q));
+                    if (arc.v[p] < arc.v[q]) add_off(m_arc_blocks[b], Kpq(p, q));
                     else add_off(m_arc_blocks[b], Kpq(q, p));
                 }
             continue;

@@ -135,7 +135,7 @@ void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, c
                 // coarser than that stores too little of that bend's energy and the
                 // preset's D moves with the grid by a point or two (docs/model-discrepancy.md
                 // section 24: DL-A04's preset, 4.9 / 6.9 mm against 7.5 mm, spread 1.49 over
-                // grids 41-81). Said, not refitted: a finer grid halves it at several times the cost.
+                // grids 41-81). Said, not refitted: a finer grid costs several times the time.
                 if (rim_lever_m > 0) {
                     const double rim = std::sqrt(e.value / std::max(rho_g * rim_lever_m, 1e-12));
                     if (rim < mesh_spacing_m) {

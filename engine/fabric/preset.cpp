@@ -221,11 +221,15 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
             if (b == "quadratic") out.model.bending = cloth::BendingModel::Quadratic;
             else throw ParameterError(where + ": field 'model.bending' = \"" + b + "\" must be \"quadratic\" for continuum presets");
         }
-        if (m.contains("edge_contact")) {
-            if (!m["edge_contact"].is_boolean())
-                throw ParameterError(where + ": field 'model.edge_contact' = " + describe_json(m["edge_contact"]) + " must be true or false");
-            out.model.edge_contact = m["edge_contact"].get<bool>();
-        }
+        // A switch of the model: absent keeps the default (bending_correction and
+        // arc_membrane are absent in presets written before they existed: off, as made).
+        auto read_switch = [&](const char* key, bool& to) {
+            if (!m.contains(key)) return;
+            if (!m[key].is_boolean())
+                throw ParameterError(where + ": field 'model." + key + "' = " + describe_json(m[key]) + " must be true or false");
+            to = m[key].get<bool>();
+        };
+        read_switch("edge_contact", out.model.edge_contact);
         // "buckling": "euler" was the first buckling model (2026-11-29), the Euler
         // load of a strip as long as the mesh spacing; it is read as the material
         // length it had on the default grid (60 nodes on 300 mm: 5 mm) unless the
@@ -237,19 +241,8 @@ FabricPreset fabric_from_json(const json& j, const std::string& where)
             } else if (b != "none")
                 throw ParameterError(where + ": field 'model.buckling' = \"" + b + "\" must be \"euler\" or \"none\"");
         }
-        // Absent in presets written before 2026-11-30: they were made without it.
-        if (m.contains("bending_correction")) {
-            if (!m["bending_correction"].is_boolean())
-                throw ParameterError(where + ": field 'model.bending_correction' = " + describe_json(m["bending_correction"]) +
-                                     " must be true or false");
-            out.model.bending_correction = m["bending_correction"].get<bool>();
-        }
-        // Absent in presets written before 2026-12-01: they were made with chords.
-        if (m.contains("arc_membrane")) {
-            if (!m["arc_membrane"].is_boolean())
-                throw ParameterError(where + ": field 'model.arc_membrane' = " + describe_json(m["arc_membrane"]) + " must be true or false");
-            out.model.arc_membrane = m["arc_membrane"].get<bool>();
-        }
+        read_switch("bending_correction", out.model.bending_correction); // since 2026-11-30
+        read_switch("arc_membrane", out.model.arc_membrane);             // since 2026-12-01
         if (m.contains("contact_depth_m")) {
             if (!m["contact_depth_m"].is_number() || !(m["contact_depth_m"].get<double>() > 0) ||
                 !(m["contact_depth_m"].get<double>() < 0.01))

@@ -6,14 +6,17 @@
 // beside every row (the machine is shared).
 //
 //   build/bin/bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]
-//   build/bin/bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F]
+//   build/bin/bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F] [--mesh grid|rings] [--preset FILE]...
 //
 // --starters (issue 14): D, folds, wall time and Newton iterations of every
 // starter fabric draped from flat (300 / 150 mm, seed 1, its own model options;
 // --plain: without the crest-corrected bending stencils) at each grid, one
 // drape at a time, with the spread of D and of the fold count over the grids;
 // laid as `drape simulate` lays them (FabricPreset::laying: the starters at
-// once; --laying F: first under F g, e.g. 0.4, the drape lab's).
+// once; --laying F: first under F g, e.g. 0.4, the drape lab's); --mesh: the
+// specimen's mesh (DrapeSetup::mesh, grid by default); --preset FILE: a preset
+// file's row after the starters' (e.g. a fitted one; repeatable).
+#include "engine/fabric/preset.hpp"
 #include "engine/cloth/drape.hpp"
 #include "engine/fabric/seed_format.hpp"
 #include "engine/library/starter.hpp"
@@ -54,7 +57,13 @@ Row in_child(F fn)
     const pid_t pid = fork();
     if (pid == 0) {
         close(fd[0]);
-        Row r = fn();
+        Row r;
+        try {
+            r = fn();
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "bench_drape: %s\n", e.what());
+            _exit(1); // the parent reads no row: "crashed"
+        }
         if (write(fd[1], &r.wall, sizeof(double) * 1) < 0) _exit(1);
         const long ints[4] = {r.iters, r.fevals, r.nodes, r.vertices};
         const double dbl[2] = {r.residual, r.dc};
@@ -109,19 +118,22 @@ void print(const std::string& name, const Row& r)
 } // namespace
 
 /// The starters under refinement: one row per starter, one column per grid.
-int starters_table(const std::vector<int>& grids, bool plain, double laying)
+int starters_table(const std::vector<int>& grids, bool plain, double laying, DrapeMesh mesh, const std::vector<std::string>& extra)
 {
-    std::printf("starters draped from flat, 300 / 150 mm, seed 1, %s%s; D [%%] (folds), wall [s], Newton iterations\n\n",
-                laying > 0 ? ("laid under " + std::to_string(laying).substr(0, 4) + " g first").c_str() : "laid as each preset says", plain ? ", plain bending stencils (--plain)" : ", the presets' own model options");
+    std::printf("starters draped from flat, 300 / 150 mm, seed 1, %s mesh, %s%s; D [%%] (folds), wall [s], Newton iterations\n\n",
+                to_string(mesh), laying > 0 ? ("laid under " + std::to_string(laying).substr(0, 4) + " g first").c_str() : "laid as each preset says",
+                plain ? ", plain bending stencils (--plain)" : ", the presets' own model options");
     std::printf("| starter |");
     for (int g : grids) std::printf(" grid %d |", g);
     std::printf(" spread of D | folds | load avg |\n|---|");
     for (std::size_t i = 0; i < grids.size(); ++i) std::printf("---|");
     std::printf("---|---|---|\n");
-    for (const auto& st : drape::library::starters()) {
-        drape::fabric::FabricPreset p = st.preset;
+    std::vector<std::pair<std::string, drape::fabric::FabricPreset>> rows;
+    for (const auto& st : drape::library::starters()) rows.emplace_back(st.short_name, st.preset);
+    for (const auto& f : extra) rows.emplace_back(f, drape::fabric::load_fabric(f));
+    for (auto& [name, p] : rows) {
         if (plain) p.model.bending_correction = false;
-        std::printf("| %s |", st.short_name.c_str());
+        std::printf("| %s |", name.c_str());
         std::fflush(stdout);
         double lo = 1e9, hi = -1e9;
         int nlo = 1000, nhi = -1;
@@ -130,6 +142,7 @@ int starters_table(const std::vector<int>& grids, bool plain, double laying)
             setup.sample_diameter = 0.30;
             setup.disc_diameter = 0.15;
             setup.grid = g;
+            setup.mesh = mesh;
             setup.laying_load = laying > 0 ? laying : p.laying(); // `drape simulate`'s default
             const Row r = in_child([&] { // `drape simulate`'s budget: 1,000 Newton iterations per level
                 return to_row(simulate_drape(p.material(), setup, {}, p.model), 0);
@@ -156,6 +169,8 @@ int main(int argc, char** argv)
     bool quick = false, static_only = false, starters = false, plain = false, starters_option = false;
     double laying = 0; // 0: each preset's own (FabricPreset::laying: a starter at once)
     std::vector<int> grids = {41, 61, 81, 101};
+    DrapeMesh mesh = DrapeMesh::Grid;
+    std::vector<std::string> extra;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--starters")) starters = true;
         else if (!std::strcmp(argv[i], "--plain")) plain = true;
@@ -166,6 +181,18 @@ int main(int argc, char** argv)
                 std::fprintf(stderr, "bench_drape: --laying: '%s' is not a fraction of gravity in (0, 1]\n", argv[i]);
                 return 2;
             }
+        }
+        else if (!std::strcmp(argv[i], "--mesh") && i + 1 < argc) {
+            starters_option = true;
+            try {
+                mesh = drape_mesh_from_string(argv[++i]);
+            } catch (const std::exception& e) {
+                std::fprintf(stderr, "bench_drape: --%s\n", e.what());
+                return 2;
+            }
+        } else if (!std::strcmp(argv[i], "--preset") && i + 1 < argc) {
+            starters_option = true;
+            extra.emplace_back(argv[++i]);
         }
         else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) {
             starters_option = true;
@@ -186,7 +213,7 @@ int main(int argc, char** argv)
         else if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc) tol = std::atof(argv[++i]);
         else {
             std::fprintf(stderr, "usage: bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]\n"
-                                 "       bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F]\n");
+                                 "       bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F] [--mesh grid|rings] [--preset FILE]...\n");
             return 2;
         }
     }
@@ -195,10 +222,15 @@ int main(int argc, char** argv)
             std::fprintf(stderr, "bench_drape: --grids: no grid\n");
             return 2;
         }
-        return starters_table(grids, plain, laying);
+        try {
+            return starters_table(grids, plain, laying, mesh, extra);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "bench_drape: %s\n", e.what());
+            return 1;
+        }
     }
     if (plain || starters_option) {
-        std::fprintf(stderr, "bench_drape: --grids, --plain and --laying go with --starters\n");
+        std::fprintf(stderr, "bench_drape: --grids, --plain, --laying, --mesh and --preset go with --starters\n");
         return 2;
     }
     std::printf("tolerance: relative force residual %.0e; RK4 stops at %.0f s wall if not at rest\n\n", tol, rk4_limit);

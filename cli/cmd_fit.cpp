@@ -61,6 +61,9 @@ as not identifiable.
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 41: 7.5 mm
                       between nodes on a 300 mm specimen, where presets carry over to finer meshes)
+  --mesh M            the specimen's mesh in the fit's simulations: grid (default) | rings
+                      (refined at the pedestal's rim; the preset's provenance.mesh, which
+                      drape predict then uses)
   --refine-grid N     when the optimum is grid-bound (a fitted bending length below the mesh
                       spacing), fit again on grid N from it (default 41 when --grid is below 41,
                       else 0 = never)
@@ -137,7 +140,7 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--laying", "--flat-grid"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--laying", "--flat-grid", "--mesh"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
             "--bending-correction", "--plain-bending", "--arc-membrane"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
@@ -163,6 +166,7 @@ int run(const std::vector<std::string>& argv)
         throw UsageError(std::string("--") + e.what());
     }
     fo.grid = a.get_int("--grid", 41, 9, 200);
+    fo.mesh = parse_mesh(a, fo.mesh);
     fo.refine_grid = a.get_int("--refine-grid", fo.grid < 41 ? 41 : 0, 0, 200);
     if (fo.refine_grid != 0 && fo.refine_grid <= fo.grid)
         throw UsageError("--refine-grid " + std::to_string(fo.refine_grid) + " must be above --grid " + std::to_string(fo.grid) + " (or 0)");
@@ -194,6 +198,8 @@ int run(const std::vector<std::string>& argv)
     // Chords by default: with arcs alone the coarse grid's bending deficit at the
     // rim shows (docs/model-discrepancy.md section 24).
     fo.model_options.arc_membrane = a.has("--arc-membrane");
+    if (fo.model_options.arc_membrane && fo.mesh != cloth::DrapeMesh::Grid)
+        throw UsageError("--arc-membrane is the grid's springs; --mesh rings has the triangle model's fibre membrane");
     if (const auto s = a.get("--start")) {
         const fabric::FabricPreset start = fabric::load_fabric(*s);
         fo.start = start.params; // a seed-19 preset starts from its continuum equivalent

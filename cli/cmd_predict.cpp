@@ -32,6 +32,8 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
   --areal-density G     override the preset's areal density [g/m^2] (another cut of the fabric)
   --grid N              nodes across the specimen (default: the fit's grid scaled to the new
                         diameter when the preset carries provenance, within 9..201, else 31)
+  --mesh M              grid | rings (default: the fit's, provenance.mesh, else grid; see
+                        drape simulate --help)
   --seed K              perturbation seed (default 1)
   --folds N             start on an N-fold branch (a 5 mm N-fold lift; default: the seeded mix)
   --laying F            how the specimen is laid: it first rests under the fraction F of gravity, then
@@ -72,6 +74,17 @@ int run(const std::vector<std::string>& argv)
         // A default, not the user's --grid: kept inside what --grid takes
         // rather than failing on a flag that was never given.
         defaults.grid = std::clamp(defaults.grid, kMinDefaultGrid, kMaxDefaultGrid);
+    }
+    // The fit's mesh too (provenance.mesh since 2026-12-01; grid before), unless --mesh says.
+    if (!a.has("--mesh") && preset.provenance && preset.provenance->details.contains("mesh")) {
+        const auto& m = preset.provenance->details["mesh"];
+        const std::string where = a.get("--fabric").value_or("the preset") + ": provenance.";
+        if (!m.is_string()) throw ParameterError(where + "mesh must be \"grid\" or \"rings\", not " + m.dump());
+        try {
+            defaults.mesh = cloth::drape_mesh_from_string(m.get<std::string>());
+        } catch (const Error& e) {
+            throw ParameterError(where + e.what());
+        }
     }
     const cloth::DrapeSetup setup = parse_setup(a, defaults);
     cloth::single_threaded_blas();

@@ -27,12 +27,13 @@ per parameter.
   --span DECADES        range of log parameters (default 1)
   --sample-diameter L   (default 300mm)   --disc-diameter L (default 150mm)
   --grid N              (default 25)      --seed K (default 1)
+  --mesh M              grid (default) | rings
   --quiet               no progress on stderr)";
 
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv,
-           fabric_flags() + setup_value_flags(kSampleDiameter | kDiscDiameter | kGrid | kSeed) +
+           fabric_flags() + setup_value_flags(kSampleDiameter | kDiscDiameter | kGrid | kSeed | kMesh) +
                std::set<std::string>{"--out", "--params", "--steps", "--span"},
            {"--quiet"});
     if (!a.positionals().empty()) throw UsageError("unexpected argument '" + a.positionals().front() + "'");

@@ -40,6 +40,9 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --pedestal-height L   pedestal height (default 120mm)
   --edge-radius L       rounding of the pedestal top edge (default 0.5mm)
   --grid N              nodes across the specimen (default 60; seed-19 presets use their own grid)
+  --mesh M              the specimen's mesh: grid (default: the square lattice) | rings
+                        (concentric rings refined to 0.4 of the spacing at the pedestal's rim, where
+                        the cloth bends over it; docs/model-discrepancy.md section 25)
   --integrator I        static (default) | implicit | rk4 | midpoint | symplectic | euler
   --dt S                time step [s] (default: chosen per integrator)
   --tolerance R         relative force residual at rest (default 1e-6)
@@ -136,6 +139,9 @@ int run(const std::vector<std::string>& argv)
     if (a.has("--arc-membrane")) {
         if (preset.seed) throw UsageError("--arc-membrane: a seed-19 preset's grid springs are its own constants");
         if (a.has("--chord-membrane")) throw UsageError("--arc-membrane and --chord-membrane: choose one");
+        if (setup.mesh != cloth::DrapeMesh::Grid)
+            throw UsageError("--arc-membrane is the grid's springs; --mesh " + std::string(cloth::to_string(setup.mesh)) +
+                             " has the triangle model's fibre membrane");
         preset.model.arc_membrane = true;
     }
     if (a.has("--chord-membrane")) preset.model.arc_membrane = false;

@@ -21,6 +21,7 @@ constexpr FlagName kFlags[] = {
     {kGrid, "--grid", false},                      {kSeed, "--seed", false},
     {kFolds, "--folds", false},                    {kPerturbation, "--perturbation", false},
     {kDiscGrip, "--disc-grip", true},              {kLaying, "--laying", false},
+    {kMesh, "--mesh", false},
 };
 } // namespace
 
@@ -48,6 +49,17 @@ std::set<std::string> operator+(std::set<std::string> a, const std::set<std::str
 
 double parse_laying(const Args& a, double fallback) { return a.get_double_in("--laying", fallback, 1e-3, 1.0); }
 
+cloth::DrapeMesh parse_mesh(const Args& a, cloth::DrapeMesh fallback)
+{
+    const auto m = a.get("--mesh");
+    if (!m) return fallback;
+    try {
+        return cloth::drape_mesh_from_string(*m);
+    } catch (const Error& e) {
+        throw UsageError(std::string("--") + e.what());
+    }
+}
+
 cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
 {
     s.sample_diameter = a.get_length("--sample-diameter", s.sample_diameter);
@@ -55,6 +67,7 @@ cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
     s.pedestal_height = a.get_length("--pedestal-height", s.pedestal_height);
     s.edge_radius = a.get_length("--edge-radius", s.edge_radius);
     s.grid = a.get_int("--grid", s.grid, 5, 1000);
+    s.mesh = parse_mesh(a, s.mesh);
     s.seed = static_cast<std::uint64_t>(a.get_int("--seed", static_cast<int>(s.seed), 0, 2000000000));
     if (a.has("--folds")) s = cloth::on_fold_branch(s, a.get_int("--folds", 0, 2, 16));
     s.perturbation = a.get_length("--perturbation", s.perturbation);

@@ -24,12 +24,17 @@ enum SetupFlag : unsigned {
     kPerturbation = 1u << 7,   ///< --perturbation L
     kDiscGrip = 1u << 8,       ///< --disc-grip (a switch)
     kLaying = 1u << 9,         ///< --laying F (fraction of gravity of the first rest; DrapeSetup::laying_load)
-    kAllSetup = (1u << 10) - 1,
+    kMesh = 1u << 10,          ///< --mesh grid|rings (DrapeSetup::mesh)
+    kAllSetup = (1u << 11) - 1,
 };
 
 /// `--laying F` (a fraction of gravity in [0.001, 1]; UsageError naming the
 /// flag otherwise), or `fallback` when absent: parse_setup, fit and compare.
 double parse_laying(const Args& a, double fallback);
+
+/// `--mesh grid|rings` (UsageError naming the flag and value otherwise), or
+/// `fallback` when absent.
+cloth::DrapeMesh parse_mesh(const Args& a, cloth::DrapeMesh fallback);
 
 /// The value flags and switches of `which`, to merge into a command's Args.
 std::set<std::string> setup_value_flags(unsigned which);

@@ -32,94 +32,12 @@ namespace {
 
 /// rim_factor < 1: the spacing shrinks to rim_factor h0 between 65 and 90 mm from the
 /// centre (the bend over a 150 mm pedestal's rim and the folds' roots), tapering back to
-/// h0 over 15 mm on either side; rings placed at that spacing, each with as many nodes
-/// as its local spacing asks (RIMGRADE=f in the environment).
+/// h0 over 15 mm on either side (RIMGRADE=f in the environment). Since 2026-12-01 the
+/// product's generator (cloth::make_ring_disc; drapemeter_rim_grading is this band for
+/// any pedestal, `drape simulate --mesh rings`).
 cloth::ClothMesh ring_disc(double diameter, int grid, double rim_factor = 1.0)
 {
-    const double R = diameter / 2, h0 = diameter / (grid - 1);
-    auto spacing = [&](double r) {
-        const double lo = 0.065, hi = 0.090, taper = 0.015;
-        double b = 0;
-        if (r >= lo && r <= hi) b = 1;
-        else if (r > lo - taper && r < lo) b = (r - (lo - taper)) / taper;
-        else if (r > hi && r < hi + taper) b = ((hi + taper) - r) / taper;
-        return h0 * (1 - (1 - rim_factor) * b);
-    };
-    std::vector<double> radii;
-    for (double r = 0; r < R - 1e-9;) {
-        r += spacing(r + 0.5 * spacing(r));
-        radii.push_back(r);
-    }
-    // The last ring on the hem: the one nearer R taken, the rings scaled so that it lands there.
-    if (radii.size() > 1 && radii.back() - R > R - radii[radii.size() - 2]) radii.pop_back();
-    for (double& r : radii) r *= R / radii.back();
-    const int K = static_cast<int>(radii.size());
-    std::vector<Eigen::Vector3d> X{Eigen::Vector3d::Zero()};
-    std::vector<std::vector<int>> ring{{0}};
-    const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
-    for (int k = 1; k <= K; ++k) {
-        const double r = radii[static_cast<std::size_t>(k - 1)];
-        const double h = spacing(r);
-        const int n = std::max(6, static_cast<int>(std::lround(2 * std::numbers::pi * r / h)));
-        std::vector<int> ids;
-        for (int i = 0; i < n; ++i) {
-            const double t = golden * k + 2 * std::numbers::pi * i / n;
-            ids.push_back(static_cast<int>(X.size()));
-            X.emplace_back(r * std::cos(t), r * std::sin(t), 0.0);
-        }
-        ring.push_back(ids);
-    }
-    std::vector<Eigen::Vector3i> F;
-    auto angle = [&](int v) {
-        double a = std::atan2(X[v].y(), X[v].x());
-        return a;
-    };
-    // Centre fan.
-    for (std::size_t i = 0; i < ring[1].size(); ++i) F.emplace_back(0, ring[1][i], ring[1][(i + 1) % ring[1].size()]);
-    // Zip ring k-1 (inner) to ring k (outer) by angle.
-    for (int k = 2; k <= K; ++k) {
-        const auto& a = ring[k - 1];
-        const auto& b = ring[k];
-        const int na = static_cast<int>(a.size()), nb = static_cast<int>(b.size());
-        // Start both at the vertex with the smallest angle past -pi.
-        auto start = [&](const std::vector<int>& v) {
-            int s = 0;
-            for (int i = 1; i < static_cast<int>(v.size()); ++i)
-                if (angle(v[i]) < angle(v[s])) s = i;
-            return s;
-        };
-        const int sa = start(a), sb = start(b);
-        auto unwrap = [&](const std::vector<int>& v, int s, int i) {
-            double t = angle(v[(s + i) % v.size()]) - angle(v[s]);
-            while (t < 0) t += 2 * std::numbers::pi;
-            if (i == static_cast<int>(v.size())) t = 2 * std::numbers::pi;
-            return t;
-        };
-        int i = 0, j = 0;
-        while (i < na || j < nb) {
-            const int ia = a[(sa + i) % na], ia1 = a[(sa + i + 1) % na];
-            const int jb = b[(sb + j) % nb], jb1 = b[(sb + j + 1) % nb];
-            const bool adv_a = j >= nb || (i < na && unwrap(a, sa, i + 1) < unwrap(b, sb, j + 1));
-            if (adv_a) {
-                F.emplace_back(ia, jb, ia1);
-                ++i;
-            } else {
-                F.emplace_back(ia, jb, jb1);
-                ++j;
-            }
-        }
-    }
-    cloth::Positions P(static_cast<Eigen::Index>(X.size()), 3);
-    for (std::size_t v = 0; v < X.size(); ++v) P.row(static_cast<Eigen::Index>(v)) = X[v].transpose();
-    cloth::Triangles T(static_cast<Eigen::Index>(F.size()), 3);
-    for (std::size_t t = 0; t < F.size(); ++t) {
-        // Counter-clockwise seen from +z.
-        Eigen::Vector3i f = F[t];
-        const Eigen::Vector3d n = (X[f[1]] - X[f[0]]).cross(X[f[2]] - X[f[0]]);
-        if (n.z() < 0) std::swap(f[1], f[2]);
-        T.row(static_cast<Eigen::Index>(t)) = f.transpose();
-    }
-    return cloth::make_triangle_mesh(P, T);
+    return cloth::make_ring_disc(diameter, grid, cloth::RingGrading{0.065, 0.090, rim_factor, 0.015});
 }
 
 void drape_on(const char* label, cloth::ClothMesh mesh, const fabric::FabricPreset& p, const cloth::DrapeSetup& s)

@@ -28,6 +28,12 @@ void DrapeSetup::validate() const
     if (!(edge_radius >= 0) || edge_radius >= disc_diameter / 2)
         throw ParameterError("pedestal edge radius " + format_double(edge_radius) + " m must be in [0, disc radius)");
     if (grid < 5 || grid > 1000) throw ParameterError("grid = " + std::to_string(grid) + " must be in [5, 1000]");
+    // Below grid 17 the rim band's first refined ring lands past the rim and the
+    // triangles between a coarse ring and the band turn into slivers (8-12
+    // degrees at grids 6-11 on 300/150 mm); the rings exist to resolve the rim.
+    if (mesh == DrapeMesh::Rings && grid < kMinRingsGrid)
+        throw ParameterError("grid = " + std::to_string(grid) + " is too coarse for the ring mesh (at least " + std::to_string(kMinRingsGrid) +
+                             ": the rim's refined band needs rings either side of it)");
     if (!(perturbation >= 0) || perturbation > 0.05)
         throw ParameterError("perturbation = " + format_double(perturbation) + " m must be in [0, 0.05]");
     if (!specimen_offset.allFinite() || specimen_offset.norm() >= disc_diameter / 2)
@@ -42,6 +48,39 @@ void DrapeSetup::validate() const
         throw ParameterError("laying load = " + format_double(laying_load) + " must be a fraction of gravity in (0, 1]");
     for (double d : slice_depths)
         if (!(d > 0) || !std::isfinite(d)) throw ParameterError("slice depth " + format_double(d) + " m must be positive");
+}
+
+const char* to_string(DrapeMesh m)
+{
+    switch (m) {
+    case DrapeMesh::Grid: return "grid";
+    case DrapeMesh::Rings: return "rings";
+    }
+    return "grid";
+}
+
+DrapeMesh drape_mesh_from_string(const std::string& s)
+{
+    if (s == "grid") return DrapeMesh::Grid;
+    if (s == "rings") return DrapeMesh::Rings;
+    throw ParameterError("mesh \"" + s + "\" is not one of grid, rings");
+}
+
+RingGrading drapemeter_rim_grading(const DrapeSetup& setup)
+{
+    const double a = setup.disc_diameter / 2;
+    RingGrading g;
+    g.inner_radius = std::max(0.0, a - 0.010);
+    g.outer_radius = a + 0.015;
+    g.factor = 0.4;
+    g.taper = 0.015;
+    return g;
+}
+
+ClothMesh make_drape_mesh(const DrapeSetup& setup)
+{
+    if (setup.mesh == DrapeMesh::Rings) return make_ring_disc(setup.sample_diameter, setup.grid, drapemeter_rim_grading(setup), 0.0);
+    return make_disc(setup.sample_diameter, setup.grid, 0.0);
 }
 
 namespace {
@@ -83,7 +122,16 @@ void perturb(Positions& X, const DrapeSetup& setup)
 
 Positions interpolate_positions(const ClothMesh& coarse, const Positions& xc, const ClothMesh& fine)
 {
-    const double cell = std::max(coarse.grid.hu, coarse.grid.hv);
+    // Buckets of the coarse mesh's spacing: the grid's cell, or a general
+    // mesh's longest edge in material coordinates.
+    double cell = std::max(coarse.grid.hu, coarse.grid.hv);
+    if (!coarse.grid.valid()) {
+        cell = 0;
+        for (int t = 0; t < coarse.F.rows(); ++t)
+            for (int c = 0; c < 3; ++c)
+                cell = std::max(cell, (coarse.uv.row(coarse.F(t, c)) - coarse.uv.row(coarse.F(t, (c + 1) % 3))).norm());
+        if (!(cell > 0)) throw ParameterError("interpolate_positions: the coarse mesh has no extent");
+    }
     const Eigen::Vector2d lo = coarse.uv.colwise().minCoeff().transpose() - Eigen::Vector2d::Constant(cell);
     const Eigen::Vector2d hi = coarse.uv.colwise().maxCoeff().transpose() + Eigen::Vector2d::Constant(cell);
     const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
@@ -147,11 +195,16 @@ std::unique_ptr<ClothSystem> make_drape_system(const Material& fabric, const Dra
     setup.validate();
     ClothMesh mesh;
     ClothModel model;
+    if (mopt.arc_membrane && setup.mesh != DrapeMesh::Grid)
+        throw ParameterError("springs that measure arcs (model.arc_membrane) are the grid's; the " + std::string(to_string(setup.mesh)) +
+                             " mesh has the triangle model's fibre membrane");
     if (!fabric.grid_springs) {
-        mesh = make_disc(setup.sample_diameter, setup.grid, 0.0);
+        mesh = make_drape_mesh(setup);
         model = make_model(mesh, fabric.params, mopt);
     } else {
         const GridSprings& g = *fabric.grid_springs;
+        if (setup.mesh != DrapeMesh::Grid)
+            throw ParameterError("the grid springs (a seed-19 preset) need the grid mesh, not " + std::string(to_string(setup.mesh)));
         g.validate("grid springs");
         if (std::abs(g.width - setup.sample_diameter) > 1e-6)
             throw ParameterError("the grid springs (a seed-19 preset) describe a " + format_value(g.width * 1000) +
@@ -301,7 +354,7 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         co.residual = std::max(ropt.residual, 1e-4); // the fine solve polishes
         const DrapeResult rc = simulate_drape(fabric, coarse, co, mopt);
         if (rc.status.outcome != SolverStatus::Outcome::Diverged && rc.status.outcome != SolverStatus::Outcome::Cancelled) {
-            const ClothMesh cm = make_disc(coarse.sample_diameter, coarse.grid, 0.0);
+            const ClothMesh cm = make_drape_mesh(coarse);
             sys->x = interpolate_positions(cm, rc.x, sys->mesh());
         }
         pre = rc.status;

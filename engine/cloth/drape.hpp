@@ -9,15 +9,35 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 
 namespace drape::cloth {
+
+/// The specimen's mesh on the drapemeter (DrapeSetup::mesh).
+enum class DrapeMesh {
+    /// make_disc: the seed's square lattice, the grid model (warp/weft springs,
+    /// lattice bending stencils).
+    Grid,
+    /// make_ring_disc graded at the pedestal's rim (drapemeter_rim_grading):
+    /// concentric rings through the general triangle model, the spacing 0.4 of
+    /// the nominal one where the cloth bends over the rim and the folds root.
+    /// The bend over the rim is about sqrt(B / T) wide (T the tension the
+    /// overhang hangs on the rim with): 3.5-14 mm for the starters, below the
+    /// nominal spacing of grid 41 (7.5 mm) for limp fabrics, where the grid's D
+    /// moves with the grid (docs/model-discrepancy.md sections 24-25).
+    Rings,
+};
+const char* to_string(DrapeMesh m);
+/// "grid" or "rings"; ParameterError naming the value otherwise.
+DrapeMesh drape_mesh_from_string(const std::string& s);
 
 struct DrapeSetup {
     double sample_diameter = 0.30;  ///< [m]
     double disc_diameter = 0.15;    ///< [m]
     double pedestal_height = 0.12;  ///< [m]
     double edge_radius = 0.5e-3;    ///< [m] rounding of the pedestal's top edge
-    int grid = 60;                  ///< nodes across the specimen diameter
+    int grid = 60;                  ///< nodes across the specimen diameter (rings: the nominal spacing is that of this grid)
+    DrapeMesh mesh = DrapeMesh::Grid; ///< the specimen's mesh
     std::uint64_t seed = 1;         ///< perturbation seed (buckling is a bifurcation)
     /// Amplitude of the symmetry-breaking perturbation [m]: the flat sheet's
     /// height gets sum_k a_k cos(k theta + phi_k) t^2 for k = 2..16, with
@@ -74,6 +94,19 @@ inline DrapeSetup on_fold_branch(DrapeSetup s, int n, double lift_m = kFoldBranc
     s.perturbation = lift_m;
     return s;
 }
+
+/// The coarsest grid DrapeMesh::Rings takes (DrapeSetup::validate).
+inline constexpr int kMinRingsGrid = 17;
+
+/// Where DrapeMesh::Rings refines, from the pedestal's geometry alone (not the
+/// fabric, so a fit's objective does not jump with the mesh): 10 mm inside the
+/// disc's edge to 15 mm outside it at 0.4 of the nominal spacing, tapering over
+/// 15 mm (the bend over the rim and the folds' roots; chosen on the drapemeter's
+/// geometry in docs/model-discrepancy.md section 24, not fitted).
+RingGrading drapemeter_rim_grading(const DrapeSetup& setup);
+
+/// The specimen's flat mesh for `setup` (setup.mesh at setup.grid), centre at the origin.
+ClothMesh make_drape_mesh(const DrapeSetup& setup);
 
 /// Builds the drape scene: disc mesh (or the material's own grid when it has
 /// grid springs), model, pedestal and floor colliders, perturbed flat start.

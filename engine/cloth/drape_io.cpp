@@ -69,6 +69,7 @@ json drape_summary_json(const DrapeResult& r, const DrapeSetup& setup, Integrato
     j["sample_diameter_m"] = setup.sample_diameter;
     j["disc_diameter_m"] = setup.disc_diameter;
     j["grid"] = setup.grid;
+    j["mesh"] = to_string(setup.mesh);
     j["seed"] = setup.seed;
     j["perturbation_m"] = setup.perturbation;
     j["fold_mode"] = setup.fold_mode; // 0: the seeded mix of modes; n: started on the n-fold branch

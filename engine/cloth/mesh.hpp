@@ -47,6 +47,26 @@ struct ClothMesh {
 /// diameter <= 0 or n < 5.
 ClothMesh make_disc(double diameter, int n, double z = 0.0);
 
+/// Where make_ring_disc refines: between inner_radius and outer_radius [m] from
+/// the centre the spacing is factor times the nominal one, tapering linearly back
+/// to it over `taper` [m] on either side. factor 1: uniform rings.
+struct RingGrading {
+    double inner_radius = 0, outer_radius = 0; ///< [m]
+    double factor = 1;                         ///< (0, 1]
+    double taper = 0;                          ///< [m]
+};
+
+/// Round sheet of triangles on concentric rings (no lattice directions): a
+/// vertex at the centre, rings at the local spacing (nominally diameter / (n - 1),
+/// as make_disc's), each with as many near-equilateral triangles as that spacing
+/// asks and turned by the golden angle against the one inside it; the last ring
+/// on the cut circle. Material coordinates as make_disc's (u = x + R, v = y + R);
+/// no GridInfo (the general triangle model). Throws ParameterError when
+/// diameter <= 0, n outside [5, 2000], the grading is out of range (factor in
+/// [0.05, 1], taper >= 0, 0 <= inner radius <= outer radius) or the rings would
+/// fold over each other (a grid too coarse for the grading).
+ClothMesh make_ring_disc(double diameter, int n, const RingGrading& grading = {}, double z = 0.0);
+
 /// Rectangle w x h [m] with nu x nv nodes, corner at `origin`, in the plane z = origin.z.
 ClothMesh make_rectangle(double w, double h, int nu, int nv, const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
 

@@ -103,9 +103,13 @@ RestResponses rest_responses(const Material& fabric, const DrapeSetup& setup, co
     if (!changed_setups.empty()) {
         const Positions f0 = forces_with(fabric, setup, mopt, rest);
         for (const DrapeSetup& c : changed_setups) {
-            if (c.grid != setup.grid || c.sample_diameter != setup.sample_diameter)
-                throw ParameterError("rest responses: a changed set-up must keep the mesh (grid " + std::to_string(c.grid) + " vs " +
-                                     std::to_string(setup.grid) + ")");
+            if (c.grid != setup.grid || c.mesh != setup.mesh || c.sample_diameter != setup.sample_diameter ||
+                (c.mesh == DrapeMesh::Rings && c.disc_diameter != setup.disc_diameter))
+                throw ParameterError("rest responses: a changed set-up must keep the mesh (" + std::string(to_string(c.mesh)) + " " +
+                                     std::to_string(c.grid) + " on " + format_value(c.sample_diameter * 1e3) + " / " +
+                                     format_value(c.disc_diameter * 1e3) + " mm vs " + std::string(to_string(setup.mesh)) + " " +
+                                     std::to_string(setup.grid) + " on " + format_value(setup.sample_diameter * 1e3) + " / " +
+                                     format_value(setup.disc_diameter * 1e3) + " mm)");
             Positions dx;
             out.setup_residuals.push_back(solve(forces_with(fabric, c, mopt, rest) - f0, dx));
             out.setups.push_back(std::move(dx));

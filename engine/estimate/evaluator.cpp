@@ -39,7 +39,8 @@ Evaluator::Evaluator(const std::vector<MeasuredDrape>& recs, const FitOptions& o
 
 cloth::DrapeSetup Evaluator::setup_for(int r, std::uint64_t seed, bool on_branch) const
 {
-    const cloth::DrapeSetup s = m_recs[static_cast<std::size_t>(r)].setup(m_opt.grid, seed);
+    cloth::DrapeSetup s = m_recs[static_cast<std::size_t>(r)].setup(m_opt.grid, seed);
+    s.mesh = m_opt.mesh;
     // Mixed: the odd seeds (counted from the fit's seed) start from the random mix.
     const bool random_seed = m_opt.branch == FoldBranch::Mixed && ((seed - m_opt.seed) % 2 == 1);
     const int n = on_branch && !random_seed ? branch_of(r) : 0;
@@ -269,6 +270,34 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     const Evaluation e = evaluate(x, Start::Best);
     m_best = e;
     m_best_x = x;
+}
+
+double Evaluator::objective_from(const Eigen::VectorXd& x, const std::vector<std::vector<cloth::Positions>>& states, const std::string& stage)
+{
+    const std::size_t S = static_cast<std::size_t>(std::max(1, m_opt.seeds_per_evaluation));
+    bool fits = states.size() == m_recs.size();
+    for (const auto& rs : states) fits = fits && rs.size() == S;
+    if (!fits) throw ParameterError("fit: warm start states do not match the records and seeds");
+    // objective() replaces m_states (with the evaluation's own) when it takes the best point.
+    auto given = states; // copied before anything is moved: a failed copy leaves the evaluator as it was
+    auto saved = std::move(m_states);
+    const bool had = m_have_states;
+    const double best_before = m_best.chi2;
+    m_states = std::move(given);
+    m_have_states = true;
+    auto restore = [&] {
+        m_states = std::move(saved);
+        m_have_states = had;
+    };
+    double f = 0;
+    try {
+        f = objective(x, Start::Best, stage);
+    } catch (...) {
+        restore();
+        throw;
+    }
+    if (!(m_best.chi2 < best_before)) restore();
+    return f;
 }
 
 double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::string& stage)

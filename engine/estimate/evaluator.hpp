@@ -75,6 +75,12 @@ public:
     /// at rest, and returns no less than the best chi2 then (the optimizers do not
     /// centre on it).
     double objective(const Eigen::VectorXd& x, Start from, const std::string& stage);
+    /// objective() with every drape re-solved from `states` ([record][seed], on
+    /// this evaluator's grid and seeds: a tied refit continues the free fit's
+    /// drapes) instead of the best point's; they stay the warm starts only if the
+    /// evaluation becomes the best point. Throws ParameterError when the layout
+    /// does not match the records and seeds.
+    double objective_from(const Eigen::VectorXd& x, const std::vector<std::vector<cloth::Positions>>& states, const std::string& stage);
     /// Calls FitOptions::progress with the state so far.
     /// Also appends the evaluation to the trace (once per evaluation).
     void report(const std::string& stage);

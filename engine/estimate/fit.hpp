@@ -94,6 +94,7 @@ struct FitOptions {
     ModelVariant model = ModelVariant::Baseline;
     FitMethod method = FitMethod::Sensitivity;
     int grid = 25;                ///< nodes across the specimen in the fit's simulations
+    cloth::DrapeMesh mesh = cloth::DrapeMesh::Grid; ///< the specimen's mesh in the fit's simulations (at every grid it uses)
     std::uint64_t seed = 1;       ///< drives the optimizer's randomness and the perturbation seeds
     int seeds_per_evaluation = 2; ///< perturbation seeds averaged per evaluation (node-count bifurcation)
     int scan_evaluations = 6;     ///< at most, root search of a common bending on D before the global stage (0 = none)

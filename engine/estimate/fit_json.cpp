@@ -34,6 +34,7 @@ json fit_to_json(const FitResult& r)
     prov["edge_contact"] = r.options.model_options.edge_contact;
     prov["bending_correction"] = r.options.model_options.bending_correction;
     prov["arc_membrane"] = r.options.model_options.arc_membrane;
+    prov["mesh"] = cloth::to_string(r.options.mesh);
     prov["model"] = to_string(r.options.model);
     prov["seed"] = r.options.seed;
     prov["seeds_per_evaluation"] = r.options.seeds_per_evaluation;

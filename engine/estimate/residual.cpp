@@ -1,5 +1,7 @@
 #include "engine/estimate/residual.hpp"
 
+#include <Eigen/QR>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -25,7 +27,7 @@ struct Acc {
 };
 } // namespace
 
-ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fitted)
+ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fitted, const Eigen::MatrixXd& J)
 {
     ResidualAnalysis a;
     std::map<std::string, Acc> kinds;
@@ -66,19 +68,41 @@ ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fi
     };
     if (a.chi2 > a.dof + 3.0 * std::sqrt(2.0 * a.dof))
         a.exceeds_because.push_back("total: chi2 " + num(a.chi2) + " over " + std::to_string(a.dof) + " degrees of freedom");
+    // Not the closure terms: each is a fraction of seeds (0, 1/2 or 1 with two
+    // seeds) at 0.1 per sigma, not a Gaussian draw, and a cut just above the hem's
+    // highest point closes in one drape and not in the next of the same fabric, so
+    // one seed's open cut is 5 sigma and two such cuts pass the group test: a fit
+    // with the right model (tst_est_discrepancy's edge-contact control, two
+    // records) was flagged by "closure: chi2 50.0 over 14 terms" alone. They stay
+    // in the total chi2 and its test.
     for (const auto& [k, g] : kinds)
-        if (group_exceeds(g)) a.exceeds_because.push_back(k + ": chi2 " + num(g.ss) + " over " + std::to_string(g.n) + " terms");
+        if (k != "closure" && group_exceeds(g)) a.exceeds_because.push_back(k + ": chi2 " + num(g.ss) + " over " + std::to_string(g.n) + " terms");
     for (const auto& [k, g] : harm)
         if (group_exceeds(g)) a.exceeds_because.push_back("harmonic " + std::to_string(k) + ": chi2 " + num(g.ss) + " over " + std::to_string(g.n) + " terms");
     a.exceeds_noise = !a.exceeds_because.empty();
-    // Matched filters: the whitened residual projected on the unit signature s
-    // of an effect, z = s.w / |s|; z > 3 is beyond noise.
+    // Matched filters: the whitened residual projected on the signature s of an
+    // effect, z = s.w / |s_perp|; z > 3 is beyond noise. At a least-squares
+    // optimum the residual of the fitted terms is (I - P) e, e the whitened noise
+    // and P the projection on the Jacobian's columns: the fit has absorbed the
+    // noise along them, so s.w has the variance |(I - P) s|^2 = |s_perp|^2, not
+    // |s|^2. Dividing by |s| (without J) understates z by |s_perp| / |s|.
+    const bool project = J.rows() == static_cast<Eigen::Index>(terms.size()) && J.cols() > 0 && J.allFinite();
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
+    if (project) qr.compute(J);
     auto matched_filter = [&](const char* name, const char* what, auto weight) {
         double sw = 0, ss = 0;
-        for (const auto& t : terms) {
-            const double s = weight(t);
-            sw += s * t.whitened();
-            ss += s * s;
+        Eigen::VectorXd s(static_cast<Eigen::Index>(terms.size()));
+        for (std::size_t k = 0; k < terms.size(); ++k) {
+            const auto& t = terms[k];
+            s[static_cast<Eigen::Index>(k)] = weight(t);
+            sw += s[static_cast<Eigen::Index>(k)] * t.whitened();
+            ss += s[static_cast<Eigen::Index>(k)] * s[static_cast<Eigen::Index>(k)];
+        }
+        if (project && ss > 0) {
+            const Eigen::VectorXd absorbed = J * qr.solve(s);
+            // Never below a tenth of the signature: a signature the fit absorbs
+            // almost whole is not a test (0/0), and the bound keeps z finite.
+            ss = std::max((s - absorbed).squaredNorm(), 0.01 * ss);
         }
         const double z = ss > 0 ? sw / std::sqrt(ss) : 0.0;
         a.signature_z.push_back({name, z});

@@ -5,6 +5,7 @@
 #include "engine/estimate/effects.hpp"
 #include "engine/estimate/objective.hpp"
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
 #include <string>
@@ -49,8 +50,12 @@ struct ResidualAnalysis {
     std::string unexplained;
 };
 
-/// Analyses the residual terms of a fit with `fitted` coordinates.
-ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fitted);
+/// Analyses the residual terms of a fit with `fitted` coordinates. `J`: the
+/// whitened Jacobian of the fitted coordinates at the optimum, one row per term
+/// (rows of terms the fit did not fit or cannot differentiate zero), or empty: the
+/// matched filters then divide by the signature's norm, not by the norm of its part
+/// the fit cannot absorb (conservative: z understated where the two overlap).
+ResidualAnalysis analyse_residual(const std::vector<ResidualTerm>& terms, int fitted, const Eigen::MatrixXd& J = {});
 
 nlohmann::json residual_to_json(const ResidualAnalysis& a);
 

@@ -83,7 +83,7 @@ std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J, FitResult& ou
 
 void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
                          const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m,
-                         double rim_lever_m)
+                         double rim_lever_m, double rim_spacing_m)
 {
     const int n = static_cast<int>(vars.size());
     for (const auto& sp : cloth::param_table()) {
@@ -138,11 +138,12 @@ void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, c
                 // grids 41-81). Said, not refitted: a finer grid costs several times the time.
                 if (rim_lever_m > 0) {
                     const double rim = std::sqrt(e.value / std::max(rho_g * rim_lever_m, 1e-12));
-                    if (rim < mesh_spacing_m) {
+                    const double at_rim = rim_spacing_m > 0 ? rim_spacing_m : mesh_spacing_m;
+                    if (rim < at_rim) {
                         char buf[240];
                         std::snprintf(buf, sizeof buf,
                                       "bend over the pedestal's rim about %.1f mm, below the fit's mesh spacing %.1f mm: not resolved, D may move with the grid",
-                                      rim * 1e3, mesh_spacing_m * 1e3);
+                                      rim * 1e3, at_rim * 1e3);
                         e.note = e.note.empty() ? buf : e.note + "; " + buf;
                     }
                 }

@@ -23,8 +23,11 @@ std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J_terms, FitResu
 /// Fills out.estimates (every parameter of the table) and out.grid_bound from
 /// the optimum x and the coordinate sigmas. `mesh_spacing_m` is the fit's grid
 /// spacing: a fitted bending whose bending length is below it is grid-bound.
+/// `rim_spacing_m`: the mesh's spacing where the cloth bends over the pedestal's
+/// rim (the grid's; the rings' refined band), against which the rim bend
+/// sqrt(B / T) is noted (T from `rim_lever_m`); 0 = mesh_spacing_m.
 void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
                          const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m,
-                         double rim_lever_m = 0);
+                         double rim_lever_m = 0, double rim_spacing_m = 0);
 
 } // namespace drape::estimate::detail

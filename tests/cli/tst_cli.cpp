@@ -170,6 +170,32 @@ private slots:
         QVERIFY2(bad.err.contains("--arc-membrane") && bad.err.contains("seed-19"), qPrintable(bad.err));
     }
 
+    /// --mesh rings drapes the ring mesh (the summary says so and counts its
+    /// vertices); an unknown mesh, grid springs or the grid's arcs on rings are refused.
+    void meshFlag()
+    {
+        const QStringList base = {"simulate", "--fabric", DRAPE_SOURCE_DIR "/data/library/denim.json", "--grid", "17", "--json", "--quiet"};
+        const Out grid = run(base), rings = run(base + QStringList{"--mesh", "rings"});
+        QVERIFY2(grid.code == 0 && rings.code == 0, qPrintable(grid.err + rings.err));
+        const QJsonObject g = QJsonDocument::fromJson(grid.out.toUtf8()).object(), r = QJsonDocument::fromJson(rings.out.toUtf8()).object();
+        QCOMPARE(g["mesh"].toString(), QString("grid"));
+        QCOMPARE(r["mesh"].toString(), QString("rings"));
+        QVERIFY2(r["vertices"].toInt() > g["vertices"].toInt(), "the rings are refined at the rim: more vertices at the same grid");
+        QVERIFY(r["drape_coefficient_percent"].toDouble() > 40 && r["drape_coefficient_percent"].toDouble() < 95);
+        Out bad = run(base + QStringList{"--mesh", "hex"});
+        QCOMPARE(bad.code, 2);
+        QVERIFY2(bad.err.contains("--mesh") && bad.err.contains("hex"), qPrintable(bad.err));
+        bad = run(base + QStringList{"--mesh", "rings", "--arc-membrane"});
+        QCOMPARE(bad.code, 2);
+        QVERIFY2(bad.err.contains("--arc-membrane"), qPrintable(bad.err));
+        bad = run({"simulate", "--fabric", "seed-table1", "--mesh", "rings", "--quiet"});
+        QCOMPARE(bad.code, 1);
+        QVERIFY2(bad.err.contains("grid mesh"), qPrintable(bad.err));
+        bad = run({"simulate", "--fabric", "denim", "--mesh", "rings", "--grid", "9", "--quiet"});
+        QCOMPARE(bad.code, 1);
+        QVERIFY2(bad.err.contains("too coarse for the ring mesh"), qPrintable(bad.err));
+    }
+
     /// The set-up flags mean the same in every command that takes them.
     void setupFlagsAreSharedAndChecked()
     {

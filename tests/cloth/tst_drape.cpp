@@ -70,9 +70,18 @@ private slots:
         QCOMPARE(after, 0);
     }
 
+    void static_drape_converges_and_is_plausible_data()
+    {
+        QTest::addColumn<int>("mesh");
+        QTest::newRow("grid") << static_cast<int>(DrapeMesh::Grid);
+        QTest::newRow("rings") << static_cast<int>(DrapeMesh::Rings);
+    }
     void static_drape_converges_and_is_plausible()
     {
-        const DrapeResult r = simulate_drape(FabricParams(), small());
+        QFETCH(int, mesh);
+        DrapeSetup setup = small();
+        setup.mesh = static_cast<DrapeMesh>(mesh);
+        const DrapeResult r = simulate_drape(FabricParams(), setup);
         QVERIFY2(r.status.converged(), r.status.message.c_str());
         QVERIFY(r.status.residual < 1e-6);
         const auto& m = r.metrics;
@@ -251,6 +260,34 @@ private slots:
         s = small();
         s.sample_diameter = 0.36;
         QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_drape_system(Material(FabricParams(), GridSprings{}), s));
+        // Grid springs need the grid mesh; an unknown mesh name is named.
+        s = small();
+        s.mesh = DrapeMesh::Rings;
+        try {
+            make_drape_system(Material(FabricParams(), GridSprings{}), s);
+            QFAIL("grid springs on rings were accepted");
+        } catch (const drape::ParameterError& e) {
+            QVERIFY2(std::string(e.what()).find("need the grid mesh") != std::string::npos, e.what());
+        }
+        s = small();
+        s.mesh = DrapeMesh::Rings;
+        s.grid = kMinRingsGrid - 1;
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, s.validate());
+        ModelOptions arcs;
+        arcs.arc_membrane = true;
+        try {
+            make_drape_system(FabricParams(), small(), arcs); // the grid takes arcs
+            make_drape_system(FabricParams(), [] { DrapeSetup r = small(); r.mesh = DrapeMesh::Rings; return r; }(), arcs);
+            QFAIL("arcs on rings were accepted");
+        } catch (const drape::ParameterError& e) {
+            QVERIFY2(std::string(e.what()).find("arc") != std::string::npos, e.what());
+        }
+        try {
+            drape_mesh_from_string("hex");
+            QFAIL("an unknown mesh was accepted");
+        } catch (const drape::ParameterError& e) {
+            QVERIFY2(std::string(e.what()).find("\"hex\"") != std::string::npos, e.what());
+        }
     }
 
     void cancellation_stops_the_solver()

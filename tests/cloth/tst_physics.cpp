@@ -3,11 +3,14 @@
 // implicit Euler far beyond the explicit limit.
 #include "engine/cloth/drape.hpp"
 #include "engine/cloth/solver.hpp"
+#include "engine/core/error.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <QTest>
 
+#include <map>
 #include <numbers>
+#include <tuple>
 #include <random>
 
 using namespace drape::cloth;
@@ -73,7 +76,10 @@ ClothMesh test_triangles(int kind, double size, double h, const Eigen::Vector3d&
     return make_triangle_mesh(X, F, warp);
 }
 
-const char* lattice_name(int kind) { return kind == 0 ? "square lattice split" : kind == 1 ? "equilateral" : "jittered"; }
+const char* lattice_name(int kind)
+{
+    return kind == 0 ? "square lattice split" : kind == 1 ? "equilateral" : kind == 2 ? "jittered" : "drapemeter rings";
+}
 } // namespace
 
 class TestPhysics : public QObject {
@@ -400,7 +406,7 @@ private slots:
     {
         QTest::addColumn<int>("mesh");
         QTest::addColumn<double>("phi_deg");
-        for (int m = 0; m < 3; ++m)
+        for (int m = 0; m < 4; ++m)
             for (double deg : {0.0, 30.0, 45.0, 70.0, 90.0, 135.0})
                 QTest::newRow(qPrintable(QString("%1, %2 deg").arg(lattice_name(m)).arg(deg)))
                     << m << deg;
@@ -410,7 +416,9 @@ private slots:
         QFETCH(int, mesh);
         QFETCH(double, phi_deg);
         const double size = 0.1, h = 0.005;
-        const ClothMesh m = test_triangles(mesh, size, h);
+        // 3: the drapemeter's graded ring disc, 100 mm across at nominal spacing h.
+        const ClothMesh m = mesh < 3 ? test_triangles(mesh, size, h)
+                                     : make_ring_disc(size, static_cast<int>(size / h) + 1, RingGrading{0.02, 0.03, 0.4, 0.01});
         FabricParams p = undamped();
         p[Param::BendWarp] = 2e-5;
         p[Param::BendWeft] = 3e-6;
@@ -422,7 +430,7 @@ private slots:
         ClothSystem s(m, model);
         const double kappa = 2.0, R = 1 / kappa, ph = phi_deg * std::numbers::pi / 180;
         const Eigen::Vector2d dir(std::cos(ph), std::sin(ph));
-        const Positions Y = rolled(m.X, R, dir, Eigen::Vector2d(size / 2, size / 2));
+        const Positions Y = rolled(m.X, R, dir, mesh < 3 ? Eigen::Vector2d(size / 2, size / 2) : Eigen::Vector2d::Zero());
         const double c2 = dir.x() * dir.x(), s2 = dir.y() * dir.y();
         const double Bphi = p[Param::BendWarp] * c2 * c2 + 2 * std::sqrt(p[Param::BendWarp] * p[Param::BendWeft]) * c2 * s2 + p[Param::BendWeft] * s2 * s2;
         const double expected = 0.5 * Bphi * kappa * kappa * area;
@@ -593,6 +601,117 @@ private slots:
         Y.col(2) *= 1.01;
         const double want = 0.5 * p[Param::StretchWarp] * 1e-4 * m.area();
         QVERIFY2(std::abs(s.potential_energy(Y) / want - 1) < 0.02, qPrintable(QString("%1 J against %2 J").arg(s.potential_energy(Y)).arg(want)));
+    }
+
+    /// The drapemeter's ring mesh (DrapeMesh::Rings) is a disc: one connected
+    /// sheet (V - E + F = 1), every edge in one or two triangles, all triangles
+    /// counter-clockwise and no sliver (angles above 15 degrees; 18-26 measured),
+    /// the hem on the cut circle, a vertex on
+    /// the axis (the centre's tether), and the spacing refined to 0.4 of the
+    /// nominal one in the rim's band.
+    void ring_disc_is_a_graded_disc_data()
+    {
+        QTest::addColumn<int>("grid");
+        QTest::addColumn<int>("mesh");
+        for (int g : {25, 41, 61})
+            for (int m = 0; m < 2; ++m) QTest::newRow(qPrintable(QString("grid %1 %2").arg(g).arg(m ? "graded" : "uniform"))) << g << m;
+        QTest::newRow("240/180 graded, grid 41") << 41 << 2;
+    }
+    void ring_disc_is_a_graded_disc()
+    {
+        QFETCH(int, grid);
+        QFETCH(int, mesh);
+        DrapeSetup setup;
+        setup.grid = grid;
+        setup.mesh = DrapeMesh::Rings;
+        if (mesh == 2) {
+            setup.sample_diameter = 0.24;
+            setup.disc_diameter = 0.18;
+        }
+        const RingGrading grading = mesh == 0 ? RingGrading{} : drapemeter_rim_grading(setup);
+        const ClothMesh m = mesh == 0 ? make_ring_disc(setup.sample_diameter, grid) : make_drape_mesh(setup);
+        const double R = setup.sample_diameter / 2, h0 = setup.sample_diameter / (grid - 1);
+        QVERIFY(!m.grid.valid());
+        QCOMPARE(m.X.row(0).norm(), 0.0);
+        std::map<std::pair<int, int>, int> edges;
+        double min_angle = 1e9;
+        double band_sum = 0, outer_sum = 0;
+        int band_n = 0, outer_n = 0;
+        for (int t = 0; t < m.F.rows(); ++t) {
+            Eigen::Vector2d p[3];
+            for (int c = 0; c < 3; ++c) p[c] = m.X.row(m.F(t, c)).head<2>().transpose();
+            const Eigen::Vector2d e1 = p[1] - p[0], e2 = p[2] - p[0];
+            QVERIFY2(e1.x() * e2.y() - e1.y() * e2.x() > 0, qPrintable(QString("triangle %1 is not counter-clockwise").arg(t)));
+            const double r = ((p[0] + p[1] + p[2]) / 3).norm();
+            for (int c = 0; c < 3; ++c) {
+                const Eigen::Vector2d a = p[(c + 1) % 3] - p[c], b = p[(c + 2) % 3] - p[c];
+                min_angle = std::min(min_angle, std::acos(a.dot(b) / (a.norm() * b.norm())) * 180 / std::numbers::pi);
+                const int i = m.F(t, c), j = m.F(t, (c + 1) % 3);
+                ++edges[{std::min(i, j), std::max(i, j)}];
+                if (r > grading.inner_radius && r < grading.outer_radius) band_sum += a.norm(), ++band_n;
+                if (r > grading.outer_radius + grading.taper + h0 && r < R - h0) outer_sum += a.norm(), ++outer_n;
+            }
+        }
+        for (const auto& [e, n] : edges) QVERIFY2(n == 1 || n == 2, qPrintable(QString("edge %1-%2 in %3 triangles").arg(e.first).arg(e.second).arg(n)));
+        QCOMPARE(m.vertex_count() - static_cast<int>(edges.size()) + static_cast<int>(m.F.rows()), 1);
+        qInfo("%d vertices, %d triangles, smallest angle %.1f deg", m.vertex_count(), static_cast<int>(m.F.rows()), min_angle);
+        QVERIFY2(min_angle > 15, qPrintable(QString("smallest angle %1 deg").arg(min_angle)));
+        double hem_err = 0;
+        int hem = 0;
+        for (int i = 0; i < m.vertex_count(); ++i)
+            if (m.boundary[static_cast<std::size_t>(i)]) hem_err = std::max(hem_err, std::abs(m.X.row(i).norm() - R)), ++hem;
+        QVERIFY(hem > 0);
+        QVERIFY2(hem_err < 1e-12, qPrintable(QString("a hem vertex is %1 m off the circle").arg(hem_err)));
+        const double inscribed = std::numbers::pi * R * R * (1 - std::pow(2 * std::numbers::pi / hem, 2) / 6);
+        QVERIFY2(std::abs(m.area() / inscribed - 1) < 1e-3, qPrintable(QString("area %1 m^2, the inscribed polygon's %2").arg(m.area()).arg(inscribed)));
+        for (int i = 0; i < m.vertex_count(); ++i) QVERIFY((m.uv.row(i) - Eigen::RowVector2d(m.X(i, 0) + R, m.X(i, 1) + R)).norm() < 1e-15);
+        if (mesh > 0) {
+            const double band = band_sum / band_n, outer = outer_sum / std::max(1, outer_n);
+            qInfo("mean edge in the rim band %.2f mm (nominal %.2f mm x %.1f), outside it %.2f mm", band * 1e3, h0 * 1e3, grading.factor, outer * 1e3);
+            QVERIFY2(std::abs(band / (grading.factor * h0) - 1) < 0.2, qPrintable(QString("rim band edges %1 mm").arg(band * 1e3)));
+            if (outer_n > 0) QVERIFY2(std::abs(outer / h0 - 1) < 0.2, qPrintable(QString("outer edges %1 mm").arg(outer * 1e3)));
+        }
+    }
+
+    /// A grading the grid is too coarse for folds the rings over each other: refused
+    /// (a 360 mm sheet over a 115 mm disc at grid 5), as are gradings out of range.
+    void ring_disc_refuses_what_it_cannot_mesh()
+    {
+        DrapeSetup s;
+        s.sample_diameter = 0.36;
+        s.disc_diameter = 0.115;
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_ring_disc(0.36, 5, drapemeter_rim_grading(s)));
+        const RingGrading bad[] = {{0.09, 0.065, 0.4, 0.015},          // band inside out
+                                   {-0.01, 0.065, 0.4, 0.015},         // negative radius
+                                   {0.065, 0.09, 0.01, 0.015},         // too fine: millions of vertices
+                                   {0.065, 0.09, 0.4, -0.001},         // negative taper
+                                   {0.065, std::nan(""), 0.4, 0.015}}; // not a number
+        for (const RingGrading& g : bad) QVERIFY_THROWS_EXCEPTION(drape::ParameterError, make_ring_disc(0.3, 41, g));
+    }
+
+    /// The continuation carries a coarse rest state to a finer mesh: between two
+    /// ring meshes (whose vertices do not line up) an affine deformation comes
+    /// over exactly, inside and at the hem (extrapolated), as between two grids.
+    void interpolation_between_meshes_is_exact_for_affine_maps()
+    {
+        Eigen::Matrix3d A;
+        A << 0.9, 0.2, 0.1, -0.3, 1.1, 0.05, 0.4, -0.2, 0.7;
+        const Eigen::RowVector3d b(0.01, -0.02, 0.03);
+        DrapeSetup s;
+        s.mesh = DrapeMesh::Rings;
+        for (auto [coarse_grid, fine_grid, fine_mesh] : {std::tuple{41, 81, DrapeMesh::Rings}, std::tuple{25, 61, DrapeMesh::Grid}}) {
+            s.grid = coarse_grid;
+            const ClothMesh coarse = make_drape_mesh(s);
+            DrapeSetup f = s;
+            f.grid = fine_grid;
+            f.mesh = fine_mesh;
+            const ClothMesh fine = make_drape_mesh(f);
+            const Positions xc = (coarse.X * A.transpose()).rowwise() + b;
+            const Positions xf = interpolate_positions(coarse, xc, fine);
+            const Positions expected = (fine.X * A.transpose()).rowwise() + b;
+            const double err = (xf - expected).cwiseAbs().maxCoeff();
+            QVERIFY2(err < 1e-12, qPrintable(QString("rings %1 -> %2: %3 m off").arg(coarse_grid).arg(fine_grid).arg(err)));
+        }
     }
 
     /// Contact is checked on mesh edges, not only at vertices: a coarse sheet

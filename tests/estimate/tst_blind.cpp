@@ -134,7 +134,12 @@ private slots:
         QTest::addColumn<QString>("effect");
         QTest::addColumn<double>("strength");
         QTest::newRow("profiler 8 mm off axis") << "profiler_off_axis" << 8e-3;
-        QTest::newRow("camera scale +5 %") << "camera_scale" << 0.05;
+        // At the stated detection limit (docs/model-discrepancy.md, "Detection limits
+        // now": 12 %, z 7.1 and 7.9 on the slow suite's records). At 5 % D's noise
+        // (about 1.4 points after the drape-to-drape floor, against 0.8 point of D
+        // per % of scale) leaves z near 3 and the name to the realisation: 1 of 2
+        // records there, and record 11 went from named to z 2.3 with another BLAS.
+        QTest::newRow("camera scale +12 %") << "camera_scale" << 0.12;
         QTest::newRow("vertex contact") << "contact_resolution" << 1.0;
     }
     void injectedEffectIsNamed()

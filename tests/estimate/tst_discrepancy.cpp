@@ -65,6 +65,9 @@ void describe(const char* what, const FitResult& r)
         if (t.kind == "cos1" || t.kind == "sin1")
             h1 += QString("%1 %2/%3 mm (sigma %4) ").arg(QString::fromStdString(t.kind)).arg(t.simulated * 1e3, 0, 'f', 1).arg(t.measured * 1e3, 0, 'f', 1).arg(t.sigma * 1e3, 0, 'f', 1).toStdString();
     }
+    std::string because;
+    for (const auto& b : r.residual.exceeds_because) because += b + "; ";
+    if (!because.empty()) qInfo("  beyond noise because: %s", because.c_str());
     qInfo("  whitened rms per kind: %s", kinds.c_str());
     for (const auto& [k, z] : r.residual.signature_z) qInfo("  signature %s: z = %.2f", k.c_str(), z);
     qInfo("  mean radius by depth (whitened): %s", radius.c_str());
@@ -93,16 +96,22 @@ private slots:
         // traced on set-a (docs/model-discrepancy.md).
         // Two seeds per evaluation (the CLI's default): with one, the drape-to-drape
         // floors leave this signature at about 3 sigma on a single grid-17 drape.
-        const MeasuredDrape rec = synthetic(truth(), 5);
+        // Two repeat specimens (records 5 and 6, as a lab tests repeats): on one
+        // record the signature's z was 2.4-7.8 over record seeds 1-8 (5 of 8 above
+        // 3; 2.47 on record 5 with this machine's BLAS, which had passed on
+        // another), a single realisation at the edge of detection. On two it is
+        // 13.9 (5.2 with OpenBLAS's Haswell kernels), the pair 1 and 4 (the two
+        // weakest alone) 6.8, and the edge-contact control stays below 3 (1.0, 2.1).
+        const std::vector<MeasuredDrape> rec = {synthetic(truth(), 5), synthetic(truth(), 6)};
         FitOptions o = options(ModelVariant::Baseline);
         o.seeds_per_evaluation = 2;
         o.model_options.edge_contact = false;
-        const FitResult base = fit_fabric({rec}, o);
+        const FitResult base = fit_fabric(rec, o);
         describe("rim wrapping hidden, vertex contact only", base);
         QVERIFY(base.residual.exceeds_noise);
         QVERIFY(has(base.residual.candidate_effects, "rim_wrapping"));
         o.model_options.edge_contact = true;
-        const FitResult with = fit_fabric({rec}, o);
+        const FitResult with = fit_fabric(rec, o);
         describe("rim wrapping hidden, edge contact", with);
         QVERIFY(!with.residual.exceeds_noise);
         QVERIFY(with.residual.candidate_effects.empty());

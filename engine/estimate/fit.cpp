@@ -162,6 +162,11 @@ FitResult combine_runs(const FitResult& first, const FitResult& second, bool kee
     return kept;
 }
 
+/// Whether a residual term enters the linearised tests at the optimum (the
+/// effect tests' rows, the matched filters' projection): the smooth fitted
+/// terms - the node count has no derivative, a slice's closure is a count of seeds.
+bool linearised_term(const ResidualTerm& t) { return t.smooth && t.fitted && t.kind != "closure" && std::isfinite(t.whitened()); }
+
 /// The candidate effects against the residual at the optimum (issue 20):
 /// engine-made signatures, matched filter and likelihood ratio of the refit with
 /// each effect freed, the best parameter effect verified by a drape, the named
@@ -181,13 +186,12 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
         out.residual.unexplained = std::string("candidate effects not tested: ") + e.what();
         return;
     }
-    // The test's rows: the smooth fitted terms (the node count has no
-    // derivative; a slice's closure is a count of seeds).
+    // The test's rows: the linearised terms.
     Eigen::VectorXd r = Eigen::VectorXd::Zero(J.rows());
     int rows = 0;
     for (Eigen::Index k = 0; k < J.rows(); ++k) {
         const auto& t = best.terms[static_cast<std::size_t>(k)];
-        if (t.smooth && t.fitted && t.kind != "closure" && std::isfinite(t.whitened())) {
+        if (linearised_term(t)) {
             r[k] = t.whitened();
             ++rows;
         } else {
@@ -465,8 +469,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     // The mesh's spacing: nominal over the overhang (where the folds hang: the
     // bending length's test), and where the cloth bends over the rim (the grid's,
     // or the rings' refined band there: the rim bend's note).
-    cloth::DrapeSetup first = records.front().setup(options.grid, options.seed);
-    first.mesh = options.mesh;
+    const cloth::DrapeSetup first = ev.setup_for(0, options.seed, false);
     const double spacing = first.sample_diameter / std::max(1, options.grid - 1);
     const double rim_spacing = spacing * (options.mesh == cloth::DrapeMesh::Rings ? cloth::drapemeter_rim_grading(first).factor : 1.0);
     parameter_estimates(out, vars, x, sigma, options.uncertainty, spacing, rim_lever, rim_spacing);
@@ -504,14 +507,12 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         out.records.push_back(std::move(rf));
     }
     // The matched filters against the part of each signature the fit cannot
-    // absorb: the Jacobian's rows of the smooth fitted terms (as test_effects).
+    // absorb: the Jacobian's rows of the linearised terms (as test_effects).
     Eigen::MatrixXd J_fitted;
     if (J_opt.rows() == static_cast<Eigen::Index>(out.residuals.size())) {
         J_fitted = J_opt;
-        for (Eigen::Index k = 0; k < J_fitted.rows(); ++k) {
-            const auto& t = out.residuals[static_cast<std::size_t>(k)];
-            if (!(t.smooth && t.fitted && t.kind != "closure" && std::isfinite(t.whitened()))) J_fitted.row(k).setZero();
-        }
+        for (Eigen::Index k = 0; k < J_fitted.rows(); ++k)
+            if (!linearised_term(out.residuals[static_cast<std::size_t>(k)])) J_fitted.row(k).setZero();
     }
     out.residual = analyse_residual(out.residuals, n + measurement_params, J_fitted);
     out.residual.exceeds_noise_by_residual = out.residual.exceeds_noise;

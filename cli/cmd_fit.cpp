@@ -87,6 +87,14 @@ as not identifiable.
   --flat-grid N       the fitted preset also draped from flat on grid N (the first seed; a CAD's
                       finer mesh), reported beside the fit's own grid as cold_fine_* (default 61;
                       0 or a grid not above --grid: not run)
+  --flat-calibration on|off
+                      on (default): when the preset draped from flat (the report's "from flat"
+                      drapes, both grids) lays the record's fold count within 1 but misses its D
+                      by more than the D channel's sigma, both bendings are scaled by one factor
+                      (their ratio kept) until those drapes give the record's D (within half
+                      that sigma, at most two steps, each checked by drapes); the report shows
+                      the contours' optimum, the scale and the chi2 it costs. off: the preset is
+                      the contours' optimum
   --bending T         warp and weft bending: auto (default; fitted apart, and fitted again as one
                       bending when their ratio is beyond 3 but the data do not separate them - the
                       tied preset is kept unless chi2 rises by more than 9, the 3-sigma level), free (apart,
@@ -140,7 +148,7 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--laying", "--flat-grid", "--mesh"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--laying", "--flat-grid", "--mesh", "--flat-calibration"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
             "--bending-correction", "--plain-bending", "--arc-membrane"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
@@ -171,6 +179,11 @@ int run(const std::vector<std::string>& argv)
     if (fo.refine_grid != 0 && fo.refine_grid <= fo.grid)
         throw UsageError("--refine-grid " + std::to_string(fo.refine_grid) + " must be above --grid " + std::to_string(fo.grid) + " (or 0)");
     fo.flat_check_grid = a.get_int("--flat-grid", 61, 0, 200);
+    {
+        const std::string fc = a.get_or("--flat-calibration", "on");
+        if (fc != "on" && fc != "off") throw UsageError("--flat-calibration '" + fc + "' must be on or off");
+        fo.flat_calibration = fc == "on";
+    }
     fo.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     fo.seeds_per_evaluation = a.get_int("--seeds", 2, 1, 16);
     fo.laying_load = parse_laying(a, cloth::kLabLaying);
@@ -308,6 +321,7 @@ int run(const std::vector<std::string>& argv)
         else if (!r.residual.unexplained.empty()) std::printf("%s\n", r.residual.unexplained.c_str());
         if (r.refinement.from_grid > 0) std::printf("grid refinement: %s\n", r.refinement.reason.c_str());
         if (r.anisotropy.assessed && !r.anisotropy.reason.empty()) std::printf("bending: %s\n", r.anisotropy.reason.c_str());
+        if (r.flat_calibration.tried) std::printf("from flat: %s\n", r.flat_calibration.reason.c_str());
         if (r.grid_bound)
             std::printf("WARNING: grid-bound preset: a fitted bending length is below the mesh spacing of grid %d; "
                         "fit with a finer --grid for a preset that carries over to other grids\n",

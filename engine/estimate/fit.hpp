@@ -150,6 +150,17 @@ struct FitOptions {
     /// carries over to a CAD's finer mesh (issue 14/15). 0 = off (the library's
     /// default; `drape fit` checks at 61 unless --flat-grid).
     int flat_check_grid = 0;
+    /// The preset as a CAD drapes it: when the preset's drapes from flat (the
+    /// `cold_*` seeds on the fit's grid and the `cold_fine_*` one) lay the record's
+    /// fold count within 1 but miss its D by more than the D channel's sigma, both
+    /// bendings are scaled by one factor (their ratio kept) so that those drapes give
+    /// the record's D: one step on the exact sensitivity of D at the optimum, a
+    /// secant step if the first did not get within the sigma, each verified by the
+    /// same drapes from flat and kept only if it brought D closer without losing
+    /// the fold count; the steps stop within half that sigma (about the standard
+    /// error of three drapes' mean). Off in the library (the synthetic tests' truth needs no
+    /// calibration); `drape fit` turns it on unless --flat-calibration off.
+    bool flat_calibration = false;
     NoiseModel noise;
     /// Channels in the objective (dc, nodes, hem, contours); the others are
     /// held out: computed, reported and analysed as predictions, not fitted.
@@ -287,6 +298,25 @@ struct FitResult {
         double delta_chi2 = 0;      ///< (tied - free) / max(1, free chi2 / dof)
         std::string reason;         ///< one sentence for the report
     } anisotropy;
+    /// FitOptions::flat_calibration: the bendings rescaled so that the preset draped
+    /// from flat gives the record's D (the contour fit's optimum is the search's;
+    /// `params` and the bending estimates are the calibrated preset's).
+    struct FlatCalibration {
+        bool tried = false;         ///< the stage ran (drapes from flat available)
+        bool applied = false;       ///< the preset's bendings were rescaled
+        double scale = 1;           ///< factor on both bendings (1: not applied)
+        double error_before = 0;    ///< mean D from flat - measured D over the records, at the contour optimum [points]
+        double error_after = 0;     ///< the same at the calibrated preset (= before when not applied)
+        double tolerance = 0;       ///< the D channel's sigma: errors within it are left alone [points]
+        double bend_warp_fitted = 0, bend_weft_fitted = 0; ///< the contour optimum's bendings [N*m]
+        double chi2_increase = 0;   ///< linearised chi2 increase of the fitted terms for the scale (Jacobian at the optimum)
+        int steps = 0;              ///< calibration steps drawn (each: the drapes from flat again)
+        struct Step {
+            double scale = 1, error = 0, fold_error = 0; ///< the factor tried, its mean D error from flat [points], worst fold-count error
+        };
+        std::vector<Step> history;  ///< every step drawn, in order
+        std::string reason;         ///< one sentence for the report
+    } flat_calibration;
     FitOptions options;
 };
 

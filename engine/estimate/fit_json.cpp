@@ -75,6 +75,22 @@ json fit_to_json(const FitResult& r)
                              {"coarse_dof", r.refinement.coarse_dof}, {"fine_chi2", r.refinement.fine_chi2},
                              {"fine_dof", r.refinement.fine_dof}, {"reason", r.refinement.reason}};
     fit["bending"] = to_string(r.options.bending);
+    if (r.flat_calibration.tried) {
+        const auto& c = r.flat_calibration;
+        fit["flat_calibration"] = {{"applied", c.applied},
+                                   {"scale", c.scale},
+                                   {"error_before_percent", c.error_before},
+                                   {"error_after_percent", c.error_after},
+                                   {"tolerance_percent", c.tolerance},
+                                   {"bend_warp_fitted_Nm", c.bend_warp_fitted},
+                                   {"bend_weft_fitted_Nm", c.bend_weft_fitted},
+                                   {"chi2_increase_linearised", c.chi2_increase},
+                                   {"steps", c.steps},
+                                   {"reason", c.reason}};
+        json tried = json::array();
+        for (const auto& t : c.history) tried.push_back({{"scale", t.scale}, {"error_percent", t.error}, {"fold_error", t.fold_error}});
+        fit["flat_calibration"]["steps_tried"] = tried;
+    }
     if (r.anisotropy.assessed) {
         const auto& a = r.anisotropy;
         json an = {{"ratio_warp_weft", a.ratio},

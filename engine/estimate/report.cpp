@@ -401,6 +401,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
         md << "**Grid refinement**: " << r.refinement.reason
            << ". The evaluation and time counts above include both fits.\n\n";
     if (r.anisotropy.assessed && !r.anisotropy.reason.empty()) md << "**Warp/weft bending**: " << r.anisotropy.reason << ".\n\n";
+    if (r.flat_calibration.tried) md << "**The preset draped from flat**: " << r.flat_calibration.reason << ".\n\n";
     if (r.grid_bound)
         md << "**Grid-bound preset**: a fitted bending's bending length is below the mesh spacing of the fit's grid, so the "
               "coarse mesh does part of the bending's work and the preset holds at this mesh density only (`drape predict` keeps "
@@ -450,7 +451,10 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
            << (r.options.laying_load < 1 ? ", laid under " + num(r.options.laying_load, "%.2f") +
                                                " g first as the records' lab is assumed to lay them (`--laying`, written into the preset)"
                                          : std::string(", the whole load at once"))
-           << "), the preset gives"
+           << "), the preset"
+           << (r.flat_calibration.applied ? " (its bendings " + num(r.flat_calibration.scale, "%.3f") + " x the contours' optimum: calibrated from flat, above)"
+                                          : std::string())
+           << " gives"
            << (on_branch ? " (the fold count a random start picks can differ from the record's: a bifurcation, not a misfit)" : "")
            << ":\n\n"
            << "| record | D cold [%] | D error cold | nodes cold | node error cold |";

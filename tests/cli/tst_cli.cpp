@@ -85,6 +85,9 @@ private slots:
         QCOMPARE(branch.code, 2); // a usage error
         QVERIFY2(branch.err.contains("--branch") && branch.err.contains("'sideways'") && branch.err.contains("measured, random"),
                  qPrintable(branch.err));
+        const Run calib = drape({"fit", record, "--out", out, "--flat-calibration", "yes", "--quiet"});
+        QCOMPARE(calib.code, 2);
+        QVERIFY2(calib.err.contains("--flat-calibration") && calib.err.contains("'yes'") && calib.err.contains("on or off"), qPrintable(calib.err));
         const Run refine = drape({"fit", record, "--out", out, "--refine-grid", "21", "--quiet"});
         QVERIFY(refine.code != 0);
         QVERIFY2(refine.err.contains("--refine-grid 21") && refine.err.contains("--grid 41"), qPrintable(refine.err)); // the default grid

@@ -72,10 +72,11 @@ private slots:
             nhi = std::max(nhi, nodes);
         }
         qInfo("D spread over grids 41-81: %.2f points", hi - lo);
-        // Issue 14 is open on this line: the limp presets' laid drapes (8 folds)
-        // move by 1.2-1.5 points over grids 41-81 (this record 1.49, measured
-        // 2026-12-01). When the model meets it the test reports XPASS: drop this.
-        QEXPECT_FAIL("", "issue 14: D of a limp fitted preset moves by up to 1.5 points over grids 41-81", Continue);
+        // Met since the fit calibrates the preset from flat (eighteenth session:
+        // 31.97 / 31.82 / 31.00 %, spread 0.97 - a margin of 0.03 point; the
+        // contours' optimum itself spread 1.16, 34.00 / 33.63 / 32.84 %). The limp
+        // presets' spread is the rim bend under-resolved (docs/model-discrepancy.md
+        // section 24), so on another machine's rounding this may fail by a little.
         QVERIFY2(hi - lo <= 1.0, qPrintable(QString("D spread %1 points over grids 41-81").arg(hi - lo)));
         QVERIFY2(nhi - nlo <= 1, qPrintable(QString("node counts %1..%2 over grids 41-81").arg(nlo).arg(nhi)));
     }

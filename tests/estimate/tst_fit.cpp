@@ -194,6 +194,66 @@ private slots:
         QCOMPARE(j["fit"]["bending_anisotropy"]["separated"].get<bool>(), false);
     }
 
+    void flatCalibrationPutsTheDrapeFromFlatOnTheRecordsD()
+    {
+        // A record whose drapemeter D reads 5 points above what its own contours'
+        // fabric drapes to (the model's D and contours disagree, as on lab records):
+        // the contours' optimum, draped from flat, misses the record's D; the
+        // calibration scales both bendings up by one factor until the preset's
+        // drapes from flat (the report's cold_*, both grids) give the record's D,
+        // keeping the warp/weft ratio, and says what that costs the contours.
+        cloth::FabricParams p = truth();
+        p[Param::BendWarp] = p[Param::BendWeft] = 1.0e-5;
+        MeasuredDrape rec = synthetic(p, 0.30, 0.15, 25, 11);
+        rec.drape_coefficient_percent += 5.0;
+        FitOptions o;
+        o.grid = 25;
+        o.seed = 1;
+        o.flat_check_grid = 33;
+        o.bending = BendingTie::Free;
+        o.effects = false;
+        o.flat_calibration = true;
+        const FitResult r = fit_fabric({rec}, o);
+        QVERIFY(!r.cancelled);
+        const auto& c = r.flat_calibration;
+        const RecordFit& rf = r.records[0];
+        qInfo("from flat: %s; grid 25 %.2f %% (%.1f folds), grid 33 %.2f %% (%.0f folds), measured %.2f %% (%.0f folds)", c.reason.c_str(),
+              rf.cold_features.drape_coefficient_percent, rf.cold_features.node_count, rf.cold_fine_features.drape_coefficient_percent,
+              rf.cold_fine_features.node_count, rf.measured_features.drape_coefficient_percent, rf.measured_features.node_count);
+        QVERIFY(c.tried);
+        QVERIFY2(c.error_before < -c.tolerance, "the contours' optimum drapes below the raised D");
+        QVERIFY(c.applied);
+        QVERIFY(c.scale > 1.0 && c.scale <= 1.5 + 1e-12);
+        QVERIFY(std::abs(c.error_after) < std::abs(c.error_before));
+        QVERIFY(c.steps >= 1 && c.steps <= 3);
+        QVERIFY(std::isfinite(c.chi2_increase) && c.chi2_increase > 0);
+        // The preset is the contours' optimum times the scale, the ratio kept, and
+        // the bending estimates say so.
+        QVERIFY(std::abs(r.params[Param::BendWarp] / c.bend_warp_fitted - c.scale) < 1e-9 * c.scale);
+        QVERIFY(std::abs(r.params[Param::BendWeft] / c.bend_weft_fitted - c.scale) < 1e-9 * c.scale);
+        QCOMPARE(est(r, Param::BendWarp).value, r.params[Param::BendWarp]);
+        QVERIFY(est(r, Param::BendWarp).note.find("scaled by") != std::string::npos);
+        // The records' drapes from flat are the calibrated preset's: the finer grid's
+        // is the drape `drape simulate --grid 33` gives the preset (same seed, laying).
+        cloth::DrapeSetup fine = rec.setup(33, o.seed + 1000);
+        fine.laying_load = o.laying_load;
+        const cloth::DrapeResult direct = cloth::simulate_drape(r.params, fine, o.rest, o.model_options);
+        QVERIFY(std::abs(rf.cold_fine_features.drape_coefficient_percent - direct.metrics.drape_coefficient_percent) < 1e-9);
+        const double mean_flat = (rf.cold_seeds * rf.cold_features.drape_coefficient_percent + rf.cold_fine_features.drape_coefficient_percent) /
+                                 (rf.cold_seeds + 1);
+        QVERIFY(std::abs(mean_flat - rf.measured_features.drape_coefficient_percent - c.error_after) < 1e-9);
+        const auto j = fit_to_json(r);
+        QCOMPARE(j["fit"]["flat_calibration"]["applied"].get<bool>(), true);
+        QCOMPARE(j["fit"]["flat_calibration"]["scale"].get<double>(), c.scale);
+        // Off (the library's default): the preset is the contours' optimum.
+        o.flat_calibration = false;
+        const FitResult off = fit_fabric({rec}, o);
+        QVERIFY(!off.flat_calibration.tried);
+        QVERIFY(!fit_to_json(off)["fit"].contains("flat_calibration"));
+        QCOMPARE(off.params[Param::BendWarp], c.bend_warp_fitted);
+        QCOMPARE(off.params[Param::BendWeft], c.bend_weft_fitted);
+    }
+
     void untypicalUnseparatedAnisotropyIsTied()
     {
         // The same isotropic record as above with the typical factor set to 1: any

@@ -91,8 +91,8 @@ as not identifiable.
                       on (default): when the preset draped from flat (the report's "from flat"
                       drapes, both grids) lays the record's fold count within 1 but misses its D
                       by more than the D channel's sigma, both bendings are scaled by one factor
-                      (their ratio kept) until those drapes give the record's D (within half
-                      that sigma, at most two steps, each checked by drapes); the report shows
+                      (their ratio kept) until those drapes give the record's D (within that
+                      sigma, at most two steps, each checked by drapes); the report shows
                       the contours' optimum, the scale and the chi2 it costs. off: the preset is
                       the contours' optimum
   --bending T         warp and weft bending: auto (default; fitted apart, and fitted again as one

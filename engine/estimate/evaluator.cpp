@@ -154,6 +154,7 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
     const int R = static_cast<int>(m_recs.size());
     m_cold.resize(static_cast<std::size_t>(R));
     m_cold_seeds.resize(static_cast<std::size_t>(R), 0);
+    m_cold_nodes.resize(static_cast<std::size_t>(R));
     m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
     struct Job {
         int r;
@@ -194,6 +195,8 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
         std::vector<double> closed;
         m_cold[static_cast<std::size_t>(r)] = average_features(cold, &closed);
         m_cold_seeds[static_cast<std::size_t>(r)] = static_cast<int>(cold.size());
+        m_cold_nodes[static_cast<std::size_t>(r)].clear();
+        for (const auto& c : cold) m_cold_nodes[static_cast<std::size_t>(r)].push_back(c.node_count);
     }
 }
 
@@ -205,6 +208,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     std::vector<std::vector<double>> values; // [term][draw]
     m_cold.assign(static_cast<std::size_t>(R), {});
     m_cold_seeds.assign(static_cast<std::size_t>(R), 0);
+    m_cold_nodes.assign(static_cast<std::size_t>(R), {});
     m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
     // The drapes, all records' at once on the fit's threads (each is
     // independent): per record `extra` on the fit's branch.
@@ -242,6 +246,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
             std::vector<double> closed;
             m_cold[static_cast<std::size_t>(r)] = average_features(cold, &closed);
             m_cold_seeds[static_cast<std::size_t>(r)] = static_cast<int>(cold.size());
+            for (const auto& c : cold) m_cold_nodes[static_cast<std::size_t>(r)].push_back(c.node_count);
         }
         const std::size_t base = m_first_term[static_cast<std::size_t>(r)];
         for (const auto& d : draws) {

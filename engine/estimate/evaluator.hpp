@@ -123,6 +123,13 @@ public:
     long unconverged() const { return m_unconverged; }
     const std::vector<DrapeFeatures>& cold_features() const { return m_cold; }
     int cold_seeds(std::size_t r) const { return r < m_cold_seeds.size() ? m_cold_seeds[r] : 0; }
+    /// Record r's fold count of each drape behind cold_features (the mean hides a
+    /// pair 6 and 8 as 7); empty when none.
+    const std::vector<double>& cold_node_counts(std::size_t r) const
+    {
+        static const std::vector<double> none;
+        return r < m_cold_nodes.size() ? m_cold_nodes[r] : none;
+    }
     const FitOptions& options() const { return m_opt; }
     /// A drape from flat on FitOptions::flat_check_grid, measured.
     struct FineDrape {
@@ -151,6 +158,7 @@ private:
     Evaluation m_best, m_last;
     std::vector<DrapeFeatures> m_cold; ///< per record: mean features of the random-start drapes
     std::vector<int> m_cold_seeds;     ///< per record: drapes behind m_cold (0 = none)
+    std::vector<std::vector<double>> m_cold_nodes; ///< per record: each of those drapes' fold count
     std::vector<std::optional<FineDrape>> m_cold_fine; ///< per record: from flat on flat_check_grid
     Eigen::VectorXd m_last_x;
     Eigen::VectorXd m_best_x;

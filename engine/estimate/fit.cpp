@@ -260,17 +260,24 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
     }
 }
 
-/// A run's candidate-effect tests, kept for later: they cost a re-solve per
-/// switch effect and seed (10 drapes on one record), and a run that a refit
-/// replaces (the grid-bound coarse run, the free run before its tie) needs none.
 void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r);
 
-/// Record r's mean D from flat (the fit grid's seeds and the finer grid's drape,
-/// each drape one vote) and its largest fold-count error among them; false when
-/// the record has no drape from flat or no measured D.
+std::string fmt_chi2(double d)
+{
+    char b[64];
+    std::snprintf(b, sizeof b, "%+.1f (linearised)", d);
+    return b;
+}
+
+/// Record r's mean D error from flat (the fit grid's seeds and the finer grid's
+/// drape at rest, each drape one vote) and the largest fold-count error of any
+/// one of those drapes; false when the record has no drape from flat on its fold
+/// branch (a record fitted from the random mix keeps the spread stage's drapes of
+/// the optimum, which draw_from_flat does not redraw) or no measured D.
 bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double& d_error, double& fold_error)
 {
     const double dm = rf.measured_features.drape_coefficient_percent, nm = rf.measured_features.node_count;
+    if (ev.branch_of(static_cast<int>(r)) == 0 || !std::isfinite(dm)) return false;
     double sum = 0;
     int n = 0;
     fold_error = 0;
@@ -278,14 +285,18 @@ bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double&
         const int s = ev.cold_seeds(r);
         sum += s * ev.cold_features()[r].drape_coefficient_percent;
         n += s;
-        if (std::isfinite(nm)) fold_error = std::max(fold_error, std::abs(ev.cold_features()[r].node_count - nm));
+        if (std::isfinite(nm)) {
+            const auto& each = ev.cold_node_counts(r);
+            if (each.empty()) fold_error = std::max(fold_error, std::abs(ev.cold_features()[r].node_count - nm));
+            for (double k : each) fold_error = std::max(fold_error, std::abs(k - nm));
+        }
     }
     if (const Evaluator::FineDrape* f = ev.cold_fine(r); f && f->at_rest) {
         sum += f->features.drape_coefficient_percent;
         ++n;
         if (std::isfinite(nm)) fold_error = std::max(fold_error, std::abs(f->features.node_count - nm));
     }
-    if (n == 0 || !std::isfinite(dm) || !std::isfinite(sum)) return false;
+    if (n == 0 || !std::isfinite(sum)) return false;
     d_error = sum / n - dm;
     return true;
 }
@@ -294,7 +305,9 @@ bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double&
 /// the optimum x: both bendings scaled by one factor until the preset draped from
 /// flat gives the records' D (FitResult::FlatCalibration). The contour fit's
 /// optimum stays the search's result (residuals, chi2, intervals); the preset
-/// (`params`) and its bending estimates become the calibrated ones.
+/// (`params`), its bending estimates and the records' drapes from flat become the
+/// calibrated ones. Cancelled part-way: the optimum and its drapes are kept, the
+/// reason says so, and the cancellation goes on to the caller.
 void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x, const Eigen::MatrixXd& J_opt,
                          FitResult& kept)
 {
@@ -302,134 +315,168 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
     c = {};
     c.bend_warp_fitted = kept.params[Param::BendWarp];
     c.bend_weft_fitted = kept.params[Param::BendWeft];
-    // The records' mean error from flat, the worst fold-count error, and the summed
-    // sensitivity of D to +10 % of both bendings at the optimum (per record).
-    auto measure = [&](double& e, double& folds) {
+    c.chi2_increase = std::numeric_limits<double>::quiet_NaN();
+    const std::size_t R = kept.records.size();
+    // The records' mean error from flat (one scale moves them together: its best
+    // is the mean's zero), the worst fold-count error of any drape, and which
+    // records took part.
+    auto measure = [&](double& e, double& folds, std::vector<char>* used) {
         double sum = 0;
         int n = 0;
         folds = 0;
-        for (std::size_t r = 0; r < kept.records.size(); ++r) {
+        if (used) used->assign(R, 0);
+        for (std::size_t r = 0; r < R; ++r) {
             double de = 0, fe = 0;
             if (!flat_error(ev, kept.records[r], r, de, fe)) continue;
             sum += de;
             folds = std::max(folds, fe);
             ++n;
+            if (used) (*used)[r] = 1;
         }
         e = n ? sum / n : std::numeric_limits<double>::quiet_NaN();
-        return n > 0;
+        return n;
     };
     double e0 = 0, folds0 = 0;
-    if (!measure(e0, folds0)) {
-        c.reason = "no drape from flat with a measured D: not calibrated";
+    std::vector<char> used;
+    const int n_used = measure(e0, folds0, &used);
+    char buf[500];
+    if (n_used == 0) {
+        c.reason = "no drape from flat on a record's fold branch with a measured D: not calibrated";
         return;
     }
     c.tried = true;
     c.error_before = c.error_after = e0;
+    const std::string over = n_used > 1 ? " (mean over " + std::to_string(n_used) + " records)" : std::string();
     double sigma = 0;
     int nd = 0;
     for (const auto& t : kept.residuals)
         if (t.kind == "dc" && t.fitted && std::isfinite(t.sigma)) sigma += t.sigma, ++nd;
     c.tolerance = nd ? sigma / nd : 1.0;
-    char buf[400];
     if (folds0 > 1) {
         std::snprintf(buf, sizeof buf,
-                      "draped from flat the preset lays a fold count %.1f off the record's (D %+.1f points): the miss is the fold branch, "
+                      "draped from flat the preset lays a fold count %.0f off the record's (D %+.1f points%s): the miss is the fold branch, "
                       "which one bending scale does not mend without losing D; not calibrated",
-                      folds0, e0);
+                      folds0, e0, over.c_str());
         c.reason = buf;
         return;
     }
     if (std::abs(e0) <= c.tolerance) {
-        std::snprintf(buf, sizeof buf, "draped from flat the preset gives the record's D within the D channel's sigma (%+.1f against %.1f points): kept as fitted",
-                      e0, c.tolerance);
+        std::snprintf(buf, sizeof buf, "draped from flat the preset gives the record's D within the D channel's sigma (%+.1f against %.1f points%s): kept as fitted",
+                      e0, c.tolerance, over.c_str());
         c.reason = buf;
         return;
     }
-    // dD / d ln(scale) from the exact sensitivities at the optimum (first seed's rest state).
-    double slope = 0;
-    int ns = 0;
-    for (const auto& rf : kept.records) {
-        double s10 = 0;
-        bool have = false;
-        for (const auto& [q, d] : rf.d_drape_per_10_percent)
-            if (q == Param::BendWarp || q == Param::BendWeft) s10 += d, have = true;
-        if (have) slope += s10 / std::log(1.1), ++ns;
-    }
     std::vector<int> bend;
+    bool linear = false;
     for (int i = 0; i < static_cast<int>(vars.size()); ++i) {
         const auto& ps = vars[static_cast<std::size_t>(i)].params;
         if (std::find(ps.begin(), ps.end(), Param::BendWarp) != ps.end() || std::find(ps.begin(), ps.end(), Param::BendWeft) != ps.end()) {
-            if (!vars[static_cast<std::size_t>(i)].log_scale) bend.clear(), ns = 0;
             bend.push_back(i);
+            linear = linear || !vars[static_cast<std::size_t>(i)].log_scale;
         }
     }
-    if (ns == 0 || bend.empty() || !(slope / ns > 0)) {
-        std::snprintf(buf, sizeof buf, "draped from flat the preset misses the record's D by %+.1f points, but D's sensitivity to the bending at the optimum is "
-                      "not available or not positive: not calibrated", e0);
+    if (bend.empty() || linear) {
+        std::snprintf(buf, sizeof buf, "draped from flat the preset misses the record's D by %+.1f points%s, but the bendings are %s: not calibrated", e0,
+                      over.c_str(), bend.empty() ? "not fitted" : "not fitted on a log scale");
+        c.reason = buf;
+        return;
+    }
+    // dD / d ln(scale) from the exact sensitivities at the optimum (first seed's
+    // rest state), over the records measured above.
+    double slope = 0;
+    int ns = 0;
+    for (std::size_t r = 0; r < R; ++r) {
+        if (!used[r]) continue;
+        double s10 = 0;
+        bool have = false;
+        for (const auto& [q, d] : kept.records[r].d_drape_per_10_percent)
+            if (q == Param::BendWarp || q == Param::BendWeft) s10 += d, have = true;
+        if (have) slope += s10 / std::log(1.1), ++ns;
+    }
+    if (ns == 0 || !(slope / ns > 0)) {
+        std::snprintf(buf, sizeof buf, "draped from flat the preset misses the record's D by %+.1f points%s, but D's sensitivity to the bending at the optimum is "
+                      "not available or not positive: not calibrated", e0, over.c_str());
         c.reason = buf;
         return;
     }
     slope /= ns;
-    const double max_step = std::log(1.5);
-    double ln_s = std::clamp(-e0 / slope, -max_step, max_step);
-    double best_ln = 0, best_e = e0;
-    // Which drapes from flat are closest to the record: D in the D channel's sigmas,
-    // the fold count in the node channel's (0.75, NoiseModel), squared and summed.
+    // Which drapes are closest to the record: D in the D channel's sigmas, the fold
+    // count in the node channel's (0.75, NoiseModel), squared and summed.
     const double node_sigma = ev.options().noise.nodes > 0 ? ev.options().noise.nodes : 0.75;
     auto score = [&](double e, double folds) { return (e / c.tolerance) * (e / c.tolerance) + (folds / node_sigma) * (folds / node_sigma); };
-    double best_score = score(e0, folds0);
+    const double ratio0 = c.bend_warp_fitted / c.bend_weft_fitted;
+    const double max_step = std::log(1.5);
+    double ln_s = std::clamp(-e0 / slope, -max_step, max_step);
+    double best_score = score(e0, folds0), best_e = e0, best_scale = 1;
     double prev_ln = 0, prev_e = e0;
     Eigen::VectorXd best_x = x;
-    for (int step = 0; step < 2; ++step) {
-        Eigen::VectorXd xs = x;
-        for (int i : bend) {
-            const FitVariable& v = vars[static_cast<std::size_t>(i)];
-            xs[i] = std::clamp(x[i] + ln_s / std::log(10.0), v.lower, v.upper);
+    std::vector<RecordFit> best_records; // the kept step's drapes from flat (empty: the optimum's)
+    try {
+        for (int step = 0; step < 2; ++step) {
+            Eigen::VectorXd xs = x;
+            for (int i : bend) {
+                const FitVariable& v = vars[static_cast<std::size_t>(i)];
+                xs[i] = std::clamp(x[i] + ln_s / std::log(10.0), v.lower, v.upper);
+            }
+            // The factor the preset gets (bounds may clip it); a step that the bounds
+            // would bend out of the fitted warp/weft ratio is not drawn.
+            const cloth::FabricParams ps = ev.params_at(xs);
+            const double scale = ps[Param::BendWarp] / c.bend_warp_fitted;
+            if (std::abs(ps[Param::BendWarp] / ps[Param::BendWeft] / ratio0 - 1) > 1e-9 || std::abs(std::log(scale)) < 1e-6) break;
+            ev.draw_from_flat(xs);
+            ev.report("from flat, calibrated");
+            ++c.steps;
+            double e = 0, folds = 0;
+            if (measure(e, folds, nullptr) != n_used) break;
+            c.history.push_back({scale, e, folds});
+            // Kept when its drapes are closer to the record, the fold count within 1.
+            if (folds <= 1 && score(e, folds) < best_score) {
+                best_score = score(e, folds);
+                best_e = e;
+                best_scale = scale;
+                best_x = xs;
+                best_records = kept.records;
+                for (std::size_t r = 0; r < R; ++r) set_from_flat(best_records[r], ev, r);
+            }
+            // Done within the D channel's sigma: D from flat scatters with the fold
+            // pattern (one preset's drapes from flat differ by 2-3 points between seeds),
+            // so aiming closer draws again on noise (DL-A04: a secant step from +1.0
+            // landed at -1.5 with half a fold off).
+            if (std::abs(e) <= c.tolerance || folds > 1) break;
+            // Secant through the last two points (the sensitivity at the optimum is
+            // the fitted branch's; the drapes from flat may rest on another).
+            const double ln_now = std::log(scale);
+            const double sec = (e - prev_e) / (ln_now - prev_ln);
+            if (!(sec > 0)) break;
+            prev_ln = ln_now;
+            prev_e = e;
+            ln_s = std::clamp(ln_now - e / sec, -max_step, max_step);
         }
-        ev.draw_from_flat(xs);
-        ev.report("from flat, calibrated");
-        ++c.steps;
-        double e = 0, folds = 0;
-        if (!measure(e, folds)) break;
-        c.history.push_back({std::exp(ln_s), e, folds});
-        if (folds <= 1 && score(e, folds) < best_score) {
-            best_score = score(e, folds);
-            best_ln = ln_s;
-            best_e = e;
-            best_x = xs;
-            // The records' drapes from flat become this preset's (a later step
-            // that is not kept leaves them).
-            for (std::size_t r = 0; r < kept.records.size(); ++r) set_from_flat(kept.records[r], ev, r);
-        }
-        // Done when within the D channel's sigma: D from flat scatters with the fold
-        // pattern (the drapes from flat of one preset differ by up to 2-3 points between
-        // seeds), so aiming closer draws again on noise (DL-A04: a secant step from +1.0
-        // landed at -1.5 with half a fold off).
-        if (std::abs(e) <= c.tolerance || folds > 1) break;
-        // Secant through the last two points (the sensitivity at the optimum is
-        // the fitted branch's; the drapes from flat may rest on another).
-        const double sec = (e - prev_e) / (ln_s - prev_ln);
-        if (!(sec > 0)) break;
-        prev_ln = ln_s;
-        prev_e = e;
-        ln_s = std::clamp(ln_s - e / sec, -max_step, max_step);
+    } catch (const CancelledFit&) {
+        std::snprintf(buf, sizeof buf, "draped from flat the preset missed the record's D by %+.1f points%s; the calibration was cancelled: kept as fitted", e0,
+                      over.c_str());
+        c.reason = buf;
+        throw;
     }
-    if (best_ln == 0) { // the records keep the optimum's drapes from flat
+    if (best_records.empty()) {
         std::snprintf(buf, sizeof buf,
-                      "draped from flat the preset misses the record's D by %+.1f points (sigma %.1f); no bending scale tried brought it closer "
-                      "with the record's fold count within 1: kept as fitted", e0, c.tolerance);
+                      "draped from flat the preset misses the record's D by %+.1f points%s (sigma %.1f); no bending scale tried brought its drapes "
+                      "closer with the fold count within 1: kept as fitted",
+                      e0, over.c_str(), c.tolerance);
         c.reason = buf;
         return;
     }
     c.applied = true;
-    c.scale = std::exp(best_ln);
+    c.scale = best_scale;
     c.error_after = best_e;
     {
         const cloth::FabricParams pb = ev.params_at(best_x);
         kept.params[Param::BendWarp] = pb[Param::BendWarp];
         kept.params[Param::BendWeft] = pb[Param::BendWeft];
     }
-    // Linearised cost on the fitted terms (whitened Jacobian at the optimum).
+    kept.records = std::move(best_records);
+    // Linearised cost on the fitted terms (whitened Jacobian at the optimum; not
+    // taken without the uncertainty stage or with the derivative-free method).
     if (J_opt.rows() == static_cast<Eigen::Index>(kept.residuals.size()) && J_opt.cols() == best_x.size()) {
         Eigen::VectorXd dr = J_opt * (best_x - x);
         double d2 = 0;
@@ -445,17 +492,23 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             const double fitted = e.value;
             e.value = kept.params[e.id];
             const bool inside = e.value >= e.lower95 && e.value <= e.upper95;
-            std::snprintf(buf, sizeof buf, "the contours' optimum %.3g scaled by %.3f so the preset draped from flat gives the record's D (%s its 95 %% interval)",
+            std::snprintf(buf, sizeof buf,
+                          "the contours' optimum %.3g scaled by %.3f so the preset draped from flat gives the record's D (%s its 95 %% interval; "
+                          "the notes before are the optimum's)",
                           fitted, c.scale, inside ? "inside" : "outside");
             e.note = e.note.empty() ? buf : e.note + "; " + buf;
         }
+    const std::string cost = std::isfinite(c.chi2_increase) ? fmt_chi2(c.chi2_increase) : std::string("not computed (no Jacobian at the optimum)");
     std::snprintf(buf, sizeof buf,
-                  "draped from flat the contours' optimum missed the record's D by %+.1f points (sigma %.1f); both bendings scaled by %.3f "
-                  "(ratio kept): %+.1f points from flat, the fitted terms' chi2 %+.1f (linearised)",
-                  e0, c.tolerance, c.scale, best_e, c.chi2_increase);
+                  "draped from flat the contours' optimum missed the record's D by %+.1f points%s (sigma %.1f); both bendings scaled by %.3f "
+                  "(ratio kept): %+.1f points from flat; the fitted terms' chi2 %s",
+                  e0, over.c_str(), c.tolerance, c.scale, best_e, cost.c_str());
     c.reason = buf;
 }
 
+/// A run's candidate-effect tests, kept for later: they cost a re-solve per
+/// switch effect and seed (10 drapes on one record), and a run that a refit
+/// replaces (the grid-bound coarse run, the free run before its tie) needs none.
 /// Applied to the result kept from that run (FitResult as combine_runs made it):
 /// adds the tests' verdicts and their work and trace. Empty: nothing to run.
 /// `options`: the caller's (its progress callback; the counts continue the kept

@@ -156,9 +156,9 @@ struct FitOptions {
     /// bendings are scaled by one factor (their ratio kept) so that those drapes give
     /// the record's D: one step on the exact sensitivity of D at the optimum, a
     /// secant step if the first did not get within the sigma, each verified by the
-    /// same drapes from flat and kept only if it brought D closer without losing
-    /// the fold count; the steps stop within half that sigma (about the standard
-    /// error of three drapes' mean). Off in the library (the synthetic tests' truth needs no
+    /// same drapes from flat and kept only if those drapes are closer to the record
+    /// ((D error / its sigma)^2 + (fold error / 0.75)^2) with the fold count within 1.
+    /// Records fitted from the random mix (no fold branch) are left out. Off in the library (the synthetic tests' truth needs no
     /// calibration); `drape fit` turns it on unless --flat-calibration off.
     bool flat_calibration = false;
     NoiseModel noise;
@@ -309,7 +309,7 @@ struct FitResult {
         double error_after = 0;     ///< the same at the calibrated preset (= before when not applied)
         double tolerance = 0;       ///< the D channel's sigma: errors within it are left alone [points]
         double bend_warp_fitted = 0, bend_weft_fitted = 0; ///< the contour optimum's bendings [N*m]
-        double chi2_increase = 0;   ///< linearised chi2 increase of the fitted terms for the scale (Jacobian at the optimum)
+        double chi2_increase = 0;   ///< linearised chi2 increase of the fitted terms for the scale (Jacobian at the optimum; NaN: not taken)
         int steps = 0;              ///< calibration steps drawn (each: the drapes from flat again)
         struct Step {
             double scale = 1, error = 0, fold_error = 0; ///< the factor tried, its mean D error from flat [points], worst fold-count error

@@ -84,7 +84,7 @@ json fit_to_json(const FitResult& r)
                                    {"tolerance_percent", c.tolerance},
                                    {"bend_warp_fitted_Nm", c.bend_warp_fitted},
                                    {"bend_weft_fitted_Nm", c.bend_weft_fitted},
-                                   {"chi2_increase_linearised", c.chi2_increase},
+                                   {"chi2_increase_linearised", std::isfinite(c.chi2_increase) ? json(c.chi2_increase) : json(nullptr)},
                                    {"steps", c.steps},
                                    {"reason", c.reason}};
         json tried = json::array();

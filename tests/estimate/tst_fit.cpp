@@ -76,6 +76,9 @@ private slots:
               rf.cold_features.node_count, rf.cold_fine_features.drape_coefficient_percent, rf.cold_fine_features.node_count,
               direct.metrics.drape_coefficient_percent);
         QVERIFY(std::abs(rf.cold_fine_features.drape_coefficient_percent - direct.metrics.drape_coefficient_percent) < 1e-9);
+        QVERIFY(rf.cold_fine_converged); // so it is one of the drapes the calibration averaged
+        // Every drape from flat within one fold of the record (the stage's condition).
+        QVERIFY(std::abs(rf.cold_fine_features.node_count - rf.measured_features.node_count) <= 1);
         QVERIFY(direct.status.converged());
         QCOMPARE(rf.cold_fine_converged, direct.status.converged());
         QCOMPARE(rf.cold_fine_features.node_count, static_cast<double>(direct.metrics.node_count));
@@ -225,8 +228,9 @@ private slots:
         QVERIFY(c.applied);
         QVERIFY(c.scale > 1.0 && c.scale <= 1.5 + 1e-12);
         QVERIFY(std::abs(c.error_after) < std::abs(c.error_before));
-        QVERIFY(c.steps >= 1 && c.steps <= 3);
-        QVERIFY(std::isfinite(c.chi2_increase) && c.chi2_increase > 0);
+        QVERIFY(c.steps >= 1 && c.steps <= 2);
+        QCOMPARE(c.history.size(), static_cast<std::size_t>(c.steps));
+        QVERIFY(std::isfinite(c.chi2_increase)); // linearised at an optimum that is not exact: no sign asserted
         // The preset is the contours' optimum times the scale, the ratio kept, and
         // the bending estimates say so.
         QVERIFY(std::abs(r.params[Param::BendWarp] / c.bend_warp_fitted - c.scale) < 1e-9 * c.scale);
@@ -245,6 +249,17 @@ private slots:
         const auto j = fit_to_json(r);
         QCOMPARE(j["fit"]["flat_calibration"]["applied"].get<bool>(), true);
         QCOMPARE(j["fit"]["flat_calibration"]["scale"].get<double>(), c.scale);
+        // A fit from the random mix has no fold branch to hold the drapes from flat
+        // to: the stage is not tried (its grid-41 drapes are the spread stage's, of
+        // the optimum, and would not follow a scale).
+        {
+            FitOptions rnd = o;
+            rnd.branch = FoldBranch::Random;
+            const FitResult rr = fit_fabric({rec}, rnd);
+            QVERIFY(!rr.flat_calibration.tried && !rr.flat_calibration.applied);
+            QVERIFY(rr.flat_calibration.reason.find("fold branch") != std::string::npos);
+            QCOMPARE(rr.params[Param::BendWarp], est(rr, Param::BendWarp).value);
+        }
         // Off (the library's default): the preset is the contours' optimum.
         o.flat_calibration = false;
         const FitResult off = fit_fabric({rec}, o);

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -31,7 +32,9 @@ preset against records it was not fitted to, or to see what a model change does.
 
   --fabric F            a drapekit-fabric preset: file, library name or starter (silk, cotton, ...)
   --set KEY=VALUE       override one parameter (a key of the parameter table; repeatable)
-  --grid N              nodes across a 300 mm specimen (default 25, scaled with the diameter)
+  --grid N              nodes across a 300 mm specimen, scaled with the diameter (default: the grid
+                        the preset was fitted at, provenance.grid, as drape fit compared it; else 25)
+  --mesh M              grid | rings (default: the fit's, provenance.mesh, else grid)
   --seeds S             perturbation seeds averaged (default 2)
   --seed K              first perturbation seed (default 1)
   --branch B            where the drapes start: random (default; the seeded mix of modes, as
@@ -51,14 +54,22 @@ model (the fit's before its drape-to-drape calibration, so chi2 differs from a f
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed | kLaying) + std::set<std::string>{"--seeds", "--branch"},
+    Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed | kLaying | kMesh) + std::set<std::string>{"--seeds", "--branch"},
            setup_switches(kDiscGrip) + std::set<std::string>{"--json", "--quiet", "--vertex-contact-only"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const fabric::FabricPreset preset = load_fabric_flags(a);
     if (preset.is_seed())
         throw UsageError("--fabric: " + *a.get("--fabric") + " is a seed-19 preset; compare needs a drapekit-fabric preset");
     const cloth::FabricParams* base = &preset.params;
-    const int grid300 = a.get_int("--grid", 25, 9, 200);
+    // The fit's mesh density at 300 mm (provenance.grid is the fit's, at its own
+    // first record's diameter) and its mesh: the preset is compared as it was fitted.
+    int fit_grid300 = 25;
+    if (preset.provenance && preset.provenance->grid > 0) {
+        const double fit_D1 = preset.fit && preset.fit->sample_diameter_m > 0 ? preset.fit->sample_diameter_m : 0.30;
+        fit_grid300 = std::clamp(static_cast<int>(std::lround(preset.provenance->grid * 0.30 / fit_D1)), 9, 200);
+    }
+    const int grid300 = a.get_int("--grid", fit_grid300, 9, 200);
+    const cloth::DrapeMesh mesh = preset_mesh(a, preset);
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     const double laying = parse_laying(a, preset.laying());
@@ -87,6 +98,7 @@ int run(const std::vector<std::string>& argv)
         const int folds = branch == estimate::FoldBranch::Measured ? estimate::measured_fold_branch(meas.node_count) : 0;
         for (int s = 0; s < seeds; ++s) {
             cloth::DrapeSetup setup = m.setup(grid, seed0 + static_cast<std::uint64_t>(s));
+            setup.mesh = mesh;
             if (folds > 0) setup = cloth::on_fold_branch(setup, folds);
             else setup.laying_load = laying; // laid as the lab lays it
             setup.disc_grip = a.has("--disc-grip");
@@ -117,6 +129,7 @@ int run(const std::vector<std::string>& argv)
         }
         nlohmann::json rec = {{"record", m.id},
                               {"grid", grid},
+                              {"mesh", cloth::to_string(mesh)},
                               {"seeds", seeds},
                               {"fold_branch", folds > 0 ? nlohmann::json(folds) : nlohmann::json(nullptr)},
                               {"chi2", chi2},

@@ -76,16 +76,7 @@ int run(const std::vector<std::string>& argv)
         defaults.grid = std::clamp(defaults.grid, kMinDefaultGrid, kMaxDefaultGrid);
     }
     // The fit's mesh too (provenance.mesh since 2026-12-01; grid before), unless --mesh says.
-    if (!a.has("--mesh") && preset.provenance && preset.provenance->details.contains("mesh")) {
-        const auto& m = preset.provenance->details["mesh"];
-        const std::string where = a.get("--fabric").value_or("the preset") + ": provenance.";
-        if (!m.is_string()) throw ParameterError(where + "mesh must be \"grid\" or \"rings\", not " + m.dump());
-        try {
-            defaults.mesh = cloth::drape_mesh_from_string(m.get<std::string>());
-        } catch (const Error& e) {
-            throw ParameterError(where + e.what());
-        }
-    }
+    defaults.mesh = preset_mesh(a, preset);
     const cloth::DrapeSetup setup = parse_setup(a, defaults);
     cloth::single_threaded_blas();
     cloth::RestOptions ro;

@@ -60,6 +60,19 @@ cloth::DrapeMesh parse_mesh(const Args& a, cloth::DrapeMesh fallback)
     }
 }
 
+cloth::DrapeMesh preset_mesh(const Args& a, const fabric::FabricPreset& preset)
+{
+    if (a.has("--mesh") || !preset.provenance || !preset.provenance->details.contains("mesh")) return parse_mesh(a, cloth::DrapeMesh::Grid);
+    const auto& m = preset.provenance->details["mesh"];
+    const std::string where = a.get("--fabric").value_or("the preset") + ": provenance.";
+    if (!m.is_string()) throw ParameterError(where + "mesh must be \"grid\" or \"rings\", not " + m.dump());
+    try {
+        return cloth::drape_mesh_from_string(m.get<std::string>());
+    } catch (const Error& e) {
+        throw ParameterError(where + e.what());
+    }
+}
+
 cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
 {
     s.sample_diameter = a.get_length("--sample-diameter", s.sample_diameter);

@@ -36,6 +36,11 @@ double parse_laying(const Args& a, double fallback);
 /// `fallback` when absent.
 cloth::DrapeMesh parse_mesh(const Args& a, cloth::DrapeMesh fallback);
 
+/// The mesh a fitted preset is draped on: `--mesh` when given, else the fit's
+/// (provenance.mesh, "grid" or "rings"; a preset without it: the grid).
+/// ParameterError naming the preset and field on a bad value.
+cloth::DrapeMesh preset_mesh(const Args& a, const fabric::FabricPreset& preset);
+
 /// The value flags and switches of `which`, to merge into a command's Args.
 std::set<std::string> setup_value_flags(unsigned which);
 std::set<std::string> setup_switches(unsigned which);

@@ -399,6 +399,50 @@ private slots:
         QVERIFY(std::isfinite(rec["chi2"].toDouble()));
     }
 
+    /// compare drapes a fitted preset on the fit's mesh (provenance.mesh) and at
+    /// the fit's grid (provenance.grid) unless --mesh / --grid say otherwise; a bad
+    /// provenance.mesh is refused naming the file and field.
+    void compareFollowsTheFitsMesh()
+    {
+        QTemporaryDir tmp;
+        QFile src(DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json");
+        QVERIFY(src.open(QIODevice::ReadOnly));
+        QJsonObject root = QJsonDocument::fromJson(src.readAll()).object();
+        const int fit_grid = root["provenance"].toObject()["grid"].toInt();
+        QVERIFY(fit_grid > 0);
+        auto write = [&](const QString& name, const QJsonValue& mesh) {
+            QJsonObject r = root, prov = r["provenance"].toObject();
+            prov["mesh"] = mesh;
+            r["provenance"] = prov;
+            QFile f(tmp.filePath(name));
+            if (!f.open(QIODevice::WriteOnly)) return QString();
+            f.write(QJsonDocument(r).toJson());
+            return f.fileName();
+        };
+        const QString rings = write("rings.json", "rings"), bad = write("bad.json", "hexagons");
+        QVERIFY(!rings.isEmpty() && !bad.isEmpty());
+        const QStringList rec{"compare", DRAPE_SOURCE_DIR "/examples/DL-A04", "--seeds", "1", "--json", "--fabric"};
+        Out o = run(rec + QStringList{rings, "--grid", "17"});
+        QVERIFY2(o.code == 0 || o.code == 4, qPrintable(o.err));
+        QJsonObject r = QJsonDocument::fromJson(o.out.toUtf8()).array().at(0).toObject();
+        QCOMPARE(r["mesh"].toString(), QString("rings"));
+        QCOMPARE(r["grid"].toInt(), 17);
+        o = run(rec + QStringList{rings, "--grid", "17", "--mesh", "grid"});
+        QVERIFY2(o.code == 0 || o.code == 4, qPrintable(o.err));
+        r = QJsonDocument::fromJson(o.out.toUtf8()).array().at(0).toObject();
+        QCOMPARE(r["mesh"].toString(), QString("grid"));
+        o = run(rec + QStringList{bad, "--grid", "17"});
+        QCOMPARE(o.code, 1);
+        QVERIFY2(o.err.contains("bad.json") && o.err.contains("provenance.mesh") && o.err.contains("hexagons"), qPrintable(o.err));
+        // Without --grid: the fit's grid (the record is 300 mm like the fit's).
+        o = run({"compare", DRAPE_SOURCE_DIR "/examples/DL-A04", "--seeds", "1", "--json", "--fabric", DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json",
+                 "--branch", "measured"});
+        QVERIFY2(o.code == 0 || o.code == 4, qPrintable(o.err));
+        r = QJsonDocument::fromJson(o.out.toUtf8()).array().at(0).toObject();
+        QCOMPARE(r["grid"].toInt(), fit_grid % 2 ? fit_grid : fit_grid + 1);
+        QCOMPARE(r["mesh"].toString(), QString("grid"));
+    }
+
     /// `drape fit` fits with the crest-corrected bending stencils by default and
     /// the preset says so; --plain-bending fits and writes the plain ones
     /// (docs/model-discrepancy.md section 19). A coarse, short fit: only the flag.

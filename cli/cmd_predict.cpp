@@ -88,7 +88,7 @@ int run(const std::vector<std::string>& argv)
     if (!check_drape_result(r, setup)) return 4;
     if (json) {
         nlohmann::json j = cloth::drape_summary_json(r, setup, ro.integrator);
-        j["bending_correction"] = preset.model.bending_correction; // as simulate's summary
+        j["bending_correction"] = preset.model.bending_correction && setup.mesh == cloth::DrapeMesh::Grid; // as simulate's summary
         j["arc_membrane"] = preset.model.arc_membrane;
         std::cout << dump_json(j) << "\n";
     } else {

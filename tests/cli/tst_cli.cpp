@@ -183,6 +183,9 @@ private slots:
         const QJsonObject g = QJsonDocument::fromJson(grid.out.toUtf8()).object(), r = QJsonDocument::fromJson(rings.out.toUtf8()).object();
         QCOMPARE(g["mesh"].toString(), QString("grid"));
         QCOMPARE(r["mesh"].toString(), QString("rings"));
+        // The starter's crest-corrected grid stencils: applied on the grid, not on the rings.
+        QCOMPARE(g["bending_correction"].toBool(), true);
+        QCOMPARE(r["bending_correction"].toBool(), false);
         QVERIFY2(r["vertices"].toInt() > g["vertices"].toInt(), "the rings are refined at the rim: more vertices at the same grid");
         QVERIFY(r["drape_coefficient_percent"].toDouble() > 40 && r["drape_coefficient_percent"].toDouble() < 95);
         Out bad = run(base + QStringList{"--mesh", "hex"});

@@ -102,6 +102,14 @@ std::string Args::get_or(const std::string& flag, const std::string& fallback) c
     return get(flag).value_or(fallback);
 }
 
+bool Args::get_on_off(const std::string& flag, bool fallback) const
+{
+    const auto v = get(flag);
+    if (!v) return fallback;
+    if (*v != "on" && *v != "off") throw UsageError(flag + ": '" + *v + "' must be on or off");
+    return *v == "on";
+}
+
 int Args::get_int(const std::string& flag, int fallback, int min, int max) const
 {
     auto s = get(flag);

@@ -63,12 +63,8 @@ int run(const std::vector<std::string>& argv)
     const cloth::FabricParams* base = &preset.params;
     // The fit's mesh density at 300 mm (provenance.grid is the fit's, at its own
     // first record's diameter) and its mesh: the preset is compared as it was fitted.
-    int fit_grid300 = 25;
-    if (preset.provenance && preset.provenance->grid > 0) {
-        const double fit_D1 = preset.fit && preset.fit->sample_diameter_m > 0 ? preset.fit->sample_diameter_m : 0.30;
-        fit_grid300 = std::clamp(static_cast<int>(std::lround(preset.provenance->grid * 0.30 / fit_D1)), 9, 200);
-    }
-    const int grid300 = a.get_int("--grid", fit_grid300, 9, 200);
+    const auto fit_grid300 = preset_fit_grid(preset, 0.30);
+    const int grid300 = a.get_int("--grid", fit_grid300 ? std::clamp(*fit_grid300, 9, 200) : 25, 9, 200);
     const cloth::DrapeMesh mesh = preset_mesh(a, preset);
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));

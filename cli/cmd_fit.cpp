@@ -179,11 +179,7 @@ int run(const std::vector<std::string>& argv)
     if (fo.refine_grid != 0 && fo.refine_grid <= fo.grid)
         throw UsageError("--refine-grid " + std::to_string(fo.refine_grid) + " must be above --grid " + std::to_string(fo.grid) + " (or 0)");
     fo.flat_check_grid = a.get_int("--flat-grid", 61, 0, 200);
-    {
-        const std::string fc = a.get_or("--flat-calibration", "on");
-        if (fc != "on" && fc != "off") throw UsageError("--flat-calibration '" + fc + "' must be on or off");
-        fo.flat_calibration = fc == "on";
-    }
+    fo.flat_calibration = a.get_on_off("--flat-calibration", true);
     fo.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     fo.seeds_per_evaluation = a.get_int("--seeds", 2, 1, 16);
     fo.laying_load = parse_laying(a, cloth::kLabLaying);

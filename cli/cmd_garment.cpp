@@ -62,9 +62,7 @@ int run(const std::vector<std::string>& argv)
     } catch (const Error& e) {
         throw UsageError(e.what());
     }
-    const std::string self_collision = a.get_or("--self-collision", "on");
-    if (self_collision != "on" && self_collision != "off")
-        throw UsageError("--self-collision: '" + self_collision + "' must be on or off");
+    const bool self_collision = a.get_on_off("--self-collision", true);
     fabric::FabricPreset preset = load_fabric_flags(a, "cotton");
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     cloth::single_threaded_blas();
@@ -83,7 +81,7 @@ int run(const std::vector<std::string>& argv)
         scene = importers::make_garment_scene(mannequin, garment, preset);
     }
     cloth::ClothSystem& sys = *scene.system;
-    if (self_collision == "off") sys.model().self_contact_distance = 0;
+    if (!self_collision) sys.model().self_contact_distance = 0;
     cloth::RestOptions ro = importers::garment_rest_options();
     ro.trace = a.has("--trace");
     const bool tty = ::isatty(STDERR_FILENO);

@@ -67,10 +67,8 @@ int run(const std::vector<std::string>& argv)
     // Same mesh density as the fit (the fit's bias is then the same): the fit's
     // grid scaled with the diameter.
     defaults.grid = 31;
-    if (preset.provenance && preset.provenance->grid > 0) {
-        const double fit_D1 = preset.fit && preset.fit->sample_diameter_m > 0 ? preset.fit->sample_diameter_m : 0.30;
-        defaults.grid = static_cast<int>(std::lround(preset.provenance->grid * defaults.sample_diameter / fit_D1));
-        if (defaults.grid % 2 == 0) ++defaults.grid;
+    if (const auto g = preset_fit_grid(preset, defaults.sample_diameter)) {
+        defaults.grid = *g % 2 == 0 ? *g + 1 : *g;
         // A default, not the user's --grid: kept inside what --grid takes
         // rather than failing on a flag that was never given.
         defaults.grid = std::clamp(defaults.grid, kMinDefaultGrid, kMaxDefaultGrid);

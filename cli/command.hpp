@@ -25,6 +25,8 @@ public:
     std::optional<std::string> get(const std::string& flag) const; ///< the last value given
     std::vector<std::string> get_all(const std::string& flag) const; ///< every value of a repeatable flag, in order
     std::string get_or(const std::string& flag, const std::string& fallback) const;
+    /// "on" or "off" (UsageError naming the flag and value otherwise), `fallback` when absent.
+    bool get_on_off(const std::string& flag, bool fallback) const;
     /// Integer / double values with a clear error naming the flag and value.
     int get_int(const std::string& flag, int fallback, int min, int max) const;
     double get_double(const std::string& flag, double fallback) const;

@@ -7,6 +7,8 @@
 #include "engine/library/resolve.hpp"
 #endif
 
+#include <cmath>
+
 namespace drape::cli {
 
 namespace {
@@ -71,6 +73,13 @@ cloth::DrapeMesh preset_mesh(const Args& a, const fabric::FabricPreset& preset)
     } catch (const Error& e) {
         throw ParameterError(where + e.what());
     }
+}
+
+std::optional<int> preset_fit_grid(const fabric::FabricPreset& preset, double sample_diameter)
+{
+    if (!preset.provenance || preset.provenance->grid <= 0) return std::nullopt;
+    const double fit_D1 = preset.fit && preset.fit->sample_diameter_m > 0 ? preset.fit->sample_diameter_m : 0.30;
+    return static_cast<int>(std::lround(preset.provenance->grid * sample_diameter / fit_D1));
 }
 
 cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)

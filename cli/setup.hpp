@@ -7,6 +7,7 @@
 #include "engine/cloth/drape.hpp"
 #include "engine/fabric/preset.hpp"
 
+#include <optional>
 #include <set>
 #include <string>
 
@@ -40,6 +41,11 @@ cloth::DrapeMesh parse_mesh(const Args& a, cloth::DrapeMesh fallback);
 /// (provenance.mesh, "grid" or "rings"; a preset without it: the grid).
 /// ParameterError naming the preset and field on a bad value.
 cloth::DrapeMesh preset_mesh(const Args& a, const fabric::FabricPreset& preset);
+
+/// The grid a fitted preset was fitted at, scaled to a specimen of `sample_diameter`
+/// [m] (provenance.grid at the fit's first record's diameter, fit.sample_diameter_m,
+/// else 300 mm): the same mesh density. None when the preset has no fit grid.
+std::optional<int> preset_fit_grid(const fabric::FabricPreset& preset, double sample_diameter);
 
 /// The value flags and switches of `which`, to merge into a command's Args.
 std::set<std::string> setup_value_flags(unsigned which);

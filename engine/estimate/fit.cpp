@@ -285,11 +285,8 @@ bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double&
         const int s = ev.cold_seeds(r);
         sum += s * ev.cold_features()[r].drape_coefficient_percent;
         n += s;
-        if (std::isfinite(nm)) {
-            const auto& each = ev.cold_node_counts(r);
-            if (each.empty()) fold_error = std::max(fold_error, std::abs(ev.cold_features()[r].node_count - nm));
-            for (double k : each) fold_error = std::max(fold_error, std::abs(k - nm));
-        }
+        if (std::isfinite(nm))
+            for (double k : ev.cold_node_counts(r)) fold_error = std::max(fold_error, std::abs(k - nm));
     }
     if (const Evaluator::FineDrape* f = ev.cold_fine(r); f && f->at_rest) {
         sum += f->features.drape_coefficient_percent;

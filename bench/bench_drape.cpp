@@ -144,6 +144,7 @@ int starters_table(const std::vector<int>& grids, bool plain, double laying, Dra
             setup.grid = g;
             setup.mesh = mesh;
             setup.laying_load = laying > 0 ? laying : p.laying(); // `drape simulate`'s default
+            setup.perturbation = p.perturbation(setup.perturbation);
             const Row r = in_child([&] { // `drape simulate`'s budget: 1,000 Newton iterations per level
                 return to_row(simulate_drape(p.material(), setup, {}, p.model), 0);
             });

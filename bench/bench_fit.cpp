@@ -43,10 +43,8 @@ int main(int argc, char** argv)
     int grid = 41, cores = 2;
     bool trace = false;
     std::vector<estimate::FitMethod> methods{estimate::FitMethod::Sensitivity, estimate::FitMethod::Nlopt};
-    estimate::FitOptions base;
-    base.model_options.bending_correction = true; // `drape fit`'s default (--plain: the plain stencils)
-    base.laying_load = cloth::kLabLaying;          // `drape fit`'s default
-    cloth::FabricParams start = estimate::default_fit_start();
+    estimate::FitOptions base = estimate::drape_fit_defaults(); // --plain: the plain stencils
+    cloth::FabricParams start = *base.start;
     try {
         for (int i = 1; i < argc; ++i) {
             const std::string a = argv[i];

@@ -42,6 +42,8 @@ preset against records it was not fitted to, or to see what a model change does.
                         as `drape fit` drapes)
   --laying F            random branch: the first rest under the fraction F of gravity, then all of
                         it (default: the preset's provenance.laying_load, as drape simulate; else 1)
+  --perturbation L      random branch: the largest lift of the flat start's waviness (default: the
+                        preset's provenance.perturbation_m, as drape simulate; else 1mm)
   --disc-grip           the specimen cannot slide on the disc top (large static friction)
   --vertex-contact-only contact at mesh vertices only (the seed's; coarse elements cut the rim)
   --json                print the comparison as JSON on stdout
@@ -54,7 +56,7 @@ model (the fit's before its drape-to-drape calibration, so chi2 differs from a f
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed | kLaying | kMesh) + std::set<std::string>{"--seeds", "--branch"},
+    Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed | kLaying | kMesh | kPerturbation) + std::set<std::string>{"--seeds", "--branch"},
            setup_switches(kDiscGrip) + std::set<std::string>{"--json", "--quiet", "--vertex-contact-only"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
     const fabric::FabricPreset preset = load_fabric_flags(a);
@@ -69,6 +71,9 @@ int run(const std::vector<std::string>& argv)
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     const double laying = parse_laying(a, preset.laying());
+    const double waviness = a.get_length("--perturbation", preset.perturbation(cloth::kStartLift));
+    if (!(waviness >= 0) || waviness > 0.05)
+        throw UsageError("--perturbation " + *a.get("--perturbation") + " is outside [0, 50mm] (the flat start's largest lift)");
     const bool json_out = a.has("--json"), quiet = a.has("--quiet") || json_out;
     estimate::FoldBranch branch = estimate::FoldBranch::Random;
     try {
@@ -96,7 +101,10 @@ int run(const std::vector<std::string>& argv)
             cloth::DrapeSetup setup = m.setup(grid, seed0 + static_cast<std::uint64_t>(s));
             setup.mesh = mesh;
             if (folds > 0) setup = cloth::on_fold_branch(setup, folds);
-            else setup.laying_load = laying; // laid as the lab lays it
+            else {
+                setup.laying_load = laying; // laid as the lab lays it
+                setup.perturbation = waviness;
+            }
             setup.disc_grip = a.has("--disc-grip");
             cloth::RestOptions ro;
             if (!quiet) std::fprintf(stderr, "%s: seed %d/%d (grid %d)...\n", m.id.c_str(), s + 1, seeds, grid);

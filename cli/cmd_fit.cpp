@@ -84,6 +84,12 @@ as not identifiable.
                       of gravity, then under all of it (default 0.4: the drape lab's, chosen
                       leave-one-out on its set-a records; 1 = the whole load at once). Written
                       into the preset (provenance.laying_load): drape simulate and predict lay it so
+  --perturbation L    how wavy the records' lab's specimens lie when laid: the largest lift of the
+                      seeded waviness the same drapes from flat start from (default 6mm: the drape
+                      lab's, chosen leave-one-out on its set-a records; at most 50mm; the engine's
+                      own default, a preset without it, is 1mm). Written into the preset
+                      (provenance.perturbation_m): drape simulate, predict, compare and the widget
+                      start it so
   --flat-grid N       the fitted preset also draped from flat on grid N (the first seed; a CAD's
                       finer mesh), reported beside the fit's own grid as cold_fine_* (default 61;
                       0 or a grid not above --grid: not run)
@@ -148,7 +154,7 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--laying", "--flat-grid", "--mesh", "--flat-calibration"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
             "--bending-correction", "--plain-bending", "--arc-membrane"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
@@ -157,7 +163,7 @@ int run(const std::vector<std::string>& argv)
     // Fail now, not after minutes of fitting.
     prepare_output_file(*out, "--out");
     if (const auto rep = a.get("--report")) prepare_output_dir(*rep, "--report");
-    estimate::FitOptions fo;
+    estimate::FitOptions fo = estimate::drape_fit_defaults(); // every flag below falls back to it
     try {
         fo.model = estimate::parse_model_variant(a.get_or("--model", "baseline"));
     } catch (const Error& e) {
@@ -173,16 +179,19 @@ int run(const std::vector<std::string>& argv)
     } catch (const Error& e) {
         throw UsageError(std::string("--") + e.what());
     }
-    fo.grid = a.get_int("--grid", 41, 9, 200);
+    fo.grid = a.get_int("--grid", fo.grid, 9, 200);
     fo.mesh = parse_mesh(a, fo.mesh);
     fo.refine_grid = a.get_int("--refine-grid", fo.grid < 41 ? 41 : 0, 0, 200);
     if (fo.refine_grid != 0 && fo.refine_grid <= fo.grid)
         throw UsageError("--refine-grid " + std::to_string(fo.refine_grid) + " must be above --grid " + std::to_string(fo.grid) + " (or 0)");
-    fo.flat_check_grid = a.get_int("--flat-grid", 61, 0, 200);
-    fo.flat_calibration = a.get_on_off("--flat-calibration", true);
+    fo.flat_check_grid = a.get_int("--flat-grid", fo.flat_check_grid, 0, 200);
+    fo.flat_calibration = a.get_on_off("--flat-calibration", fo.flat_calibration);
     fo.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     fo.seeds_per_evaluation = a.get_int("--seeds", 2, 1, 16);
-    fo.laying_load = parse_laying(a, cloth::kLabLaying);
+    fo.laying_load = parse_laying(a, fo.laying_load);
+    fo.perturbation_m = a.get_length("--perturbation", fo.perturbation_m);
+    if (!(fo.perturbation_m >= 0) || fo.perturbation_m > 0.05)
+        throw UsageError("--perturbation " + *a.get("--perturbation") + " is outside [0, 50mm] (the flat start's largest lift)");
     fo.global_evaluations = a.get_int("--global", 0, 0, 100000);
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");
@@ -203,7 +212,7 @@ int run(const std::vector<std::string>& argv)
     // between meshes and drape from flat closer to their records (section 19).
     if (a.has("--bending-correction") && a.has("--plain-bending"))
         throw UsageError("--bending-correction and --plain-bending: choose one");
-    fo.model_options.bending_correction = !a.has("--plain-bending");
+    if (a.has("--plain-bending")) fo.model_options.bending_correction = false;
     // Chords by default: with arcs alone the coarse grid's bending deficit at the
     // rim shows (docs/model-discrepancy.md section 24).
     fo.model_options.arc_membrane = a.has("--arc-membrane");
@@ -218,8 +227,7 @@ int run(const std::vector<std::string>& argv)
             if (kv.rfind(declared, 0) == 0)
                 throw UsageError("--set " + kv + ": the record declares it (meta.json 'fabric'); a fit takes the lab's value");
     // Without --start the fit holds the membrane's compression limit at the
-    // documented typical value (estimate::kTypicalBucklingLength), not the seed's 0.
-    if (!fo.start) fo.start = estimate::default_fit_start();
+    // documented typical value (estimate::default_fit_start), not the seed's 0.
     if (!a.get_all("--set").empty()) fo.start = apply_set_flags(a, *fo.start);
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     if (const auto n = a.get("--name"); n && !try_normalize_name(*n))

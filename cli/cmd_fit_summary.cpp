@@ -28,8 +28,11 @@ const char* kUsage = R"(usage: drape fit-summary --out DIR LABEL=REPORT_DIR [LAB
 
 Reads the report.json of `drape fit --report` folders, groups them by LABEL
 (e.g. before=..., after=...) and writes to DIR:
-  summary.md            per record and label: D and node count measured / fitted,
-                        chi2 / dof, the rim matched filter z, candidate effects
+  summary.md            per record and label: D and node count measured / fitted, and
+                        of the preset draped from flat (the fit's grid and the finer
+                        --flat-grid), the calibration from flat, chi2 / dof, the rim
+                        matched filter z, candidate effects; per label how many records
+                        are within 2 points and 1 node as fitted and from flat
   summary.json          the same numbers
   dc_error.png          fitted - measured D per record, one marker per label
   radius_error_LABEL.png, fold_error_LABEL.png
@@ -42,6 +45,10 @@ struct Entry {
     std::string label, dir, id;
     double d_meas = NAN, d_fit = NAN, n_meas = NAN, n_fit = NAN;
     double d_cold = NAN, n_cold = NAN; ///< the preset draped from flat (reports since the third session of 2026-11-22)
+    double d_fine = NAN, n_fine = NAN; ///< the same on the finer grid (`--flat-grid`, reports since 2026-12-01)
+    int fine_grid = 0;
+    double calibration = NAN;          ///< the bendings' scale from flat when applied (fit.flat_calibration)
+    double waviness_m = NAN;           ///< provenance.perturbation_m of the drapes from flat
     double chi2 = 0;
     int dof = 0;
     double rim_z = 0;
@@ -84,6 +91,15 @@ Entry read_report(const std::string& label, const std::string& dir)
         e.d_cold = r["cold_drape_coefficient_percent"].get<double>();
         e.n_cold = r.value("cold_node_count", NAN);
     }
+    if (r.contains("cold_fine_drape_coefficient_percent") && r["cold_fine_drape_coefficient_percent"].is_number()) {
+        e.d_fine = r["cold_fine_drape_coefficient_percent"].get<double>();
+        e.n_fine = r.value("cold_fine_node_count", NAN);
+        e.fine_grid = r.value("cold_fine_grid", 0);
+    }
+    if (const auto& fj = j["fit"]; fj.contains("flat_calibration") && fj["flat_calibration"].is_object() &&
+                                   fj["flat_calibration"].value("applied", false))
+        e.calibration = fj["flat_calibration"].value("scale", NAN);
+    if (prov.contains("perturbation_m") && prov["perturbation_m"].is_number()) e.waviness_m = prov["perturbation_m"].get<double>();
     int fitted = 0;
     for (const auto& p : j["fit"].value("parameters", nlohmann::json::array()))
         if (p.value("role", "") == "fitted") ++fitted;
@@ -148,8 +164,9 @@ int run(const std::vector<std::string>& argv)
 
     // Table.
     std::ostringstream md;
-    md << "| record | fit | D meas. [%] | D fit [%] | D err | nodes meas. | nodes fit | D err cold | nodes err cold | chi2 / dof | rim z | beyond noise | candidate effects |\n"
-       << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    md << "| record | fit | D meas. [%] | D fit [%] | D err | nodes meas. | nodes fit | D err cold | nodes err cold | D err cold, finer grid | "
+          "nodes err cold, finer grid | calibrated from flat | chi2 / dof | rim z | beyond noise | candidate effects |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     nlohmann::json js = nlohmann::json::array();
     char buf[512];
     for (const auto& id : ids)
@@ -161,21 +178,32 @@ int run(const std::vector<std::string>& argv)
                 char cold_d[32] = "-", cold_n[32] = "-";
                 if (std::isfinite(e.d_cold)) std::snprintf(cold_d, sizeof cold_d, "%+.1f", e.d_cold - e.d_meas);
                 if (std::isfinite(e.n_cold)) std::snprintf(cold_n, sizeof cold_n, "%+.1f", e.n_cold - e.n_meas);
-                std::snprintf(buf, sizeof buf, "| %s | %s | %.1f | %.1f | %+.1f | %.0f | %.1f | %s | %s | %.0f / %d | %.1f | %s | %s |\n", id.c_str(),
-                              l.c_str(), e.d_meas, e.d_fit, e.d_fit - e.d_meas, e.n_meas, e.n_fit, cold_d, cold_n, e.chi2, e.dof, e.rim_z,
-                              e.exceeds ? "yes" : "no", cands.empty() ? "-" : cands.c_str());
+                char fine_d[48] = "-", fine_n[32] = "-", cal[32] = "-";
+                if (std::isfinite(e.d_fine)) std::snprintf(fine_d, sizeof fine_d, "%+.1f (grid %d)", e.d_fine - e.d_meas, e.fine_grid);
+                if (std::isfinite(e.n_fine)) std::snprintf(fine_n, sizeof fine_n, "%+.1f", e.n_fine - e.n_meas);
+                if (std::isfinite(e.calibration)) std::snprintf(cal, sizeof cal, "x %.3f", e.calibration);
+                std::snprintf(buf, sizeof buf, "| %s | %s | %.1f | %.1f | %+.1f | %.0f | %.1f | %s | %s | %s | %s | %s | %.0f / %d | %.1f | %s | %s |\n",
+                              id.c_str(), l.c_str(), e.d_meas, e.d_fit, e.d_fit - e.d_meas, e.n_meas, e.n_fit, cold_d, cold_n, fine_d, fine_n, cal,
+                              e.chi2, e.dof, e.rim_z, e.exceeds ? "yes" : "no", cands.empty() ? "-" : cands.c_str());
                 md << buf;
                 js.push_back({{"record", id}, {"label", l}, {"model", e.model}, {"edge_contact", e.edge_contact}, {"dc_measured", e.d_meas},
                               {"dc_fitted", e.d_fit}, {"nodes_measured", e.n_meas}, {"nodes_fitted", e.n_fit},
                               {"dc_cold", std::isfinite(e.d_cold) ? nlohmann::json(e.d_cold) : nlohmann::json(nullptr)},
-                              {"nodes_cold", std::isfinite(e.n_cold) ? nlohmann::json(e.n_cold) : nlohmann::json(nullptr)}, {"chi2", e.chi2}, {"dof", e.dof},
+                              {"nodes_cold", std::isfinite(e.n_cold) ? nlohmann::json(e.n_cold) : nlohmann::json(nullptr)},
+                              {"dc_cold_fine", std::isfinite(e.d_fine) ? nlohmann::json(e.d_fine) : nlohmann::json(nullptr)},
+                              {"nodes_cold_fine", std::isfinite(e.n_fine) ? nlohmann::json(e.n_fine) : nlohmann::json(nullptr)},
+                              {"cold_fine_grid", e.fine_grid > 0 ? nlohmann::json(e.fine_grid) : nlohmann::json(nullptr)},
+                              {"flat_calibration_scale", std::isfinite(e.calibration) ? nlohmann::json(e.calibration) : nlohmann::json(nullptr)},
+                              {"perturbation_m", std::isfinite(e.waviness_m) ? nlohmann::json(e.waviness_m) : nlohmann::json(nullptr)},
+                              {"chi2", e.chi2}, {"dof", e.dof},
                               {"rim_z", e.rim_z}, {"exceeds_noise", e.exceeds}, {"candidate_effects", e.candidates}});
             }
     // Aggregates per label.
-    md << "\n| fit | records | mean D err | RMS D err | records with \\|D err\\| <= 2 | records with \\|node err\\| <= 1 | both | both, draped from flat | mean chi2 / dof | beyond noise |\n"
-       << "|---|---|---|---|---|---|---|---|---|---|\n";
+    md << "\n| fit | records | mean D err | RMS D err | records with \\|D err\\| <= 2 | records with \\|node err\\| <= 1 | both | both, draped from flat | "
+          "both, as fitted and from flat at two grids | mean chi2 / dof | beyond noise |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& l : labels) {
-        int n = 0, dok = 0, nok = 0, both = 0, both_cold = 0, have_cold = 0, beyond = 0;
+        int n = 0, dok = 0, nok = 0, both = 0, both_cold = 0, have_cold = 0, beyond = 0, all_ok = 0, have_fine = 0;
         double s = 0, ss = 0, cd = 0;
         for (const auto& e : entries) {
             if (e.label != l) continue;
@@ -186,17 +214,25 @@ int run(const std::vector<std::string>& argv)
             dok += std::abs(d) <= 2.0 ? 1 : 0;
             nok += std::abs(e.n_fit - e.n_meas) <= 1.0 ? 1 : 0;
             both += (std::abs(d) <= 2.0 && std::abs(e.n_fit - e.n_meas) <= 1.0) ? 1 : 0;
+            const bool fitted_ok = std::abs(d) <= 2.0 && std::abs(e.n_fit - e.n_meas) <= 1.0;
+            const bool cold_ok = std::abs(e.d_cold - e.d_meas) <= 2.0 && std::abs(e.n_cold - e.n_meas) <= 1.0;
             if (std::isfinite(e.d_cold)) {
                 ++have_cold;
-                both_cold += (std::abs(e.d_cold - e.d_meas) <= 2.0 && std::abs(e.n_cold - e.n_meas) <= 1.0) ? 1 : 0;
+                both_cold += cold_ok ? 1 : 0;
+            }
+            // Issue 15's done-when: as fitted, and from flat on the fit's grid and the finer one.
+            if (std::isfinite(e.d_cold) && std::isfinite(e.d_fine)) {
+                ++have_fine;
+                all_ok += (fitted_ok && cold_ok && std::abs(e.d_fine - e.d_meas) <= 2.0 && std::abs(e.n_fine - e.n_meas) <= 1.0) ? 1 : 0;
             }
             cd += e.chi2 / std::max(1, e.dof);
             beyond += e.exceeds ? 1 : 0;
         }
-        char bc[32] = "-";
+        char bc[32] = "-", ba[32] = "-";
         if (have_cold) std::snprintf(bc, sizeof bc, "%d of %d", both_cold, have_cold);
-        std::snprintf(buf, sizeof buf, "| %s | %d | %+.2f | %.2f | %d | %d | %d | %s | %.2f | %d |\n", l.c_str(), n, s / n, std::sqrt(ss / n), dok, nok, both, bc,
-                      cd / n, beyond);
+        if (have_fine) std::snprintf(ba, sizeof ba, "%d of %d", all_ok, have_fine);
+        std::snprintf(buf, sizeof buf, "| %s | %d | %+.2f | %.2f | %d | %d | %d | %s | %s | %.2f | %d |\n", l.c_str(), n, s / n, std::sqrt(ss / n), dok, nok, both, bc,
+                      ba, cd / n, beyond);
         md << buf;
     }
     drape::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());

@@ -56,7 +56,8 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
                         assumed of its records' lab - drape fit: 0.4 -, else 1 = the whole load at
                         once; 1 with --folds unless --laying is given). Static solver only: the
                         dynamic integrators fall under the whole load
-  --perturbation L      largest lift of the flat start's perturbation (at most 50mm)
+  --perturbation L      largest lift of the flat start's perturbation (default: the preset's
+                        provenance.perturbation_m, how wavy its lab laid it; else 1mm; at most 50mm)
   --out DIR             write summary.json, rest.obj, slices.csv, outline.csv and rest.png (the rest
                         state seen from the front and from above)
   --json                print the summary as JSON on stdout
@@ -94,6 +95,7 @@ int run(const std::vector<std::string>& argv)
     cloth::DrapeSetup defaults;
     defaults.grid = 60;
     defaults.laying_load = preset.laying(); // a fitted preset is laid as its records' lab laid them
+    defaults.perturbation = preset.perturbation(defaults.perturbation); // and starts as wavy
     const cloth::DrapeSetup setup = parse_setup(a, defaults);
     cloth::RestOptions ro;
     try {
@@ -225,6 +227,10 @@ int run(const std::vector<std::string>& argv)
                         std::string(sp.unit).c_str(), t.d_drape_coefficient_percent * 0.1 * t.value, t.d_hem_mean_z * 0.1 * t.value * 1e3);
         }
     }
+    if (!r.status.converged() && ro.integrator == cloth::Integrator::Static)
+        std::fprintf(stderr, "drape simulate: not at rest within %ld Newton iterations per level (exit 4; the metrics are the last state's): "
+                             "--max-iterations %ld to let it go on\n",
+                     ro.max_newton, 3 * ro.max_newton);
     return r.status.converged() ? 0 : 4;
 }
 

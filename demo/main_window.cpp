@@ -417,13 +417,9 @@ void MainWindow::fitFromRecord()
     setBusy(true);
     m_cancel->setEnabled(true);
     const bool started = m_fitJob.start(tr("fit"), [records, result, where](widget::JobContext& ctx) {
-        estimate::FitOptions o;
-        // `drape fit`'s defaults: grid 41, the typical compression limit held and
-        // the crest-corrected bending stencils, the lab's laying from flat.
-        o.grid = 41;
-        o.model_options.bending_correction = true;
-        o.laying_load = cloth::kLabLaying;
-        o.start = estimate::default_fit_start();
+        // `drape fit`'s defaults (the lab's laying, the drapes from flat at grid 61
+        // and the calibration from flat included: the same preset as the CLI's).
+        estimate::FitOptions o = estimate::drape_fit_defaults();
         o.cancel = ctx.cancelFlag();
         o.progress = [&ctx](const estimate::FitProgress& p) {
             ctx.report(p.planned > 0 ? std::min(1.0, double(p.evaluation) / p.planned) : -1.0,

@@ -47,6 +47,7 @@ cloth::DrapeSetup Evaluator::setup_for(int r, std::uint64_t seed, bool on_branch
     if (n > 0) return cloth::on_fold_branch(s, n, m_opt.branch_lift_m);
     cloth::DrapeSetup laid = s;
     laid.laying_load = m_opt.laying_load;
+    laid.perturbation = m_opt.perturbation_m;
     return laid;
 }
 

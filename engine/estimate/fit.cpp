@@ -46,6 +46,19 @@ cloth::FabricParams default_fit_start()
     return p;
 }
 
+FitOptions drape_fit_defaults()
+{
+    FitOptions o;
+    o.grid = 41;
+    o.model_options.bending_correction = true;
+    o.laying_load = cloth::kLabLaying;
+    o.perturbation_m = cloth::kLabWaviness;
+    o.flat_check_grid = 61;
+    o.flat_calibration = true;
+    o.start = default_fit_start();
+    return o;
+}
+
 std::string to_string(FitMethod m) { return m == FitMethod::Sensitivity ? "lm" : "nlopt"; }
 
 FitMethod parse_fit_method(const std::string& name)
@@ -566,6 +579,8 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         throw ParameterError("fit: branch lift = " + std::to_string(options.branch_lift_m) + " m is outside (0, 0.05]");
     if (!(options.laying_load > 0) || options.laying_load > 1)
         throw ParameterError("fit: laying load = " + std::to_string(options.laying_load) + " is outside (0, 1] (a fraction of gravity)");
+    if (!(options.perturbation_m >= 0) || options.perturbation_m > 0.05)
+        throw ParameterError("fit: perturbation = " + std::to_string(options.perturbation_m) + " m is outside [0, 0.05] (the flat start's largest lift)");
     if (options.random_start_seeds < 0 || options.random_start_seeds > 16)
         throw ParameterError("fit: random_start_seeds = " + std::to_string(options.random_start_seeds) + " is outside [0, 16]");
     if (options.seeds_per_evaluation < 1 || options.seeds_per_evaluation > 16)

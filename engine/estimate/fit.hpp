@@ -142,6 +142,13 @@ struct FitOptions {
     /// the branch is what they start on. 1 here (the library's default);
     /// `drape fit` passes cloth::kLabLaying unless --laying.
     double laying_load = 1.0;
+    /// DrapeSetup::perturbation of the same drapes (the laid ones): how wavy the
+    /// lab's specimens lie when laid, the largest lift [m] of the flat start's
+    /// seeded waviness, in [0, 0.05]. The n-fold starts keep branch_lift_m.
+    /// Written into the preset (provenance.perturbation_m) like laying_load.
+    /// kStartLift here (the library's default); `drape fit` passes
+    /// cloth::kLabWaviness unless --perturbation.
+    double perturbation_m = cloth::kStartLift;
     /// Measured branch: perturbation seeds draped from the random mix at the
     /// optimum, reported as `cold_*` (what `drape predict` shows).
     int random_start_seeds = 2;
@@ -336,6 +343,14 @@ inline constexpr double kTypicalBucklingLength = 0.0075;
 /// The start `drape fit` uses without --start: the parameter table's defaults
 /// with buckling_length_m = kTypicalBucklingLength.
 cloth::FabricParams default_fit_start();
+
+/// The options `drape fit` fits with when no flag changes them, one place for
+/// the CLI, the demo's fits and bench_fit: grid 41, the crest-corrected bending
+/// stencils, the lab's laying (cloth::kLabLaying) and waviness
+/// (cloth::kLabWaviness), the preset also draped from flat at grid 61 and calibrated from
+/// flat, the start default_fit_start(). The library's FitOptions{} keeps the
+/// plain engine (no laying, no drapes from flat, no calibration) for tests.
+FitOptions drape_fit_defaults();
 
 /// The parameters of `base` with areal density and thickness from the record.
 cloth::FabricParams params_for_record(const cloth::FabricParams& base, const MeasuredDrape& m);

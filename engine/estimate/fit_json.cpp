@@ -47,6 +47,7 @@ json fit_to_json(const FitResult& r)
     // How the records' lab laid them (the from-flat drapes' first rest): the
     // preset is laid so by drape simulate / predict (FabricPreset::laying).
     provenance.laying_load = r.options.laying_load;
+    provenance.perturbation_m = r.options.perturbation_m;
     preset.provenance = provenance;
 
     fabric::FitSummary summary;

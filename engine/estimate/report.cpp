@@ -451,6 +451,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
            << (r.options.laying_load < 1 ? ", laid under " + num(r.options.laying_load, "%.2f") +
                                                " g first as the records' lab is assumed to lay them (`--laying`, written into the preset)"
                                          : std::string(", the whole load at once"))
+           << ", the flat start's waviness " << num(r.options.perturbation_m * 1e3, "%.1f") << " mm (`--perturbation`, written into the preset)"
            << "), the preset"
            << (r.flat_calibration.applied ? " (its bendings " + num(r.flat_calibration.scale, "%.3f") + " x the contours' optimum: calibrated from flat, above)"
                                           : std::string())

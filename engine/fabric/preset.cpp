@@ -68,6 +68,7 @@ Provenance read_provenance(const JsonReader& r, const json& root)
         }
     if (j.contains("grid")) p.grid = r.integer(root, "provenance.grid", 5, 1000);
     if (j.contains("laying_load")) p.laying_load = r.number_in(root, "provenance.laying_load", 1e-3, 1.0);
+    if (j.contains("perturbation_m")) p.perturbation_m = r.number_in(root, "provenance.perturbation_m", 0.0, 0.05);
     if (j.contains("records") && j["records"].is_array())
         for (const auto& rec : j["records"]) {
             if (rec.is_string()) p.records.push_back(rec.get<std::string>());
@@ -84,6 +85,8 @@ json write_provenance(const Provenance& p)
     if (p.grid > 0) j["grid"] = p.grid;
     if (p.laying_load > 0) j["laying_load"] = p.laying_load;
     else j.erase("laying_load"); // not stated: laid at once
+    if (p.perturbation_m) j["perturbation_m"] = *p.perturbation_m;
+    else j.erase("perturbation_m"); // not stated: the engine's default
     if (!j.contains("records") && !p.records.empty()) j["records"] = p.records;
     return j;
 }

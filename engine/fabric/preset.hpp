@@ -35,6 +35,11 @@ struct Provenance {
     /// starters): laid at once. `drape simulate`, `predict` and the widget lay a
     /// preset this way by default (FabricPreset::laying).
     double laying_load = 0;
+    /// How wavy the lab's specimens lie when laid ("perturbation_m", the largest
+    /// lift [m] of the flat start's seeded waviness: cloth::DrapeSetup::perturbation,
+    /// in [0, 0.05]) as the fit assumed it for its drapes from flat; nullopt = not
+    /// stated (presets before 2026-12-01, the starters): the engine's default.
+    std::optional<double> perturbation_m;
     nlohmann::json details = nlohmann::json::object(); ///< everything else, verbatim
 };
 
@@ -89,6 +94,10 @@ struct FabricPreset {
     /// flat: its records' lab's (Provenance::laying_load) when the fit stated
     /// it, else 1 (the whole load at once).
     double laying() const { return provenance && provenance->laying_load > 0 ? provenance->laying_load : 1.0; }
+    /// cloth::DrapeSetup::perturbation of a drape of this preset from flat: its
+    /// records' lab's (Provenance::perturbation_m) when the fit stated it, else
+    /// `fallback` (the engine's default, cloth::kStartLift).
+    double perturbation(double fallback) const { return provenance && provenance->perturbation_m ? *provenance->perturbation_m : fallback; }
 };
 
 /// The built-in presets by name ("seed-table1": the seed paper's Table 1).

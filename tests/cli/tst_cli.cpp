@@ -77,6 +77,50 @@ private slots:
         QVERIFY(QDir(tmp.path() + "/new/sub").entryList(QDir::Files | QDir::Hidden).isEmpty()); // no probe file left behind
     }
 
+    /// `drape fit-summary` tabulates fit reports: per record and label D and nodes
+    /// as fitted and from flat on both grids, and per label how many records meet
+    /// issue 15's tolerances everywhere; bad arguments are refused by name.
+    void fitSummaryTabulatesReports()
+    {
+        QTemporaryDir tmp;
+        const QString rep = tmp.path() + "/rep";
+        const Run fit = drape({"fit", DRAPE_SOURCE_DIR "/examples/DL-A04", "--out", tmp.path() + "/f.json", "--report", rep, "--channels", "dc", "--grid", "9",
+                               "--seeds", "1", "--local", "2", "--refine-grid", "0", "--flat-grid", "11", "--no-uncertainty", "--quiet"});
+        QVERIFY2(fit.code == 0, qPrintable(fit.err));
+        const QString out = tmp.path() + "/sum";
+        const Run s = drape({"fit-summary", "--out", out, "new=" + rep, "old=" DRAPE_SOURCE_DIR "/docs/fit-report"});
+        QVERIFY2(s.code == 0, qPrintable(s.err));
+        QFile md(out + "/summary.md");
+        QVERIFY(md.open(QIODevice::ReadOnly));
+        const QString table = QString::fromUtf8(md.readAll());
+        QVERIFY2(table.contains("| DL-A04 | new | 31.3 |") && table.contains("| DL-A08 | old | 58.6 |"), qPrintable(table));
+        QVERIFY2(table.contains("(grid 11)") && table.contains("both, as fitted and from flat at two grids"), qPrintable(table));
+        QFile js(out + "/summary.json");
+        QVERIFY(js.open(QIODevice::ReadOnly));
+        const QJsonArray rows = QJsonDocument::fromJson(js.readAll()).array();
+        QCOMPARE(rows.size(), 2);
+        for (const auto& v : rows) {
+            const QJsonObject r = v.toObject();
+            const bool fresh = r["label"].toString() == "new";
+            QCOMPARE(r["cold_fine_grid"].isNull(), !fresh); // the old report predates the finer grid's drape
+            if (fresh) {
+                QCOMPARE(r["cold_fine_grid"].toInt(), 11);
+                QVERIFY(std::isfinite(r["dc_cold_fine"].toDouble(NAN)));
+                QCOMPARE(r["perturbation_m"].toDouble(), 0.006); // drape fit's default, the lab's
+            }
+        }
+        QVERIFY(QFile::exists(out + "/dc_error.png"));
+        const Run noreport = drape({"fit-summary", "--out", out, "x=" + tmp.path() + "/nothing"});
+        QVERIFY(noreport.code != 0);
+        QVERIFY2(noreport.err.contains("nothing/report.json"), qPrintable(noreport.err));
+        const Run badlabel = drape({"fit-summary", "--out", out, "a b=" + rep});
+        QCOMPARE(badlabel.code, 2);
+        QVERIFY2(badlabel.err.contains("label 'a b'"), qPrintable(badlabel.err));
+        const Run nolabel = drape({"fit-summary", "--out", out, rep});
+        QCOMPARE(nolabel.code, 2);
+        QVERIFY2(nolabel.err.contains("is not LABEL=REPORT_DIR"), qPrintable(nolabel.err));
+    }
+
     void badBranchAndGridOptionsAreRefusedByName()
     {
         const QString record = DRAPE_SOURCE_DIR "/examples/DL-A04";
@@ -88,6 +132,11 @@ private slots:
         const Run calib = drape({"fit", record, "--out", out, "--flat-calibration", "yes", "--quiet"});
         QCOMPARE(calib.code, 2);
         QVERIFY2(calib.err.contains("--flat-calibration") && calib.err.contains("'yes'") && calib.err.contains("on or off"), qPrintable(calib.err));
+        for (const QString bad : {"60mm", "-1mm", "wavy"}) {
+            const Run pert = drape({"fit", record, "--out", out, "--perturbation", bad, "--quiet"});
+            QCOMPARE(pert.code, 2);
+            QVERIFY2(pert.err.contains("--perturbation") && pert.err.contains(bad), qPrintable(pert.err));
+        }
         const Run refine = drape({"fit", record, "--out", out, "--refine-grid", "21", "--quiet"});
         QVERIFY(refine.code != 0);
         QVERIFY2(refine.err.contains("--refine-grid 21") && refine.err.contains("--grid 41"), qPrintable(refine.err)); // the default grid
@@ -457,6 +506,7 @@ private slots:
             QStringList args{"fit", DRAPE_SOURCE_DIR "/examples/DL-A04", "--out", preset, "--channels", "dc", "--grid", "9", "--seeds", "1",
                              "--local", "2", "--refine-grid", "0", "--no-uncertainty", "--quiet"};
             if (plain) args << "--plain-bending" << "--laying" << "1";
+            else args << "--perturbation" << "4mm";
             const Out o = run(args);
             QVERIFY2(o.code == 0, qPrintable(o.err));
             QFile f(preset);
@@ -468,14 +518,22 @@ private slots:
             // The lab's laying the fit assumed (default 0.4, --laying) travels in the
             // preset, and `drape simulate` lays the preset so unless told otherwise.
             QCOMPARE(root["provenance"].toObject()["laying_load"].toDouble(), plain ? 1.0 : 0.4);
+            // So does the waviness of the lab's laid specimens (--perturbation, default 6 mm).
+            QCOMPARE(root["provenance"].toObject()["perturbation_m"].toDouble(), plain ? 0.006 : 0.004); // default: the lab's
             if (!plain) {
                 for (const QString laying : {"", "1"}) {
                     QStringList sim{"simulate", "--fabric", preset, "--grid", "9", "--json", "--quiet"};
-                    if (!laying.isEmpty()) sim << "--laying" << laying;
+                    if (!laying.isEmpty()) sim << "--laying" << laying << "--perturbation" << "2mm";
                     const Out s = run(sim);
                     QVERIFY2(s.code == 0, qPrintable(s.err));
-                    QCOMPARE(QJsonDocument::fromJson(s.out.toUtf8()).object()["laying_load"].toDouble(), laying.isEmpty() ? 0.4 : 1.0);
+                    const QJsonObject sum = QJsonDocument::fromJson(s.out.toUtf8()).object();
+                    QCOMPARE(sum["laying_load"].toDouble(), laying.isEmpty() ? 0.4 : 1.0);
+                    QCOMPARE(sum["perturbation_m"].toDouble(), laying.isEmpty() ? 0.004 : 0.002);
                 }
+                // --folds starts on the branch's own lift, not the lab's waviness.
+                const Out branch = run({"simulate", "--fabric", preset, "--grid", "9", "--json", "--quiet", "--folds", "6"});
+                QVERIFY2(branch.code == 0, qPrintable(branch.err));
+                QVERIFY(QJsonDocument::fromJson(branch.out.toUtf8()).object()["perturbation_m"].toDouble() != 0.004);
             }
         }
     }

@@ -104,6 +104,7 @@ private slots:
         p.provenance->records = {"DL-A01"};
         p.provenance->grid = 41;
         p.provenance->laying_load = 0.4;
+        p.provenance->perturbation_m = 0.006;
         QTemporaryDir d;
         const std::string path = d.filePath("f.json").toStdString();
         save_fabric(p, path);
@@ -121,6 +122,8 @@ private slots:
         QCOMPARE(back.laying(), 0.4); // laid as its records' lab laid them
         FabricPreset starter;
         QCOMPARE(starter.laying(), 1.0); // no provenance: at once
+        QCOMPARE(back.perturbation(0.001), 0.006); // as wavy as its lab laid them
+        QCOMPARE(starter.perturbation(0.001), 0.001); // not stated: the engine's default
         // The file carries the unit-suffixed keys.
         const json j = json::parse(read_file(path));
         QVERIFY(j["parameters"].contains("bend_warp_Nm"));
@@ -281,6 +284,21 @@ private slots:
         }
         j["provenance"]["laying_load"] = 0.4;
         QCOMPARE(fabric_from_json(j, "p.json").laying(), 0.4);
+        // The lab's waviness: a length in [0, 0.05] m.
+        for (const json& bad : {json(-0.001), json(0.2), json("6mm")}) {
+            j["provenance"]["perturbation_m"] = bad;
+            e.clear();
+            try {
+                fabric_from_json(j, "p.json");
+            } catch (const drape::Error& ex) {
+                e = ex.what();
+            }
+            QVERIFY2(e.contains("provenance.perturbation_m") && e.contains("p.json"), qPrintable(e));
+        }
+        j["provenance"]["perturbation_m"] = 0.0;
+        QCOMPARE(fabric_from_json(j, "p.json").perturbation(0.001), 0.0);
+        j["provenance"].erase("perturbation_m");
+        QCOMPARE(fabric_from_json(j, "p.json").perturbation(0.001), 0.001);
     }
 
     void failed_save_keeps_the_old_file()

@@ -73,9 +73,11 @@ int main(int argc, char** argv)
         }
         if (dirs.empty()) dirs.push_back(DRAPE_SOURCE_DIR "/examples/DL-A04");
         std::printf("bench_fit: grid %d, model baseline, %s bending stencils, branch %s, buckling_length_m %.4g, %d core(s), default "
-                    "budgets, seed 1\n",
+                    "budgets, seed 1; as `drape fit`: laid under %.2g g, %.3g mm waviness from flat, the preset also from flat at grid %d, "
+                    "calibration from flat %s\n",
                     grid, base.model_options.bending_correction ? "corrected" : "plain", estimate::to_string(base.branch).c_str(),
-                    start[cloth::Param::BucklingLength], cores);
+                    start[cloth::Param::BucklingLength], cores, base.laying_load, base.perturbation_m * 1e3, base.flat_check_grid,
+                    base.flat_calibration ? "on" : "off");
         std::printf("load average before: %s\n\n", loadavg().c_str());
         std::printf("| record | method | wall [s] | drapes | factorisations | back-substitutions | evaluations | chi2 / dof | "
                     "D err fitted | nodes err fitted | D err from flat | nodes err from flat | warp / weft bending | 60 s |\n");

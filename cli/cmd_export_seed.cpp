@@ -67,6 +67,8 @@ int run(const std::vector<std::string>& argv)
                           {"sample_diameter_m", setup.sample_diameter},
                           {"disc_diameter_m", setup.disc_diameter},
                           {"seeds", seeds},
+                          {"laying_load", setup.laying_load},      // the drapes it matched were laid so
+                          {"perturbation_m", setup.perturbation}, // and started this wavy (the preset's lab)
                           {"preset_drape_coefficient_percent", e.target_dc_percent},
                           {"seed_drape_coefficient_percent", e.seed_dc_percent},
                           {"matched", e.matched},

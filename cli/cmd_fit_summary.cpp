@@ -35,6 +35,8 @@ Reads the report.json of `drape fit --report` folders, groups them by LABEL
                         are within 2 points and 1 node as fitted and from flat
   summary.json          the same numbers
   dc_error.png          fitted - measured D per record, one marker per label
+  dc_error_flat.png     the same for the preset draped from flat (the fit's grid; a bar to
+                        the finer grid's drape), when the reports have those drapes
   radius_error_LABEL.png, fold_error_LABEL.png
                         contour mean radius / RMS fold amplitude, simulated - measured,
                         against depth, one line per record
@@ -47,6 +49,7 @@ struct Entry {
     double d_cold = NAN, n_cold = NAN; ///< the preset draped from flat (reports since the third session of 2026-11-22)
     double d_fine = NAN, n_fine = NAN; ///< the same on the finer grid (`--flat-grid`, reports since 2026-12-01)
     int fine_grid = 0;
+    bool fine_at_rest = true;          ///< cold_fine_converged: a drape the budget stopped is shown, not counted
     double calibration = NAN;          ///< the bendings' scale from flat when applied (fit.flat_calibration)
     double waviness_m = NAN;           ///< provenance.perturbation_m of the drapes from flat
     double chi2 = 0;
@@ -95,6 +98,7 @@ Entry read_report(const std::string& label, const std::string& dir)
         e.d_fine = r["cold_fine_drape_coefficient_percent"].get<double>();
         e.n_fine = r.value("cold_fine_node_count", NAN);
         e.fine_grid = r.value("cold_fine_grid", 0);
+        e.fine_at_rest = r.value("cold_fine_converged", true);
     }
     if (const auto& fj = j["fit"]; fj.contains("flat_calibration") && fj["flat_calibration"].is_object() &&
                                    fj["flat_calibration"].value("applied", false))
@@ -179,7 +183,8 @@ int run(const std::vector<std::string>& argv)
                 if (std::isfinite(e.d_cold)) std::snprintf(cold_d, sizeof cold_d, "%+.1f", e.d_cold - e.d_meas);
                 if (std::isfinite(e.n_cold)) std::snprintf(cold_n, sizeof cold_n, "%+.1f", e.n_cold - e.n_meas);
                 char fine_d[48] = "-", fine_n[32] = "-", cal[32] = "-";
-                if (std::isfinite(e.d_fine)) std::snprintf(fine_d, sizeof fine_d, "%+.1f (grid %d)", e.d_fine - e.d_meas, e.fine_grid);
+                if (std::isfinite(e.d_fine))
+                    std::snprintf(fine_d, sizeof fine_d, "%+.1f (grid %d%s)", e.d_fine - e.d_meas, e.fine_grid, e.fine_at_rest ? "" : ", not at rest");
                 if (std::isfinite(e.n_fine)) std::snprintf(fine_n, sizeof fine_n, "%+.1f", e.n_fine - e.n_meas);
                 if (std::isfinite(e.calibration)) std::snprintf(cal, sizeof cal, "x %.3f", e.calibration);
                 std::snprintf(buf, sizeof buf, "| %s | %s | %.1f | %.1f | %+.1f | %.0f | %.1f | %s | %s | %s | %s | %s | %.0f / %d | %.1f | %s | %s |\n",
@@ -193,6 +198,7 @@ int run(const std::vector<std::string>& argv)
                               {"dc_cold_fine", std::isfinite(e.d_fine) ? nlohmann::json(e.d_fine) : nlohmann::json(nullptr)},
                               {"nodes_cold_fine", std::isfinite(e.n_fine) ? nlohmann::json(e.n_fine) : nlohmann::json(nullptr)},
                               {"cold_fine_grid", e.fine_grid > 0 ? nlohmann::json(e.fine_grid) : nlohmann::json(nullptr)},
+                              {"cold_fine_converged", std::isfinite(e.d_fine) ? nlohmann::json(e.fine_at_rest) : nlohmann::json(nullptr)},
                               {"flat_calibration_scale", std::isfinite(e.calibration) ? nlohmann::json(e.calibration) : nlohmann::json(nullptr)},
                               {"perturbation_m", std::isfinite(e.waviness_m) ? nlohmann::json(e.waviness_m) : nlohmann::json(nullptr)},
                               {"chi2", e.chi2}, {"dof", e.dof},
@@ -200,10 +206,11 @@ int run(const std::vector<std::string>& argv)
             }
     // Aggregates per label.
     md << "\n| fit | records | mean D err | RMS D err | records with \\|D err\\| <= 2 | records with \\|node err\\| <= 1 | both | both, draped from flat | "
-          "both, as fitted and from flat at two grids | mean chi2 / dof | beyond noise |\n"
-       << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+          "both, as fitted and from flat at two grids | waviness from flat [mm] | mean chi2 / dof | beyond noise |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& l : labels) {
         int n = 0, dok = 0, nok = 0, both = 0, both_cold = 0, have_cold = 0, beyond = 0, all_ok = 0, have_fine = 0;
+        double wmin = INFINITY, wmax = -INFINITY; // provenance.perturbation_m over the label's reports
         double s = 0, ss = 0, cd = 0;
         for (const auto& e : entries) {
             if (e.label != l) continue;
@@ -223,16 +230,21 @@ int run(const std::vector<std::string>& argv)
             // Issue 15's done-when: as fitted, and from flat on the fit's grid and the finer one.
             if (std::isfinite(e.d_cold) && std::isfinite(e.d_fine)) {
                 ++have_fine;
-                all_ok += (fitted_ok && cold_ok && std::abs(e.d_fine - e.d_meas) <= 2.0 && std::abs(e.n_fine - e.n_meas) <= 1.0) ? 1 : 0;
+                all_ok += (fitted_ok && cold_ok && e.fine_at_rest && std::abs(e.d_fine - e.d_meas) <= 2.0 && std::abs(e.n_fine - e.n_meas) <= 1.0) ? 1 : 0;
             }
             cd += e.chi2 / std::max(1, e.dof);
+            if (std::isfinite(e.waviness_m)) wmin = std::min(wmin, e.waviness_m), wmax = std::max(wmax, e.waviness_m);
             beyond += e.exceeds ? 1 : 0;
         }
-        char bc[32] = "-", ba[32] = "-";
+        char bc[32] = "-", ba[32] = "-", wv[48] = "- (1, not stated)";
+        if (std::isfinite(wmin)) {
+            if (wmax > wmin) std::snprintf(wv, sizeof wv, "%.3g-%.3g", wmin * 1e3, wmax * 1e3);
+            else std::snprintf(wv, sizeof wv, "%.3g", wmin * 1e3);
+        }
         if (have_cold) std::snprintf(bc, sizeof bc, "%d of %d", both_cold, have_cold);
         if (have_fine) std::snprintf(ba, sizeof ba, "%d of %d", all_ok, have_fine);
-        std::snprintf(buf, sizeof buf, "| %s | %d | %+.2f | %.2f | %d | %d | %d | %s | %s | %.2f | %d |\n", l.c_str(), n, s / n, std::sqrt(ss / n), dok, nok, both, bc,
-                      ba, cd / n, beyond);
+        std::snprintf(buf, sizeof buf, "| %s | %d | %+.2f | %.2f | %d | %d | %d | %s | %s | %s | %.2f | %d |\n", l.c_str(), n, s / n, std::sqrt(ss / n), dok, nok, both,
+                      bc, ba, wv, cd / n, beyond);
         md << buf;
     }
     drape::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());
@@ -266,6 +278,35 @@ int run(const std::vector<std::string>& argv)
         for (const auto& l : labels) ls += (ls.empty() ? "" : ", ") + l;
         pl.set_caption("dashed: +-2 points (issue 4's target). Fits: " + ls);
         pl.save((std::filesystem::path(*out) / "dc_error.png").string());
+    }
+    // The same for the presets draped from flat (the fit's grid, the bar to the
+    // finer grid's drape), where reports have them: how the preset drapes in a CAD.
+    if (std::any_of(entries.begin(), entries.end(), [](const Entry& e) { return std::isfinite(e.d_cold); })) {
+        estimate::Plot pl(820, 140 + 34 * static_cast<int>(ids.size()), "drape coefficient draped from flat: preset - measured",
+                          "D error [percentage points]", "");
+        std::vector<std::pair<double, std::string>> ticks;
+        const double dy = 0.6 / static_cast<double>(labels.size());
+        double lo = -3, hi = 3;
+        for (std::size_t i = 0; i < ids.size(); ++i) {
+            const double y0 = static_cast<double>(ids.size() - i);
+            ticks.push_back({y0, ids[i]});
+            for (std::size_t li = 0; li < labels.size(); ++li)
+                for (const auto& e : entries)
+                    if (e.id == ids[i] && e.label == labels[li] && std::isfinite(e.d_cold)) {
+                        const double d = e.d_cold - e.d_meas, f = std::isfinite(e.d_fine) ? e.d_fine - e.d_meas : d;
+                        const double y = y0 + 0.3 - dy * (static_cast<double>(li) + 0.5);
+                        pl.interval(std::min(d, f), d, std::max(d, f), y, estimate::category(static_cast<int>(li)));
+                        lo = std::min(lo, std::min(d, f) - 0.5), hi = std::max(hi, std::max(d, f) + 0.5);
+                    }
+        }
+        for (std::size_t li = 0; li < labels.size(); ++li) pl.points({}, {}, estimate::category(static_cast<int>(li)), labels[li]);
+        pl.set_yticklabels(ticks);
+        pl.set_yrange(0.4, static_cast<double>(ids.size()) + 0.6);
+        pl.set_xrange(lo, hi);
+        for (const double x : {-2.0, 2.0}) pl.line({x, x}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
+        pl.line({0.0, 0.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {0, 0, 0}, "", 1);
+        pl.set_caption("marker: the fit's grid (mean of its seeds); bar to the finer grid's drape (--flat-grid). dashed: +-2 points");
+        pl.save((std::filesystem::path(*out) / "dc_error_flat.png").string());
     }
     // Contour errors against depth, per label.
     for (const auto& l : labels)

@@ -41,6 +41,9 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
                         assumed of its records' lab - drape fit: 0.4 -, else 1 = the whole load at
                         once; 1 with --folds unless --laying is given). Static solver only: the
                         dynamic integrators fall under the whole load
+  --perturbation L      the largest lift of the flat start's seeded waviness (default: the preset's
+                        provenance.perturbation_m, how wavy its fit assumed its lab laid it - drape
+                        fit: 6mm -, else 1mm; at most 50mm)
   --json                print the summary as JSON on stdout
   --quiet               no progress on stderr)";
 

@@ -227,7 +227,7 @@ int run(const std::vector<std::string>& argv)
                         std::string(sp.unit).c_str(), t.d_drape_coefficient_percent * 0.1 * t.value, t.d_hem_mean_z * 0.1 * t.value * 1e3);
         }
     }
-    if (!r.status.converged() && ro.integrator == cloth::Integrator::Static)
+    if (r.status.outcome == cloth::SolverStatus::Outcome::NotConverged && ro.integrator == cloth::Integrator::Static)
         std::fprintf(stderr, "drape simulate: not at rest within %ld Newton iterations per level (exit 4; the metrics are the last state's): "
                              "--max-iterations %ld to let it go on\n",
                      ro.max_newton, 3 * ro.max_newton);

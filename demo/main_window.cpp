@@ -417,8 +417,8 @@ void MainWindow::fitFromRecord()
     setBusy(true);
     m_cancel->setEnabled(true);
     const bool started = m_fitJob.start(tr("fit"), [records, result, where](widget::JobContext& ctx) {
-        // `drape fit`'s defaults (the lab's laying, the drapes from flat at grid 61
-        // and the calibration from flat included: the same preset as the CLI's).
+        // `drape fit`'s defaults (the lab's laying and waviness, the drapes from flat
+        // at grid 61 and the calibration from flat included: the same preset as the CLI's).
         estimate::FitOptions o = estimate::drape_fit_defaults();
         o.cancel = ctx.cancelFlag();
         o.progress = [&ctx](const estimate::FitProgress& p) {

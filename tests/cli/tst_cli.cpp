@@ -94,7 +94,18 @@ private slots:
         QVERIFY(md.open(QIODevice::ReadOnly));
         const QString table = QString::fromUtf8(md.readAll());
         QVERIFY2(table.contains("| DL-A04 | new | 31.3 |") && table.contains("| DL-A08 | old | 58.6 |"), qPrintable(table));
-        QVERIFY2(table.contains("(grid 11)") && table.contains("both, as fitted and from flat at two grids"), qPrintable(table));
+        QVERIFY2(table.contains("(grid 11") && table.contains("both, as fitted and from flat at two grids"), qPrintable(table));
+        // The per-label row: the old report predates the finer grid's drape ("-"),
+        // the new one is counted ("k of 1") at the default waviness, 6 mm.
+        const QStringList lines = table.split('\n');
+        bool old_row = false, new_row = false;
+        for (const QString& line : lines) {
+            const QStringList c = line.split('|');
+            if (c.size() < 12 || !(c[2].trimmed() == "1")) continue; // "| label | 1 record | ..."
+            if (c[1].trimmed() == "old") old_row = c[9].trimmed() == "-" && c[10].trimmed().startsWith("-");
+            if (c[1].trimmed() == "new") new_row = c[9].trimmed().endsWith("of 1") && c[10].trimmed() == "6";
+        }
+        QVERIFY2(old_row && new_row, qPrintable(table));
         QFile js(out + "/summary.json");
         QVERIFY(js.open(QIODevice::ReadOnly));
         const QJsonArray rows = QJsonDocument::fromJson(js.readAll()).array();
@@ -110,6 +121,7 @@ private slots:
             }
         }
         QVERIFY(QFile::exists(out + "/dc_error.png"));
+        QVERIFY(QFile::exists(out + "/dc_error_flat.png"));
         const Run noreport = drape({"fit-summary", "--out", out, "x=" + tmp.path() + "/nothing"});
         QVERIFY(noreport.code != 0);
         QVERIFY2(noreport.err.contains("nothing/report.json"), qPrintable(noreport.err));
@@ -119,6 +131,33 @@ private slots:
         const Run nolabel = drape({"fit-summary", "--out", out, rep});
         QCOMPARE(nolabel.code, 2);
         QVERIFY2(nolabel.err.contains("is not LABEL=REPORT_DIR"), qPrintable(nolabel.err));
+    }
+
+    /// `drape export-seed` matches the seed constants on drapes laid and started
+    /// as the preset's lab's (provenance.laying_load, perturbation_m) and says so
+    /// in the seed file, which carries no provenance of its own.
+    void exportSeedRecordsTheSetUpItMatched()
+    {
+        QTemporaryDir tmp;
+        QFile in(DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json");
+        QVERIFY(in.open(QIODevice::ReadOnly));
+        QJsonObject preset = QJsonDocument::fromJson(in.readAll()).object();
+        QJsonObject prov = preset["provenance"].toObject();
+        prov["laying_load"] = 0.5;
+        prov["perturbation_m"] = 0.004;
+        preset["provenance"] = prov;
+        const QString path = tmp.path() + "/p.json", seed = tmp.path() + "/seed.json";
+        QFile out(path);
+        QVERIFY(out.open(QIODevice::WriteOnly));
+        out.write(QJsonDocument(preset).toJson());
+        out.close();
+        const Run r = drape({"export-seed", "--fabric", path, "--out", seed, "--grid", "9", "--seeds", "1", "--quiet"});
+        QVERIFY2(r.code == 0 || r.code == 3, qPrintable(r.err));
+        QFile s(seed);
+        QVERIFY(s.open(QIODevice::ReadOnly));
+        const QJsonObject from = QJsonDocument::fromJson(s.readAll()).object()["exported_from"].toObject();
+        QCOMPARE(from["laying_load"].toDouble(), 0.5);
+        QCOMPARE(from["perturbation_m"].toDouble(), 0.004);
     }
 
     void badBranchAndGridOptionsAreRefusedByName()
@@ -533,7 +572,7 @@ private slots:
                 // --folds starts on the branch's own lift, not the lab's waviness.
                 const Out branch = run({"simulate", "--fabric", preset, "--grid", "9", "--json", "--quiet", "--folds", "6"});
                 QVERIFY2(branch.code == 0, qPrintable(branch.err));
-                QVERIFY(QJsonDocument::fromJson(branch.out.toUtf8()).object()["perturbation_m"].toDouble() != 0.004);
+                QCOMPARE(QJsonDocument::fromJson(branch.out.toUtf8()).object()["perturbation_m"].toDouble(), 0.005); // cloth::kFoldBranchLift
             }
         }
     }

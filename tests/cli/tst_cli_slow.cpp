@@ -41,7 +41,7 @@ class TestCliSlow : public QObject {
     }
 
 private slots:
-    void fittedPresetDrapesTheRecordAtEveryGrid()
+    void fittedPresetConvergesUnderRefinement()
     {
         QTemporaryDir tmp;
         QVERIFY(tmp.isValid());

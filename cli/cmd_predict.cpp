@@ -94,9 +94,10 @@ int run(const std::vector<std::string>& argv)
         j["arc_membrane"] = preset.model.arc_membrane;
         std::cout << dump_json(j) << "\n";
     } else {
+        std::string how = setup.laying_load < 1 ? ", laid under " + format_value(setup.laying_load) + " g first" : std::string();
+        if (setup.fold_mode == 0 && setup.perturbation != cloth::kStartLift) how += ", " + format_value(setup.perturbation * 1e3) + " mm wavy";
         std::printf("set-up             %.0f / %.0f mm (grid %d, seed %llu%s)\n", setup.sample_diameter * 1e3, setup.disc_diameter * 1e3,
-                    setup.grid, static_cast<unsigned long long>(setup.seed),
-                    setup.laying_load < 1 ? (", laid under " + format_value(setup.laying_load) + " g first").c_str() : "");
+                    setup.grid, static_cast<unsigned long long>(setup.seed), how.c_str());
         std::printf("drape coefficient  %.1f %%\n", r.metrics.drape_coefficient_percent);
         std::printf("nodes              %d\n", r.metrics.node_count);
         std::printf("hem height         %.1f .. %.1f mm (below the pedestal top)\n", r.hem.min_z * 1e3, r.hem.max_z * 1e3);

@@ -219,6 +219,9 @@ int run(const std::vector<std::string>& argv)
         if (ro.integrator == cloth::Integrator::Static && setup.laying_load < 1)
             std::printf("laying             first at rest under %s g (the preset's lab; --laying 1: the whole load at once)\n",
                         format_value(setup.laying_load).c_str());
+        if (setup.fold_mode == 0 && setup.perturbation != cloth::kStartLift)
+            std::printf("start              flat, %s mm wavy at most (the preset's lab; --perturbation 1mm: the engine's default)\n",
+                        format_value(setup.perturbation * 1e3).c_str());
         if (!r.status.message.empty()) std::printf("                   %s\n", r.status.message.c_str());
         if (!sens.empty()) std::printf("sensitivity        D change for +10 %% of each parameter (exact, at this rest state):\n");
         for (const auto& t : sens) {

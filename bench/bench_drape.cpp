@@ -143,8 +143,8 @@ int starters_table(const std::vector<int>& grids, bool plain, double laying, Dra
             setup.disc_diameter = 0.15;
             setup.grid = g;
             setup.mesh = mesh;
-            setup.laying_load = laying > 0 ? laying : p.laying(); // `drape simulate`'s default
-            setup.perturbation = p.perturbation(setup.perturbation);
+            setup = p.laid(setup); // `drape simulate`'s default
+            if (laying > 0) setup.laying_load = laying;
             const Row r = in_child([&] { // `drape simulate`'s budget: 1,000 Newton iterations per level
                 return to_row(simulate_drape(p.material(), setup, {}, p.model), 0);
             });

@@ -71,9 +71,7 @@ int run(const std::vector<std::string>& argv)
     const int seeds = a.get_int("--seeds", 2, 1, 16);
     const auto seed0 = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     const double laying = parse_laying(a, preset.laying());
-    const double waviness = a.get_length("--perturbation", preset.perturbation(cloth::kStartLift));
-    if (!(waviness >= 0) || waviness > 0.05)
-        throw UsageError("--perturbation " + *a.get("--perturbation") + " is outside [0, 50mm] (the flat start's largest lift)");
+    const double waviness = parse_perturbation(a, preset.perturbation());
     const bool json_out = a.has("--json"), quiet = a.has("--quiet") || json_out;
     estimate::FoldBranch branch = estimate::FoldBranch::Random;
     try {

@@ -50,8 +50,7 @@ int run(const std::vector<std::string>& argv)
     const cloth::FabricParams* p = &preset.params;
     cloth::DrapeSetup defaults;
     defaults.grid = preset.provenance && preset.provenance->grid > 0 ? preset.provenance->grid : 31;
-    defaults.laying_load = preset.laying(); // the D `drape simulate` gives the preset
-    defaults.perturbation = preset.perturbation(defaults.perturbation); // and starts as wavy
+    defaults = preset.laid(defaults); // the D `drape simulate` gives the preset: laid and started as its lab
     const cloth::DrapeSetup setup = parse_setup(a, defaults);
     if (setup.grid > 401) throw UsageError("--grid: " + std::to_string(setup.grid) + " is outside [5, 401]");
     const int seeds = a.get_int("--seeds", 2, 1, 16);

@@ -189,9 +189,7 @@ int run(const std::vector<std::string>& argv)
     fo.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     fo.seeds_per_evaluation = a.get_int("--seeds", 2, 1, 16);
     fo.laying_load = parse_laying(a, fo.laying_load);
-    fo.perturbation_m = a.get_length("--perturbation", fo.perturbation_m);
-    if (!(fo.perturbation_m >= 0) || fo.perturbation_m > 0.05)
-        throw UsageError("--perturbation " + *a.get("--perturbation") + " is outside [0, 50mm] (the flat start's largest lift)");
+    fo.perturbation_m = parse_perturbation(a, fo.perturbation_m);
     fo.global_evaluations = a.get_int("--global", 0, 0, 100000);
     fo.local_evaluations = a.get_int("--local", 0, 0, 100000);
     fo.uncertainty = !a.has("--no-uncertainty");

@@ -220,8 +220,8 @@ int run(const std::vector<std::string>& argv)
             ss += d * d;
             dok += std::abs(d) <= 2.0 ? 1 : 0;
             nok += std::abs(e.n_fit - e.n_meas) <= 1.0 ? 1 : 0;
-            both += (std::abs(d) <= 2.0 && std::abs(e.n_fit - e.n_meas) <= 1.0) ? 1 : 0;
             const bool fitted_ok = std::abs(d) <= 2.0 && std::abs(e.n_fit - e.n_meas) <= 1.0;
+            both += fitted_ok ? 1 : 0;
             const bool cold_ok = std::abs(e.d_cold - e.d_meas) <= 2.0 && std::abs(e.n_cold - e.n_meas) <= 1.0;
             if (std::isfinite(e.d_cold)) {
                 ++have_cold;

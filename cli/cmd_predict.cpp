@@ -65,8 +65,7 @@ int run(const std::vector<std::string>& argv)
         preset.set_params(p);
     }
     cloth::DrapeSetup defaults;
-    defaults.laying_load = preset.laying(); // a fitted preset is laid as its records' lab laid them
-    defaults.perturbation = preset.perturbation(defaults.perturbation); // and starts as wavy
+    defaults = preset.laid(defaults); // a fitted preset is laid (and as wavy) as its records' lab laid them
     defaults.sample_diameter = a.get_length("--sample-diameter", defaults.sample_diameter);
     // Same mesh density as the fit (the fit's bias is then the same): the fit's
     // grid scaled with the diameter.

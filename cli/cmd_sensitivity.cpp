@@ -46,8 +46,7 @@ int run(const std::vector<std::string>& argv)
     o.model = preset.model;
     cloth::DrapeSetup defaults;
     defaults.grid = 25;
-    defaults.laying_load = preset.laying(); // laid as `drape simulate` lays the preset
-    defaults.perturbation = preset.perturbation(defaults.perturbation); // and starts as wavy
+    defaults = preset.laid(defaults); // laid and started as `drape simulate` lays the preset
     o.setup = parse_setup(a, defaults);
     if (o.setup.grid > 200) throw UsageError("--grid: " + std::to_string(o.setup.grid) + " is outside [5, 200]");
     o.steps = a.get_int("--steps", 5, 2, 41);

@@ -94,8 +94,7 @@ int run(const std::vector<std::string>& argv)
     fabric::FabricPreset preset = load_fabric_flags(a);
     cloth::DrapeSetup defaults;
     defaults.grid = 60;
-    defaults.laying_load = preset.laying(); // a fitted preset is laid as its records' lab laid them
-    defaults.perturbation = preset.perturbation(defaults.perturbation); // and starts as wavy
+    defaults = preset.laid(defaults); // a fitted preset is laid (and as wavy) as its records' lab laid them
     const cloth::DrapeSetup setup = parse_setup(a, defaults);
     cloth::RestOptions ro;
     try {

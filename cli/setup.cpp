@@ -51,6 +51,14 @@ std::set<std::string> operator+(std::set<std::string> a, const std::set<std::str
 
 double parse_laying(const Args& a, double fallback) { return a.get_double_in("--laying", fallback, 1e-3, 1.0); }
 
+double parse_perturbation(const Args& a, double fallback)
+{
+    const double v = a.get_length("--perturbation", fallback);
+    if (!(v >= 0) || v > 0.05)
+        throw UsageError("--perturbation " + *a.get("--perturbation") + " is outside [0, 50mm] (the flat start's largest lift)");
+    return v;
+}
+
 cloth::DrapeMesh parse_mesh(const Args& a, cloth::DrapeMesh fallback)
 {
     const auto m = a.get("--mesh");

@@ -32,6 +32,9 @@ enum SetupFlag : unsigned {
 /// `--laying F` (a fraction of gravity in [0.001, 1]; UsageError naming the
 /// flag otherwise), or `fallback` when absent: parse_setup, fit and compare.
 double parse_laying(const Args& a, double fallback);
+/// `--perturbation L` (a length in [0, 50mm]; UsageError naming the flag and
+/// value otherwise), `fallback` when absent.
+double parse_perturbation(const Args& a, double fallback);
 
 /// `--mesh grid|rings` (UsageError naming the flag and value otherwise), or
 /// `fallback` when absent.

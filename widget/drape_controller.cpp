@@ -154,8 +154,7 @@ void DrapeController::rebuildNow()
     spec->setup.sample_diameter = m_settings.sampleDiameter * 1e-3;
     spec->setup.disc_diameter = m_settings.discDiameter * 1e-3;
     spec->setup.grid = m_settings.gridSize;
-    spec->setup.laying_load = m_preset.laying(); // as `drape simulate` lays it (a fitted preset: as its lab did)
-    spec->setup.perturbation = m_preset.perturbation(cloth::kStartLift);
+    spec->setup = m_preset.laid(spec->setup); // as `drape simulate` lays it (a fitted preset: as its lab did)
     m_worker->requestCancel(); // a running static solve gives way to the rebuild
     toWorker([w = m_worker, spec = std::shared_ptr<const DrapeSpec>(spec)] { w->rebuild(spec); });
     if (m_settings.running) toWorker([w = m_worker] { w->play(); });

@@ -11,6 +11,7 @@
 // coefficient is a percentage everywhere (D = 31.7 means 31.7 %); presets
 // written before that rule ("drape_coefficient": {"value": 0.317}) are read
 // as the same percentage.
+#include "engine/cloth/drape.hpp"
 #include "engine/cloth/model.hpp"
 #include "engine/cloth/params.hpp"
 #include "engine/fabric/seed_format.hpp"
@@ -96,8 +97,17 @@ struct FabricPreset {
     double laying() const { return provenance && provenance->laying_load > 0 ? provenance->laying_load : 1.0; }
     /// cloth::DrapeSetup::perturbation of a drape of this preset from flat: its
     /// records' lab's (Provenance::perturbation_m) when the fit stated it, else
-    /// `fallback` (the engine's default, cloth::kStartLift).
-    double perturbation(double fallback) const { return provenance && provenance->perturbation_m ? *provenance->perturbation_m : fallback; }
+    /// the engine's default, cloth::kStartLift.
+    double perturbation() const { return provenance && provenance->perturbation_m ? *provenance->perturbation_m : cloth::kStartLift; }
+    /// `s` laid as this preset's lab laid its specimens (laying() and
+    /// perturbation()): how `drape simulate`, predict, the widget and the
+    /// benchmarks drape the preset from flat unless told otherwise.
+    cloth::DrapeSetup laid(cloth::DrapeSetup s) const
+    {
+        s.laying_load = laying();
+        s.perturbation = perturbation();
+        return s;
+    }
 };
 
 /// The built-in presets by name ("seed-table1": the seed paper's Table 1).

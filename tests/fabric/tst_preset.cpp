@@ -122,8 +122,10 @@ private slots:
         QCOMPARE(back.laying(), 0.4); // laid as its records' lab laid them
         FabricPreset starter;
         QCOMPARE(starter.laying(), 1.0); // no provenance: at once
-        QCOMPARE(back.perturbation(0.001), 0.006); // as wavy as its lab laid them
-        QCOMPARE(starter.perturbation(0.001), 0.001); // not stated: the engine's default
+        QCOMPARE(back.perturbation(), 0.006); // as wavy as its lab laid them
+        QCOMPARE(starter.perturbation(), drape::cloth::kStartLift); // not stated: the engine's default
+        QCOMPARE(back.laid({}).perturbation, 0.006);
+        QCOMPARE(back.laid({}).laying_load, 0.4);
         // The file carries the unit-suffixed keys.
         const json j = json::parse(read_file(path));
         QVERIFY(j["parameters"].contains("bend_warp_Nm"));
@@ -269,17 +271,20 @@ private slots:
             e = ex.what();
         }
         QVERIFY2(e.contains("fit.records[0].sample_diameter_m") && e.contains("outside"), qPrintable(e));
+        const auto load_error = [](const json& preset) {
+            try {
+                fabric_from_json(preset, "p.json");
+            } catch (const drape::Error& ex) {
+                return QString(ex.what());
+            }
+            return QString();
+        };
         j["fit"]["records"][0]["sample_diameter_m"] = 0.3;
         QCOMPARE(fabric_from_json(j, "p.json").fit->sample_diameter_m, 0.3);
         // The lab's laying in the provenance: a fraction of gravity in (0, 1].
         for (const json& bad : {json(0.0), json(1.5), json("0.4")}) {
             j["provenance"] = {{"tool", "drape fit"}, {"laying_load", bad}};
-            e.clear();
-            try {
-                fabric_from_json(j, "p.json");
-            } catch (const drape::Error& ex) {
-                e = ex.what();
-            }
+            e = load_error(j);
             QVERIFY2(e.contains("provenance.laying_load") && e.contains("p.json"), qPrintable(e));
         }
         j["provenance"]["laying_load"] = 0.4;
@@ -287,18 +292,13 @@ private slots:
         // The lab's waviness: a length in [0, 0.05] m.
         for (const json& bad : {json(-0.001), json(0.2), json("6mm")}) {
             j["provenance"]["perturbation_m"] = bad;
-            e.clear();
-            try {
-                fabric_from_json(j, "p.json");
-            } catch (const drape::Error& ex) {
-                e = ex.what();
-            }
+            e = load_error(j);
             QVERIFY2(e.contains("provenance.perturbation_m") && e.contains("p.json"), qPrintable(e));
         }
         j["provenance"]["perturbation_m"] = 0.0;
-        QCOMPARE(fabric_from_json(j, "p.json").perturbation(0.001), 0.0);
+        QCOMPARE(fabric_from_json(j, "p.json").perturbation(), 0.0);
         j["provenance"].erase("perturbation_m");
-        QCOMPARE(fabric_from_json(j, "p.json").perturbation(0.001), 0.001);
+        QCOMPARE(fabric_from_json(j, "p.json").perturbation(), drape::cloth::kStartLift);
     }
 
     void failed_save_keeps_the_old_file()

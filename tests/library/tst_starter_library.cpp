@@ -68,7 +68,7 @@ private slots:
         cloth::DrapeSetup setup;
         setup.sample_diameter = ref["sample_diameter_m"].get<double>();
         setup.disc_diameter = ref["disc_diameter_m"].get<double>();
-        setup.laying_load = p.laying(); // as `drape simulate` lays it (a starter: at once)
+        setup = p.laid(setup); // as `drape simulate` lays it (a starter: at once, 1 mm wavy)
         const cloth::DrapeResult r = cloth::simulate_drape(p.material(), setup, {}, p.model);
         QCOMPARE(r.status.outcome, cloth::SolverStatus::Outcome::Converged);
         const double D = r.metrics.drape_coefficient_percent;
@@ -97,7 +97,7 @@ private slots:
             setup.sample_diameter = 0.30;
             setup.disc_diameter = 0.15;
             setup.grid = grid;
-            setup.laying_load = p.laying(); // `drape simulate --grid G`, the command
+            setup = p.laid(setup); // `drape simulate --grid G`, the command
             const cloth::DrapeResult r = cloth::simulate_drape(p.material(), setup, {}, p.model);
             QVERIFY2(r.status.converged(), r.status.message.c_str());
             const double D = r.metrics.drape_coefficient_percent;

@@ -361,7 +361,15 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
     }
     DrapeResult r;
     if (continuation) {
-        r.status = run_to_rest(*sys, ropt);
+        // The finer level starts on the coarse level's fold branch and only
+        // polishes it: where the exact Hessian is indefinite there (the rim,
+        // compressed fold flanks), a shifted exact Hessian goes on at Newton's
+        // pace, where the projected one crept for 1,000-2,000 iterations at grid 81
+        // (docs/performance.md, twentieth session).
+        RestOptions fine = ropt;
+        if (fine.shift_before_projection == 0) fine.shift_before_projection = kFineShiftPseudoTime;
+        fine.shift_before_projection = std::max(fine.shift_before_projection, 0.0);
+        r.status = run_to_rest(*sys, fine);
         r.status.add_work(pre);
     } else {
         r.status = rest_from_flat(*sys, setup, ropt); // laid as the set-up says

@@ -147,6 +147,11 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
 /// (docs/model-discrepancy.md section 19).
 inline constexpr int kCoarsestLevel = 41;
 
+/// RestOptions::shift_before_projection of the continuation's finer levels [s]:
+/// the proximal shift M / h^2 grows to m / (0.01 s)^2 per vertex (a stiffness of
+/// 10^4 s^-2 times its mass) before the static solver projects curvature away.
+inline constexpr double kFineShiftPseudoTime = 0.01;
+
 /// DrapeSetup::laying_load of the drape lab's tests: what `drape fit` assumes
 /// of the records' lab by default (--laying) for its drapes from flat, and
 /// writes into the fitted preset (fabric::Provenance::laying_load), so that

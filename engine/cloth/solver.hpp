@@ -50,6 +50,14 @@ struct RestOptions {
     long max_steps = 5'000'000;
     long max_newton = 1000;        ///< static solver
     bool trace = false;           ///< print each static iteration to stderr (residual, step, worst vertex)
+    /// Static solver: when the exact Hessian does not factorise, first shrink the
+    /// proximal pseudo-time h (a larger mass-weighted shift M / h^2 on the exact
+    /// Hessian) down to this [s] before dropping curvature terms (projection).
+    /// 0 = off: straight to the projected Hessian, as a drape from flat has always
+    /// done (its path picks the fold branch, so it is kept); simulate_drape then
+    /// sets kFineShiftPseudoTime for the finer levels of its continuation, which
+    /// only polish a branch. Negative: off on those levels too.
+    double shift_before_projection = 0;
     /// Called now and then with the status so far; return false to cancel.
     std::function<bool(const SolverStatus&)> progress;
     const std::atomic<bool>* cancel = nullptr;

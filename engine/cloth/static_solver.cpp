@@ -139,6 +139,12 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
         }
         ++st.steps;
         if (llt.info() != Eigen::Success) ++prof.failed_factorizations;
+        if (llt.info() != Eigen::Success && exact && opt.shift_before_projection > 0 && h > opt.shift_before_projection) {
+            // A larger proximal shift M / h^2 on the exact Hessian first
+            // (RestOptions::shift_before_projection; 0: never).
+            h = std::max(0.25 * h, opt.shift_before_projection);
+            continue;
+        }
         if (llt.info() != Eigen::Success && exact) {
             exact_ok = -5; // back off from the exact Hessian for a few iterations
             continue;

@@ -158,6 +158,46 @@ private slots:
         QVERIFY(std::abs(warm.metrics.drape_coefficient_percent - cold.metrics.drape_coefficient_percent) < 5);
     }
 
+    void finer_level_shift_keeps_the_rest_state()
+    {
+        // A finer grid's level polishes the coarse level's branch; where its exact
+        // Hessian does not factorise, a larger proximal shift comes before the
+        // projected Hessian (RestOptions::shift_before_projection, which
+        // simulate_drape sets there). It changes the path's cost, not the drape:
+        // the same grid-41 rest interpolated onto grid 45 and polished both ways.
+        // A heavy anisotropic fabric laid as the lab lays it (DL-A07's fit of the
+        // nineteenth session); tst_drape_slow measures the cost at grid 81.
+        FabricParams p;
+        p[Param::AreaDensity] = 0.28;
+        p[Param::BendWarp] = 3.96e-5;
+        p[Param::BendWeft] = 1.49e-5;
+        p[Param::Shear] = 29.7;
+        p[Param::Thickness] = 6.5e-4;
+        DrapeSetup coarse = small(kCoarsestLevel, 1);
+        coarse.laying_load = 0.4;
+        coarse.perturbation = 6e-3;
+        ModelOptions mo;
+        mo.bending_correction = true;
+        const DrapeResult c = simulate_drape(p, coarse, {}, mo);
+        QVERIFY2(c.status.converged(), c.status.message.c_str());
+        DrapeSetup fine = coarse;
+        fine.grid = 45;
+        const Positions start = interpolate_positions(make_drape_mesh(coarse), c.x, make_drape_mesh(fine));
+        RestOptions with_shift;
+        with_shift.shift_before_projection = kFineShiftPseudoTime;
+        const DrapeResult shifted = simulate_drape_from(p, fine, start, with_shift, mo);
+        const DrapeResult projected = simulate_drape_from(p, fine, start, {}, mo);
+        QVERIFY2(projected.status.converged(), projected.status.message.c_str());
+        QVERIFY2(shifted.status.converged(), shifted.status.message.c_str());
+        qInfo("grid 45 from grid 41: %ld Newton iterations with the shift, %ld without; D %.4f / %.4f %%, %d / %d folds",
+              shifted.status.newton_iterations, projected.status.newton_iterations, shifted.metrics.drape_coefficient_percent,
+              projected.metrics.drape_coefficient_percent, shifted.metrics.node_count, projected.metrics.node_count);
+        QCOMPARE(shifted.metrics.node_count, projected.metrics.node_count);
+        QVERIFY(std::abs(shifted.metrics.drape_coefficient_percent - projected.metrics.drape_coefficient_percent) < 0.01);
+        QVERIFY(std::abs(shifted.potential_energy - projected.potential_energy) < 1e-6 * std::abs(projected.potential_energy));
+        QVERIFY(shifted.status.newton_iterations <= projected.status.newton_iterations);
+    }
+
     void fold_mode_starts_on_the_requested_branch()
     {
         // The default fabric at grid 25 drapes from the random mix with 8-9 folds; a

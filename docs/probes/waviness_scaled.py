@@ -1,5 +1,6 @@
 # A waviness that scales with the specimen's bending length c = (B / (rho_A g))^(1/3):
-# amplitude = a0 * (c / 20 mm)^p, B the geometric mean of the 6 mm fit's bendings.
+# amplitude = a0 * (c / 20 mm)^p, B the geometric mean of the 6 mm presets' bendings (after the
+# calibration from flat on A01, A06, A09; the contours' optimum gives the same tables).
 # No new drapes: each record's seven drapes from flat are taken from the fixed waviness
 # (1/3/6/10 mm, folders pL of fitall.sh + seeds.sh) nearest in log to the rule's amplitude;
 # in-sample loss per rule, then leave-one-out over (a0, p) as pooled.py does for one value.
@@ -8,13 +9,6 @@ import json,math,sys
 S=(sys.argv[1] if len(sys.argv)>1 else '.').rstrip('/')+'/'
 Ls=['1','3','6','10']
 ids=['DL-A%02d'%i for i in range(1,11)]
-def find(d,k):
-    if isinstance(d,dict):
-      for kk,v in d.items():
-        if kk==k and not isinstance(v,dict): return v
-        r=find(v,k)
-        if r is not None: return r
-    return None
 lab={}; dr={}; c={}
 for L in Ls:
   for id in ids:
@@ -24,9 +18,8 @@ for L in Ls:
     for fn in ['flat41','flat61','flat81','flat41.s2','flat61.s2','flat41.s3','flat61.s3']:
       j=json.load(open(S+'p%s/%s.%s.json'%(L,id,fn))); out.append((j['drape_coefficient_percent'],j['node_count']))
     dr[(L,id)]=out
-# bending length from the 6 mm fit's contour optimum (bend before calibration = the same at every L)
+# bending length of the 6 mm preset
 for id in ids:
-  f=json.load(open(S+'p6/%s.fit.json'%id))
   p=json.load(open(S+'p6/%s.json'%id))
   q=p['parameters']; bw=q['bend_warp_Nm']; bf=q['bend_weft_Nm']; rho=q['areal_density_kg_m2']
   c[id]=((bw*bf)**0.5/(rho*9.81))**(1/3)*1000

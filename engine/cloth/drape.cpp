@@ -319,6 +319,7 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
     auto sys = make_drape_system(fabric, setup, mopt);
     const bool continuation = ropt.integrator == Integrator::Static && !fabric.grid_springs && setup.grid > kCoarsestLevel;
     SolverStatus pre;
+    bool polish = false; // the finer level starts on the coarse level's rest
     if (continuation) {
         // Intermediate levels have an odd grid: a node then sits on the axis, the
         // centre anchor holds the sheet there, and turning about the axis costs
@@ -356,6 +357,7 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         if (rc.status.outcome != SolverStatus::Outcome::Diverged && rc.status.outcome != SolverStatus::Outcome::Cancelled) {
             const ClothMesh cm = make_drape_mesh(coarse);
             sys->x = interpolate_positions(cm, rc.x, sys->mesh());
+            polish = true;
         }
         pre = rc.status;
     }
@@ -366,8 +368,10 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         // compressed fold flanks), a shifted exact Hessian goes on at Newton's
         // pace, where the projected one crept for 1,000-2,000 iterations at grid 81
         // (docs/performance.md, twentieth session).
+        // (A coarse level that diverged or was cancelled leaves the flat start:
+        // then the usual order, as from flat.)
         RestOptions fine = ropt;
-        if (fine.shift_before_projection == 0) fine.shift_before_projection = kFineShiftPseudoTime;
+        if (fine.shift_before_projection == 0 && polish) fine.shift_before_projection = kFineShiftPseudoTime;
         fine.shift_before_projection = std::max(fine.shift_before_projection, 0.0);
         r.status = run_to_rest(*sys, fine);
         r.status.add_work(pre);

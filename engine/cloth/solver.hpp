@@ -55,8 +55,12 @@ struct RestOptions {
     /// Hessian) down to this [s] before dropping curvature terms (projection).
     /// 0 = off: straight to the projected Hessian, as a drape from flat has always
     /// done (its path picks the fold branch, so it is kept); simulate_drape then
-    /// sets kFineShiftPseudoTime for the finer levels of its continuation, which
-    /// only polish a branch. Negative: off on those levels too.
+    /// sets kFineShiftPseudoTime for the finer levels of its continuation that start
+    /// on the coarser level's rest (they only polish its branch). Negative: off on
+    /// those levels too. A positive value given to simulate_drape applies to every
+    /// level, the coarsest one from flat included (which may change its branch).
+    /// Failed factorisations on the way count as SolverStatus::steps, not as
+    /// newton_iterations.
     double shift_before_projection = 0;
     /// Called now and then with the status so far; return false to cancel.
     std::function<bool(const SolverStatus&)> progress;

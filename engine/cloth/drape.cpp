@@ -371,8 +371,8 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         // (A coarse level that diverged or was cancelled leaves the flat start:
         // then the usual order, as from flat.)
         RestOptions fine = ropt;
+        // (A negative value, off, reaches the solver, which shifts only when it is positive.)
         if (fine.shift_before_projection == 0 && polish) fine.shift_before_projection = kFineShiftPseudoTime;
-        fine.shift_before_projection = std::max(fine.shift_before_projection, 0.0);
         r.status = run_to_rest(*sys, fine);
         r.status.add_work(pre);
     } else {

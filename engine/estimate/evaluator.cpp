@@ -149,14 +149,16 @@ DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::ui
     return drape_features(sim, rec);
 }
 
-void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
+void Evaluator::draw_from_flat(const Eigen::VectorXd& x, FlatDraw which)
 {
+    const bool coarse = which != FlatDraw::FinerGrid, fine_too = which != FlatDraw::FitGrid;
     const cloth::FabricParams p = params_at(x);
     const int R = static_cast<int>(m_recs.size());
     m_cold.resize(static_cast<std::size_t>(R));
     m_cold_seeds.resize(static_cast<std::size_t>(R), 0);
     m_cold_nodes.resize(static_cast<std::size_t>(R));
-    m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt);
+    m_cold_fine.resize(static_cast<std::size_t>(R));
+    if (coarse) m_cold_fine.assign(static_cast<std::size_t>(R), std::nullopt); // another point's
     struct Job {
         int r;
         std::uint64_t seed;
@@ -166,11 +168,11 @@ void Evaluator::draw_from_flat(const Eigen::VectorXd& x)
     // The finer grid's drapes first: each is the longest job (it lays the sheet
     // on the continuation's coarsest level, then refines), so the two threads
     // finish together.
-    const bool fine = m_opt.flat_check_grid > m_opt.grid && m_opt.random_start_seeds > 0;
+    const bool fine = fine_too && m_opt.flat_check_grid > m_opt.grid && m_opt.random_start_seeds > 0;
     // Every record's (a record fitted from the random mix has its cold_* from
     // the spread's draws, but no drape on the finer grid).
     for (int r = 0; r < R && fine; ++r) jobs.push_back({r, m_opt.seed + 1000, m_opt.flat_check_grid});
-    for (int r = 0; r < R; ++r)
+    for (int r = 0; r < R && coarse; ++r)
         if (branch_of(r) != 0)
             for (int k = 0; k < m_opt.random_start_seeds; ++k) jobs.push_back({r, m_opt.seed + 1000 + static_cast<std::uint64_t>(k), 0});
     if (jobs.empty()) return;
@@ -358,6 +360,17 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
     for (int i = 0; i < n; ++i)
         for (Param q : m_vars[static_cast<std::size_t>(i)].params)
             if (!(p[q] > cloth::spec(q).lower) || !(p[q] < cloth::spec(q).upper) || !cloth::spec(q).affects_statics) exact[static_cast<std::size_t>(i)] = 0;
+    // A linear coordinate at a lower bound of 0 switches an effect on (a radius, a
+    // buckling length) that enters as its square or higher: its slope there is 0
+    // (a start at 0 is stored as 1e-300), and a small difference sees nothing, so
+    // the search could never leave 0. The secant over a fifth of the range (6 mm of
+    // a 30 mm radius) says whether switching it on helps.
+    auto at_switch = [&](int i) {
+        const auto& v = m_vars[static_cast<std::size_t>(i)];
+        return !v.log_scale && v.lower == 0 && x[i] <= 1e-6 * (v.upper - v.lower);
+    };
+    for (int i = 0; i < n; ++i)
+        if (at_switch(i)) exact[static_cast<std::size_t>(i)] = 0;
 
     // Coordinate step of the metric's central difference along dx/dc: the
     // first-order path is linear, so the step only has to be small against the
@@ -454,6 +467,7 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
         // the differences are all the search has, and are kept as they are.
         const auto& v = m_vars[static_cast<std::size_t>(i)];
         double h = v.log_scale ? 0.05 : 0.02 * (v.upper - v.lower);
+        if (at_switch(i)) h = 0.2 * (v.upper - v.lower); // see at_switch
         Eigen::VectorXd xp = x;
         if (x[i] + h > v.upper) h = -h;
         xp[i] = x[i] + h;

@@ -69,7 +69,12 @@ public:
     void calibrate_spread(const Eigen::VectorXd& x, int extra);
     /// The cold_* drapes calibrate_spread leaves out: per record on another
     /// branch than the random mix, random_start_seeds drapes from it.
-    void draw_from_flat(const Eigen::VectorXd& x);
+    /// `which`: FitGrid draws only the fit grid's drapes (and drops the finer
+    /// grid's, which were another point's), FinerGrid only the flat_check_grid one,
+    /// added to the fit grid's drapes a FitGrid call drew at the same x: a caller
+    /// screens a candidate on the cheap drapes before it pays for the finer one.
+    enum class FlatDraw { All, FitGrid, FinerGrid };
+    void draw_from_flat(const Eigen::VectorXd& x, FlatDraw which = FlatDraw::All);
     /// Objective for the optimizers: evaluates, keeps the best point and its rest
     /// states. An evaluation with a drape not at rest never replaces a best point
     /// at rest, and returns no less than the best chi2 then (the optimizers do not

@@ -312,12 +312,20 @@ bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double&
 }
 
 /// FitOptions::flat_calibration on the kept result, after its drapes from flat at
-/// the optimum x: both bendings scaled by one factor until the preset draped from
-/// flat gives the records' D (FitResult::FlatCalibration). The contour fit's
-/// optimum stays the search's result (residuals, chi2, intervals); the preset
-/// (`params`), its bending estimates and the records' drapes from flat become the
-/// calibrated ones. Cancelled part-way: the optimum and its drapes are kept, the
-/// reason says so, and the cancellation goes on to the caller.
+/// the optimum x: the preset moved until, draped from flat, it gives the records'
+/// fold count and D (FitResult::FlatCalibration). Two parts:
+/// - fold count off by more than 1: a step of the bendings (warp/weft ratio kept)
+///   along the contours' profile - the other fitted coordinates follow to where the
+///   linearised contours are best for that bending - at 1, 2 and 3 sigma of the
+///   profile (linearised chi2 cost 1, 4, 9, the level of the tie test), softer when
+///   the drapes lay too few folds; the first whose drapes lay the record's count
+///   within 1 and are closer to the record is kept;
+/// - then D: both bendings scaled by one factor until the mean D from flat is
+///   within the D channel's sigma.
+/// The contour fit's optimum stays the search's result (residuals, chi2,
+/// intervals); the preset (`params`), its estimates and the records' drapes from
+/// flat become the calibrated ones. Cancelled part-way: the optimum and its
+/// drapes are kept, the reason says so, and the cancellation goes on to the caller.
 void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x, const Eigen::MatrixXd& J_opt,
                          FitResult& kept)
 {
@@ -328,11 +336,11 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
     c.chi2_increase = std::numeric_limits<double>::quiet_NaN();
     const std::size_t R = kept.records.size();
     // The records' mean error from flat (one scale moves them together: its best
-    // is the mean's zero), the worst fold-count error of any drape, and which
-    // records took part.
-    auto measure = [&](double& e, double& folds, std::vector<char>* used) {
-        double sum = 0;
-        int n = 0;
+    // is the mean's zero), the worst fold-count error of any drape, the mean signed
+    // fold-count error, and which records took part.
+    auto measure = [&](double& e, double& folds, std::vector<char>* used, double* signed_folds = nullptr) {
+        double sum = 0, fsum = 0;
+        int n = 0, nf = 0;
         folds = 0;
         if (used) used->assign(R, 0);
         for (std::size_t r = 0; r < R; ++r) {
@@ -342,35 +350,34 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             folds = std::max(folds, fe);
             ++n;
             if (used) (*used)[r] = 1;
+            const double nm = kept.records[r].measured_features.node_count;
+            if (!std::isfinite(nm)) continue;
+            if (r < ev.cold_features().size() && ev.cold_seeds(r) > 0)
+                for (double k : ev.cold_node_counts(r)) fsum += k - nm, ++nf;
+            if (const Evaluator::FineDrape* f = ev.cold_fine(r); f && f->at_rest) fsum += f->features.node_count - nm, ++nf;
         }
         e = n ? sum / n : std::numeric_limits<double>::quiet_NaN();
+        if (signed_folds) *signed_folds = nf ? fsum / nf : 0.0;
         return n;
     };
-    double e0 = 0, folds0 = 0;
+    double e0 = 0, folds0 = 0, signed0 = 0;
     std::vector<char> used;
-    const int n_used = measure(e0, folds0, &used);
-    char buf[500];
+    const int n_used = measure(e0, folds0, &used, &signed0);
+    char buf[700];
     if (n_used == 0) {
         c.reason = "no drape from flat on a record's fold branch with a measured D: not calibrated";
         return;
     }
     c.tried = true;
     c.error_before = c.error_after = e0;
+    c.fold_error_before = c.fold_error_after = folds0;
     const std::string over = n_used > 1 ? " (mean over " + std::to_string(n_used) + " records)" : std::string();
     double sigma = 0;
     int nd = 0;
     for (const auto& t : kept.residuals)
         if (t.kind == "dc" && t.fitted && std::isfinite(t.sigma)) sigma += t.sigma, ++nd;
     c.tolerance = nd ? sigma / nd : 1.0;
-    if (folds0 > 1) {
-        std::snprintf(buf, sizeof buf,
-                      "draped from flat the preset lays a fold count %.0f off the record's (D %+.1f points%s): the miss is the fold branch, "
-                      "which one bending scale does not mend without losing D; not calibrated",
-                      folds0, e0, over.c_str());
-        c.reason = buf;
-        return;
-    }
-    if (std::abs(e0) <= c.tolerance) {
+    if (folds0 <= 1 && std::abs(e0) <= c.tolerance) {
         std::snprintf(buf, sizeof buf, "draped from flat the preset gives the record's D within the D channel's sigma (%+.1f against %.1f points%s): kept as fitted",
                       e0, c.tolerance, over.c_str());
         c.reason = buf;
@@ -385,12 +392,44 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             linear = linear || !vars[static_cast<std::size_t>(i)].log_scale;
         }
     }
+    const std::string miss = folds0 > 1 ? "lays a fold count " + std::to_string(static_cast<int>(std::lround(folds0))) + " off the record's" : "misses the record's D";
     if (bend.empty() || linear) {
-        std::snprintf(buf, sizeof buf, "draped from flat the preset misses the record's D by %+.1f points%s, but the bendings are %s: not calibrated", e0,
+        std::snprintf(buf, sizeof buf, "draped from flat the preset %s (D %+.1f points%s), but the bendings are %s: not calibrated", miss.c_str(), e0,
                       over.c_str(), bend.empty() ? "not fitted" : "not fitted on a log scale");
         c.reason = buf;
         return;
     }
+    // Which drapes are closest to the record: D in the D channel's sigmas, the fold
+    // count in the node channel's (0.75, NoiseModel), squared and summed.
+    const double node_sigma = ev.options().noise.nodes > 0 ? ev.options().noise.nodes : 0.75;
+    auto score = [&](double e, double folds) { return (e / c.tolerance) * (e / c.tolerance) + (folds / node_sigma) * (folds / node_sigma); };
+    const double ratio0 = c.bend_warp_fitted / c.bend_weft_fitted;
+    double best_score = score(e0, folds0), best_e = e0, best_folds = folds0;
+    Eigen::VectorXd best_x = x;
+    std::vector<RecordFit> best_records; // the kept step's drapes from flat (empty: the optimum's)
+    auto keep = [&](const Eigen::VectorXd& xs, double e, double folds) {
+        best_score = score(e, folds);
+        best_e = e;
+        best_folds = folds;
+        best_x = xs;
+        best_records = kept.records;
+        for (std::size_t r = 0; r < R; ++r) set_from_flat(best_records[r], ev, r);
+    };
+    // Linearised chi2 of the fitted terms at x + dx minus at x (whitened Jacobian at
+    // the optimum); NaN without one (the derivative-free method, --no-uncertainty).
+    const bool have_J = J_opt.rows() == static_cast<Eigen::Index>(kept.residuals.size()) && J_opt.cols() == x.size();
+    auto lin_cost = [&](const Eigen::VectorXd& dx) {
+        if (!have_J) return std::numeric_limits<double>::quiet_NaN();
+        Eigen::VectorXd dr = J_opt * dx;
+        double d2 = 0;
+        for (Eigen::Index k = 0; k < dr.size(); ++k)
+            if (linearised_term(kept.residuals[static_cast<std::size_t>(k)])) {
+                const double w = kept.residuals[static_cast<std::size_t>(k)].whitened();
+                d2 += (w + dr[k]) * (w + dr[k]) - w * w;
+            }
+        return d2;
+    };
+    const double s2 = std::max(1.0, kept.chi2 / std::max(1, kept.dof)); // a fit worse than its noise widens the profile, as the intervals
     // dD / d ln(scale) from the exact sensitivities at the optimum (first seed's
     // rest state), over the records measured above.
     double slope = 0;
@@ -403,67 +442,216 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             if (q == Param::BendWarp || q == Param::BendWeft) s10 += d, have = true;
         if (have) slope += s10 / std::log(1.1), ++ns;
     }
-    if (ns == 0 || !(slope / ns > 0)) {
-        std::snprintf(buf, sizeof buf, "draped from flat the preset misses the record's D by %+.1f points%s, but D's sensitivity to the bending at the optimum is "
-                      "not available or not positive: not calibrated", e0, over.c_str());
-        c.reason = buf;
-        return;
-    }
-    slope /= ns;
-    // Which drapes are closest to the record: D in the D channel's sigmas, the fold
-    // count in the node channel's (0.75, NoiseModel), squared and summed.
-    const double node_sigma = ev.options().noise.nodes > 0 ? ev.options().noise.nodes : 0.75;
-    auto score = [&](double e, double folds) { return (e / c.tolerance) * (e / c.tolerance) + (folds / node_sigma) * (folds / node_sigma); };
-    const double ratio0 = c.bend_warp_fitted / c.bend_weft_fitted;
+    const bool slope_ok = ns > 0 && slope / ns > 0;
+    if (slope_ok) slope /= ns;
     const double max_step = std::log(1.5);
-    double ln_s = std::clamp(-e0 / slope, -max_step, max_step);
-    double best_score = score(e0, folds0), best_e = e0, best_scale = 1;
-    double prev_ln = 0, prev_e = e0;
-    Eigen::VectorXd best_x = x;
-    std::vector<RecordFit> best_records; // the kept step's drapes from flat (empty: the optimum's)
+    // Both bendings scaled by exp(ln_s) from `from` (ratio kept); false when the
+    // bounds would clip the step or bend the warp/weft ratio.
+    auto scaled = [&](const Eigen::VectorXd& from, double ln_s, Eigen::VectorXd& xs) {
+        xs = from;
+        for (int i : bend) {
+            const FitVariable& v = vars[static_cast<std::size_t>(i)];
+            xs[i] = std::clamp(from[i] + ln_s / std::log(10.0), v.lower, v.upper);
+        }
+        const cloth::FabricParams ps = ev.params_at(xs), pf = ev.params_at(from);
+        return std::abs(ps[Param::BendWarp] / ps[Param::BendWeft] / ratio0 - 1) <= 1e-9 &&
+               std::abs(std::log(ps[Param::BendWarp] / pf[Param::BendWarp])) >= 1e-6;
+    };
+    auto bend_scale = [&](const Eigen::VectorXd& xs) { return ev.params_at(xs)[Param::BendWarp] / c.bend_warp_fitted; };
     try {
-        for (int step = 0; step < 2; ++step) {
-            Eigen::VectorXd xs = x;
-            for (int i : bend) {
-                const FitVariable& v = vars[static_cast<std::size_t>(i)];
-                xs[i] = std::clamp(x[i] + ln_s / std::log(10.0), v.lower, v.upper);
+        if (folds0 > 1) {
+            // 1. The fold count: steps along the contours' profile of the bendings,
+            // screened on the fit grid's drapes; then D by a bending scale on the same
+            // drapes; the finer grid's drape once, for the preset that is kept.
+            c.fold_search = true;
+            std::vector<int> other;
+            for (int i = 0; i < static_cast<int>(vars.size()); ++i)
+                if (std::find(bend.begin(), bend.end(), i) == bend.end()) other.push_back(i);
+            // The profile's direction per decade of the bendings: the other coordinates
+            // where the linearised contours are best, from the rows the fit linearises.
+            const double sign = signed0 < 0 ? -1.0 : 1.0; // too few folds: softer bendings; too many: stiffer
+            std::string why_not;
+            if (!have_J) why_not = "without the contours' Jacobian at the optimum there is no profile to step along";
+            else if (signed0 == 0) why_not = "its drapes lay as many folds too many as too few";
+            double unit = 0;
+            Eigen::VectorXd dir = Eigen::VectorXd::Zero(x.size());
+            if (why_not.empty()) {
+                std::vector<char> rows(kept.residuals.size());
+                for (std::size_t k = 0; k < rows.size(); ++k) rows[k] = linearised_term(kept.residuals[k]) ? 1 : 0;
+                dir = profile_direction(J_opt, rows, bend, unit);
+                if (!(unit > 0) || !std::isfinite(unit)) why_not = "the contours do not see the bendings at the optimum";
             }
-            // The factor the preset gets (bounds may clip it); a step that the bounds
-            // would bend out of the fitted warp/weft ratio is not drawn.
-            const cloth::FabricParams ps = ev.params_at(xs);
-            const double scale = ps[Param::BendWarp] / c.bend_warp_fitted;
-            if (std::abs(ps[Param::BendWarp] / ps[Param::BendWeft] / ratio0 - 1) > 1e-9 || std::abs(std::log(scale)) < 1e-6) break;
-            ev.draw_from_flat(xs);
+            // The step of k sigma of the profile (its curvature: the linearised chi2
+            // rises by k^2 s2 from its minimum), shortened where a coordinate would
+            // leave the box or move more than k decades (k tenths of a linear range):
+            // the point stays on the profile's line.
+            auto step_of = [&](double k) {
+                double t = sign * k * std::sqrt(s2 / unit);
+                for (int i = 0; i < static_cast<int>(vars.size()); ++i) {
+                    const FitVariable& v = vars[static_cast<std::size_t>(i)];
+                    const double move = t * dir[i];
+                    if (move == 0) continue;
+                    const double cap = k * (v.log_scale ? 1.0 : 0.1 * (v.upper - v.lower));
+                    const double room = std::min(cap, move > 0 ? v.upper - x[i] : x[i] - v.lower);
+                    if (std::abs(move) > room) t *= std::max(0.0, room) / std::abs(move);
+                }
+                return t;
+            };
+            // A profile no other coordinate follows is a bending scale alone, which
+            // does not mend the fold count without losing D; one that leaves the box
+            // at once has no step to draw.
+            if (why_not.empty()) {
+                bool follows = false;
+                for (int i : other) {
+                    const FitVariable& v = vars[static_cast<std::size_t>(i)];
+                    follows = follows || std::abs(dir[i]) > 1e-3 * (v.log_scale ? 1.0 : v.upper - v.lower);
+                }
+                if (!follows)
+                    why_not = "the contours' profile moves the bendings alone (no other fitted coordinate follows them), and one bending "
+                              "scale does not mend the fold count without losing D";
+                else if (std::abs(step_of(1.0)) < 0.01)
+                    why_not = "the contours' profile leaves the fit's box at once (a coordinate it moves is at its bound)";
+            }
+            c.fold_direction = why_not.empty() ? sign : 0;
+            Eigen::VectorXd cand;
+            double cand_e = 0, cand_score = best_score;
+            bool last_is_cand = false;
+            double t_prev = 0;
+            for (double k : {1.0, 2.0}) {
+                if (!why_not.empty()) break;
+                const double t = step_of(k);
+                // A step the box shortened to (next to) the last one draws nothing new.
+                if (std::abs(t - t_prev) < 0.01 || std::abs(t) < 0.01) break;
+                t_prev = t;
+                Eigen::VectorXd xs = x + t * dir;
+                for (int i = 0; i < static_cast<int>(vars.size()); ++i) {
+                    const FitVariable& v = vars[static_cast<std::size_t>(i)];
+                    xs[i] = std::clamp(xs[i], v.lower, v.upper); // rounding only: step_of kept it inside
+                }
+                const double cost = lin_cost(xs - x);
+                ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
+                ev.report("from flat, fold count");
+                ++c.steps;
+                double e = 0, folds = 0;
+                if (measure(e, folds, nullptr) != n_used) break;
+                c.history.push_back({bend_scale(xs), e, folds, "fold count", k, cost, false});
+                if (folds <= 1 && score(e, folds) < cand_score) {
+                    cand = xs;
+                    cand_e = e;
+                    cand_score = score(e, folds);
+                    c.fold_sigmas = k;
+                    c.fold_cost = cost;
+                    last_is_cand = true;
+                    break;
+                }
+            }
+            if (cand.size() == 0) {
+                if (why_not.empty())
+                    why_not = "no step of the bendings along the contours' profile within 2 sigma laid it within 1 with its drapes closer to the record";
+                std::snprintf(buf, sizeof buf, "draped from flat the preset lays a fold count %.0f off the record's (D %+.1f points%s); %s: not calibrated",
+                              folds0, e0, over.c_str(), why_not.c_str());
+                c.reason = buf;
+                c.fold_search_failed = true;
+                return;
+            }
+            // D on the fit grid's drapes, from the step's point.
+            if (std::abs(cand_e) > c.tolerance && slope_ok) {
+                const Eigen::VectorXd from = cand;
+                const double ln_s = std::clamp(-cand_e / slope, -max_step, max_step);
+                // One step (each costs a set of drapes; the fit's time is bounded).
+                for (int step = 0; step < 1; ++step) {
+                    Eigen::VectorXd xs;
+                    if (!scaled(from, ln_s, xs)) break;
+                    ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
+                    ev.report("from flat, calibrated");
+                    ++c.steps;
+                    double e = 0, folds = 0;
+                    if (measure(e, folds, nullptr) != n_used) break;
+                    c.history.push_back({bend_scale(xs), e, folds, "D", 0, lin_cost(xs - x), false});
+                    last_is_cand = false;
+                    if (folds <= 1 && score(e, folds) < cand_score) {
+                        cand = xs;
+                        cand_e = e;
+                        cand_score = score(e, folds);
+                        last_is_cand = true;
+                    }
+                }
+            }
+            // The finer grid's drape for the preset that is kept (with the fit grid's
+            // drapes again when a later step drew other ones).
+            ev.draw_from_flat(cand, last_is_cand ? Evaluator::FlatDraw::FinerGrid : Evaluator::FlatDraw::All);
             ev.report("from flat, calibrated");
-            ++c.steps;
             double e = 0, folds = 0;
-            if (measure(e, folds, nullptr) != n_used) break;
-            c.history.push_back({scale, e, folds});
-            // Kept when its drapes are closer to the record, the fold count within 1.
-            if (folds <= 1 && score(e, folds) < best_score) {
-                best_score = score(e, folds);
-                best_e = e;
-                best_scale = scale;
-                best_x = xs;
-                best_records = kept.records;
-                for (std::size_t r = 0; r < R; ++r) set_from_flat(best_records[r], ev, r);
+            if (measure(e, folds, nullptr) != n_used) {
+                c.reason = "draped from flat the calibrated preset did not come to rest on the finer grid: kept as fitted";
+                c.fold_search_failed = true;
+                return;
             }
-            // Done within the D channel's sigma: D from flat scatters with the fold
-            // pattern (one preset's drapes from flat differ by 2-3 points between seeds),
-            // so aiming closer draws again on noise (DL-A04: a secant step from +1.0
-            // landed at -1.5 with half a fold off).
-            if (std::abs(e) <= c.tolerance || folds > 1) break;
-            // Secant through the last two points (the sensitivity at the optimum is
-            // the fitted branch's; the drapes from flat may rest on another).
-            const double ln_now = std::log(scale);
-            const double sec = (e - prev_e) / (ln_now - prev_ln);
-            if (!(sec > 0)) break;
-            prev_ln = ln_now;
-            prev_e = e;
-            ln_s = std::clamp(ln_now - e / sec, -max_step, max_step);
+            const double cost = lin_cost(cand - x);
+            c.history.push_back({bend_scale(cand), e, folds, "preset", 0, cost, true});
+            // Kept when its drapes are within 1 fold and closer to the record by more
+            // than the contours lose: the record's fold count and D from flat and its
+            // contours on the fold branch weighed in one likelihood (the drapes' score
+            // in the sigmas of D and of the node count, the contours' linearised chi2
+            // scaled as the intervals are).
+            if (folds <= 1 && score(e, folds) < best_score && !(cost / s2 < best_score - score(e, folds))) {
+                std::snprintf(buf, sizeof buf,
+                              "draped from flat the preset lays a fold count %.0f off the record's (D %+.1f points%s); a step along the contours' "
+                              "profile lays it within 1 (D %+.1f points) but costs the contours more (linearised chi2 %+.1f, scaled %+.1f) than "
+                              "it gains from flat (%.1f): not calibrated",
+                              folds0, e0, over.c_str(), e, cost, cost / s2, best_score - score(e, folds));
+                c.reason = buf;
+                c.fold_search_failed = true;
+                return;
+            }
+            if (!(folds <= 1 && score(e, folds) < best_score)) {
+                std::snprintf(buf, sizeof buf,
+                              "draped from flat the preset lays a fold count %.0f off the record's (D %+.1f points%s); a step along the contours' "
+                              "profile laid it within 1 on the fit grid, but with the finer grid's drape it is %.0f off (D %+.1f points): not calibrated",
+                              folds0, e0, over.c_str(), folds, e);
+                c.reason = buf;
+                c.fold_search_failed = true;
+                return;
+            }
+            keep(cand, e, folds);
+        } else if (std::abs(e0) > c.tolerance && slope_ok) {
+            // 2. D alone (the fold count within 1): both bendings scaled by one factor.
+            double ln_s = std::clamp(-e0 / slope, -max_step, max_step);
+            double prev_ln = 0, prev_e = e0;
+            for (int step = 0; step < 2; ++step) {
+                Eigen::VectorXd xs;
+                if (!scaled(x, ln_s, xs)) break;
+                const double scale = bend_scale(xs);
+                ev.draw_from_flat(xs);
+                ev.report("from flat, calibrated");
+                ++c.steps;
+                double e = 0, folds = 0;
+                if (measure(e, folds, nullptr) != n_used) break;
+                c.history.push_back({scale, e, folds, "D", 0, lin_cost(xs - x), true});
+                // Kept when its drapes are closer to the record, the fold count within 1.
+                if (folds <= 1 && score(e, folds) < best_score) keep(xs, e, folds);
+                // Done within the D channel's sigma: D from flat scatters with the fold
+                // pattern (one preset's drapes from flat differ by 2-3 points between seeds),
+                // so aiming closer draws again on noise (DL-A04: a secant step from +1.0
+                // landed at -1.5 with half a fold off).
+                if (std::abs(e) <= c.tolerance || folds > 1) break;
+                // Secant through the last two points (the sensitivity at the optimum is
+                // the fitted branch's; the drapes from flat may rest on another).
+                const double ln_now = std::log(scale);
+                const double sec = (e - prev_e) / (ln_now - prev_ln);
+                if (!(sec > 0)) break;
+                prev_ln = ln_now;
+                prev_e = e;
+                ln_s = std::clamp(ln_now - e / sec, -max_step, max_step);
+            }
+        } else {
+            std::snprintf(buf, sizeof buf, "draped from flat the preset misses the record's D by %+.1f points%s, but D's sensitivity to the bending at the optimum is "
+                          "not available or not positive: not calibrated", e0, over.c_str());
+            c.reason = buf;
+            return;
         }
     } catch (const CancelledFit&) {
-        std::snprintf(buf, sizeof buf, "draped from flat the preset missed the record's D by %+.1f points%s; the calibration was cancelled: kept as fitted", e0,
+        std::snprintf(buf, sizeof buf, "draped from flat the preset %s (D %+.1f points%s); the calibration was cancelled: kept as fitted", miss.c_str(), e0,
                       over.c_str());
         c.reason = buf;
         throw;
@@ -477,42 +665,58 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
         return;
     }
     c.applied = true;
-    c.scale = best_scale;
     c.error_after = best_e;
-    {
-        const cloth::FabricParams pb = ev.params_at(best_x);
-        kept.params[Param::BendWarp] = pb[Param::BendWarp];
-        kept.params[Param::BendWeft] = pb[Param::BendWeft];
-    }
-    kept.records = std::move(best_records);
-    // Linearised cost on the fitted terms (whitened Jacobian at the optimum; not
-    // taken without the uncertainty stage or with the derivative-free method).
-    if (J_opt.rows() == static_cast<Eigen::Index>(kept.residuals.size()) && J_opt.cols() == best_x.size()) {
-        Eigen::VectorXd dr = J_opt * (best_x - x);
-        double d2 = 0;
-        for (Eigen::Index k = 0; k < dr.size(); ++k)
-            if (linearised_term(kept.residuals[static_cast<std::size_t>(k)])) {
-                const double w = kept.residuals[static_cast<std::size_t>(k)].whitened();
-                d2 += (w + dr[k]) * (w + dr[k]) - w * w;
+    c.fold_error_after = best_folds;
+    const cloth::FabricParams pb = ev.params_at(best_x);
+    c.scale = pb[Param::BendWarp] / c.bend_warp_fitted;
+    // Every fitted coordinate the calibration moved goes into the preset.
+    std::vector<Param> moved;
+    for (int i = 0; i < static_cast<int>(vars.size()); ++i)
+        if (best_x[i] != x[i])
+            for (Param q : vars[static_cast<std::size_t>(i)].params) {
+                kept.params[q] = pb[q];
+                if (std::find(moved.begin(), moved.end(), q) == moved.end()) moved.push_back(q);
             }
-        c.chi2_increase = d2;
+    kept.records = std::move(best_records);
+    c.chi2_increase = lin_cost(best_x - x);
+    std::string others;
+    for (Param q : moved) {
+        if (q == Param::BendWarp || q == Param::BendWeft) continue;
+        char o[160];
+        const std::string key(cloth::spec(q).key);
+        std::snprintf(o, sizeof o, "%s%s x %.3f", others.empty() ? "" : ", ", key.c_str(), pb[q] / ev.params_at(x)[q]);
+        others += o;
     }
-    for (auto& e : kept.estimates)
-        if (e.id == Param::BendWarp || e.id == Param::BendWeft) {
-            const double fitted = e.value;
-            e.value = kept.params[e.id];
-            const bool inside = e.value >= e.lower95 && e.value <= e.upper95;
+    for (auto& e : kept.estimates) {
+        if (std::find(moved.begin(), moved.end(), e.id) == moved.end()) continue;
+        const double fitted = e.value;
+        e.value = kept.params[e.id];
+        const bool inside = e.value >= e.lower95 && e.value <= e.upper95;
+        if (c.fold_search)
+            std::snprintf(buf, sizeof buf,
+                          "the contours' optimum %.3g moved along their profile to %.3g so the preset draped from flat lays the record's fold count "
+                          "within 1 and gives its D (%s its 95 %% interval; the notes before are the optimum's)",
+                          fitted, e.value, inside ? "inside" : "outside");
+        else
             std::snprintf(buf, sizeof buf,
                           "the contours' optimum %.3g scaled by %.3f so the preset draped from flat gives the record's D (%s its 95 %% interval; "
                           "the notes before are the optimum's)",
                           fitted, c.scale, inside ? "inside" : "outside");
-            e.note = e.note.empty() ? buf : e.note + "; " + buf;
-        }
+        e.note = e.note.empty() ? buf : e.note + "; " + buf;
+    }
     const std::string cost = std::isfinite(c.chi2_increase) ? fmt_chi2(c.chi2_increase) : std::string("not computed (no Jacobian at the optimum)");
-    std::snprintf(buf, sizeof buf,
-                  "draped from flat the contours' optimum missed the record's D by %+.1f points%s (sigma %.1f); both bendings scaled by %.3f "
-                  "(ratio kept): %+.1f points from flat; the fitted terms' chi2 %s",
-                  e0, over.c_str(), c.tolerance, c.scale, best_e, cost.c_str());
+    if (c.fold_search) {
+        std::snprintf(buf, sizeof buf,
+                      "draped from flat the contours' optimum laid a fold count %.0f off the record's (D %+.1f points%s); a step along the contours' "
+                      "profile, %.0f sigma (bendings x %.3f%s%s), lays it within %.0f (D %+.1f points, sigma %.1f); the fitted terms' chi2 %s",
+                      folds0, e0, over.c_str(), c.fold_sigmas, c.scale, others.empty() ? "" : ", ", others.c_str(), best_folds, best_e, c.tolerance,
+                      cost.c_str());
+    } else {
+        std::snprintf(buf, sizeof buf,
+                      "draped from flat the contours' optimum missed the record's D by %+.1f points%s (sigma %.1f); both bendings scaled by %.3f "
+                      "(ratio kept): %+.1f points from flat; the fitted terms' chi2 %s",
+                      e0, over.c_str(), c.tolerance, c.scale, best_e, cost.c_str());
+    }
     c.reason = buf;
 }
 

@@ -317,9 +317,19 @@ struct FitResult {
         double tolerance = 0;       ///< the D channel's sigma: errors within it are left alone [points]
         double bend_warp_fitted = 0, bend_weft_fitted = 0; ///< the contour optimum's bendings [N*m]
         double chi2_increase = 0;   ///< linearised chi2 increase of the fitted terms for the scale (Jacobian at the optimum; NaN: not taken)
-        int steps = 0;              ///< calibration steps drawn (each: the drapes from flat again)
+        int steps = 0;              ///< calibration steps drawn (each: the drapes from flat again, or only the fit grid's)
+        double fold_error_before = 0, fold_error_after = 0; ///< worst fold-count error of a drape from flat, at the optimum / the preset
+        bool fold_search = false;   ///< the fold count was off by more than 1: steps along the contours' profile were tried
+        bool fold_search_failed = false; ///< none of them laid it within 1 (not calibrated)
+        double fold_direction = 0;  ///< -1: softer bendings (too few folds), +1 stiffer, 0: no profile (no Jacobian)
+        double fold_sigmas = 0;     ///< the kept step, in sigmas of the profile (1, 2, 3; 0: none)
+        double fold_cost = 0;       ///< its linearised chi2 increase of the fitted terms
         struct Step {
-            double scale = 1, error = 0, fold_error = 0; ///< the factor tried, its mean D error from flat [points], worst fold-count error
+            double scale = 1, error = 0, fold_error = 0; ///< the bendings' factor, the mean D error from flat [points], worst fold-count error
+            std::string kind = "D";  ///< "fold count": a step along the contours' profile; "D": a bending scale
+            double sigmas = 0;       ///< a profile step's size in its sigmas
+            double chi2_cost = 0;    ///< linearised chi2 increase of the fitted terms (NaN: no Jacobian)
+            bool finer_grid = true;  ///< the flat_check_grid drape was drawn too (a profile step screened out on the fit grid: not)
         };
         std::vector<Step> history;  ///< every step drawn, in order
         std::string reason;         ///< one sentence for the report

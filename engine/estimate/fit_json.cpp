@@ -87,9 +87,21 @@ json fit_to_json(const FitResult& r)
                                    {"bend_weft_fitted_Nm", c.bend_weft_fitted},
                                    {"chi2_increase_linearised", std::isfinite(c.chi2_increase) ? json(c.chi2_increase) : json(nullptr)},
                                    {"steps", c.steps},
+                                   {"fold_error_before", c.fold_error_before},
+                                   {"fold_error_after", c.fold_error_after},
+                                   {"fold_search", c.fold_search},
+                                   {"fold_sigmas", c.fold_sigmas},
+                                   {"fold_chi2_increase_linearised", c.fold_sigmas > 0 && std::isfinite(c.fold_cost) ? json(c.fold_cost) : json(nullptr)},
                                    {"reason", c.reason}};
         json tried = json::array();
-        for (const auto& t : c.history) tried.push_back({{"scale", t.scale}, {"error_percent", t.error}, {"fold_error", t.fold_error}});
+        for (const auto& t : c.history)
+            tried.push_back({{"kind", t.kind},
+                             {"scale", t.scale},
+                             {"sigmas", t.sigmas},
+                             {"error_percent", t.error},
+                             {"fold_error", t.fold_error},
+                             {"finer_grid", t.finer_grid},
+                             {"chi2_increase_linearised", std::isfinite(t.chi2_cost) ? json(t.chi2_cost) : json(nullptr)}});
         fit["flat_calibration"]["steps_tried"] = tried;
     }
     if (r.anisotropy.assessed) {

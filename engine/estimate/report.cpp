@@ -453,7 +453,8 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
                                          : std::string(", the whole load at once"))
            << ", the flat start's waviness " << num(r.options.perturbation_m * 1e3, "%.1f") << " mm (`--perturbation`, written into the preset)"
            << "), the preset"
-           << (r.flat_calibration.applied ? " (its bendings " + num(r.flat_calibration.scale, "%.3f") + " x the contours' optimum: calibrated from flat, above)"
+           << (r.flat_calibration.applied ? (r.flat_calibration.fold_search ? " (moved along the contours' profile and its bendings " : " (its bendings ") +
+                                                num(r.flat_calibration.scale, "%.3f") + " x the contours' optimum: calibrated from flat, above)"
                                           : std::string())
            << " gives"
            << (on_branch ? " (the fold count a random start picks can differ from the record's: a bifurcation, not a misfit)" : "")

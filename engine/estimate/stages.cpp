@@ -4,6 +4,7 @@
 #include "engine/estimate/root.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 
 #include <algorithm>
 #include <cmath>
@@ -286,6 +287,35 @@ bool mirror_check(Evaluator& ev, const std::vector<FitVariable>& vars, const std
         return true;
     }
     return false;
+}
+
+Eigen::VectorXd profile_direction(const Eigen::MatrixXd& J, const std::vector<char>& rows, const std::vector<int>& bend, double& curvature)
+{
+    const Eigen::Index n = J.cols();
+    std::vector<int> other;
+    for (int i = 0; i < static_cast<int>(n); ++i)
+        if (std::find(bend.begin(), bend.end(), i) == bend.end()) other.push_back(i);
+    std::vector<Eigen::Index> use;
+    for (Eigen::Index k = 0; k < J.rows(); ++k)
+        if (static_cast<std::size_t>(k) < rows.size() && rows[static_cast<std::size_t>(k)]) use.push_back(k);
+    Eigen::VectorXd dir = Eigen::VectorXd::Zero(n);
+    for (int i : bend) dir[i] = 1;
+    if (!other.empty() && !use.empty()) {
+        Eigen::MatrixXd Jo(static_cast<Eigen::Index>(use.size()), static_cast<Eigen::Index>(other.size()));
+        Eigen::VectorXd jb = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(use.size()));
+        for (std::size_t k = 0; k < use.size(); ++k) {
+            for (std::size_t j = 0; j < other.size(); ++j) Jo(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j)) = J(use[k], other[j]);
+            for (int i : bend) jb[static_cast<Eigen::Index>(k)] += J(use[k], i);
+        }
+        // Least squares with column pivoting: a coordinate the rows do not see gets 0.
+        const Eigen::VectorXd d = Jo.colPivHouseholderQr().solve(-jb);
+        for (std::size_t j = 0; j < other.size(); ++j)
+            dir[other[j]] = std::isfinite(d[static_cast<Eigen::Index>(j)]) ? d[static_cast<Eigen::Index>(j)] : 0.0;
+    }
+    curvature = 0;
+    const Eigen::VectorXd jd = J * dir;
+    for (Eigen::Index k : use) curvature += jd[k] * jd[k];
+    return dir;
 }
 
 } // namespace drape::estimate::detail

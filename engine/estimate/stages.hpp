@@ -49,6 +49,15 @@ void scan_bending(Evaluator& ev, const std::vector<FitVariable>& vars, const std
 bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Eigen::VectorXd& x, const Box& box, int budget,
                          const std::string& stage, Start from = Start::Best);
 
+/// The profile of the bendings in a linearised chi2 |w + J dx|^2 (only the rows
+/// where `rows` is set): for a step of every bending coordinate (`bend`) by one
+/// together, the other coordinates' step that keeps the chi2 least - where the
+/// other fitted parameters go when the bendings are held at another value. Returns
+/// that direction (1 at the bending coordinates) and, in `curvature`, |J dir|^2 over
+/// the rows: the chi2's rise per (decade of bending)^2 along it. Other coordinates
+/// the rows do not see stay (0). Used by the calibration from flat (fit.cpp).
+Eigen::VectorXd profile_direction(const Eigen::MatrixXd& J, const std::vector<char>& rows, const std::vector<int>& bend, double& curvature);
+
 /// Mirror check: D and the node count do not change when warp and weft swap;
 /// only the signed cos 2theta of the contours tells which axis is stiffer, and
 /// it is weak against the fold noise, so a local stage can end in the mirror

@@ -4,6 +4,7 @@
 // same seed gives the same fit.
 #include "engine/core/error.hpp"
 #include "engine/estimate/fit.hpp"
+#include "engine/estimate/stages.hpp"
 #include "synthetic.hpp"
 
 #include <QTest>
@@ -267,6 +268,122 @@ private slots:
         QVERIFY(!fit_to_json(off)["fit"].contains("flat_calibration"));
         QCOMPARE(off.params[Param::BendWarp], c.bend_warp_fitted);
         QCOMPARE(off.params[Param::BendWeft], c.bend_weft_fitted);
+    }
+
+    void profileFollowsTheBendingWhereTheChi2IsLeast()
+    {
+        // chi2(b, g, h) = (b - g)^2 + (0.1 g)^2 + (2 h)^2, a masked row 5 b aside: held
+        // at b = 1, the chi2 is least at g = 1 / 1.01 and h = 0, where it has risen by
+        // 0.01 / 1.01 per unit b^2 - the profile the calibration from flat steps along.
+        Eigen::MatrixXd J(4, 3);
+        J << 1, -1, 0, //
+            0, 0.1, 0, //
+            0, 0, 2,   //
+            5, 0, 0;
+        double curvature = 0;
+        const Eigen::VectorXd dir = detail::profile_direction(J, {1, 1, 1, 0}, {0}, curvature);
+        QCOMPARE(dir.size(), Eigen::Index(3));
+        QCOMPARE(dir[0], 1.0);
+        QVERIFY(std::abs(dir[1] - 1 / 1.01) < 1e-12);
+        QVERIFY(std::abs(dir[2]) < 1e-12);
+        QVERIFY(std::abs(curvature - 0.01 / 1.01) < 1e-12);
+        // Two bending coordinates step together; a coordinate no row sees stays.
+        Eigen::MatrixXd J2(2, 4);
+        J2 << 1, 1, -1, 0, //
+            0, 0, 1, 0;
+        const Eigen::VectorXd d2 = detail::profile_direction(J2, {1, 1}, {0, 1}, curvature);
+        QCOMPARE(d2[0], 1.0);
+        QCOMPARE(d2[1], 1.0);
+        QVERIFY(std::abs(d2[2] - 1.0) < 1e-12); // min (2 - g)^2 + g^2: g = 1
+        QCOMPARE(d2[3], 0.0);
+        QVERIFY(std::abs(curvature - 2.0) < 1e-12);
+    }
+
+    void flatCalibrationStepsAlongTheProfileForTheFoldCount()
+    {
+        // A record that states two folds more than its fabric lays from flat: the fit
+        // drapes on the stated branch, its preset draped from flat misses the count by
+        // 2, and the calibration steps the bendings (softer: too few folds) along the
+        // contours' profile, 1 then 2 sigma, screening each step on the fit grid's
+        // drapes. Whatever it finds, the result must be consistent: kept only when its
+        // drapes from flat are within 1 fold and closer to the record by more than the
+        // contours' linearised chi2 rises; else the preset is the contours' optimum.
+        // (A stiff anisotropic fabric with a moderate shear, where the contours' profile
+        // trades bending for shear: on this machine the step of 1 sigma is kept.)
+        cloth::FabricParams p = truth();
+        p[Param::BendWarp] = 3.0e-5;
+        p[Param::BendWeft] = 1.2e-5;
+        p[Param::Shear] = 30;
+        MeasuredDrape rec = synthetic(p, 0.30, 0.15, 25, 11);
+        FitOptions o;
+        o.grid = 25;
+        o.seed = 1;
+        o.flat_check_grid = 33;
+        o.bending = BendingTie::Free;
+        o.effects = false;
+        o.flat_calibration = true;
+        {
+            // The count the fabric lays from flat (the calibration's first seed), and a
+            // photo that "reads" two more.
+            cloth::DrapeSetup laid = rec.setup(25, o.seed + 1000);
+            laid.laying_load = o.laying_load;
+            const cloth::DrapeResult d = cloth::simulate_drape(p, laid, o.rest, o.model_options);
+            rec.node_count = static_cast<int>(std::lround(d.metrics.node_count)) + 2;
+            rec.node_source = "test";
+        }
+        const FitResult r = fit_fabric({rec}, o);
+        QVERIFY(!r.cancelled);
+        const auto& c = r.flat_calibration;
+        qInfo("from flat (%s): %s", c.applied ? "applied" : "not applied", c.reason.c_str());
+        for (const auto& h : c.history)
+            qInfo("  %s: sigmas %.0f, bendings x %.3f, D %+.2f, folds %.0f off, chi2 %+.1f%s", h.kind.c_str(), h.sigmas, h.scale, h.error, h.fold_error,
+                  h.chi2_cost, h.finer_grid ? " (with the finer grid)" : "");
+        QVERIFY(c.tried);
+        QVERIFY2(c.fold_error_before > 1, "the stated count is two above what the fabric lays");
+        QVERIFY(c.fold_search);
+        QCOMPARE(c.fold_direction, -1.0); // too few folds: softer
+        int fold_steps = 0;
+        for (const auto& h : c.history)
+            if (h.kind == "fold count") {
+                ++fold_steps;
+                QVERIFY(!h.finer_grid);
+                QVERIFY(h.sigmas == 1 || h.sigmas == 2);
+                QVERIFY(h.scale < 1); // softer bendings
+                QVERIFY(std::isfinite(h.chi2_cost));
+            }
+        QVERIFY(fold_steps >= 1 && fold_steps <= 2);
+        const double ratio = r.params[Param::BendWarp] / r.params[Param::BendWeft];
+        QVERIFY(std::abs(ratio / (c.bend_warp_fitted / c.bend_weft_fitted) - 1) < 1e-9); // warp/weft ratio kept
+        const double node_sigma = 0.75;
+        auto score = [&](double e, double f) { return (e / c.tolerance) * (e / c.tolerance) + (f / node_sigma) * (f / node_sigma); };
+        if (c.applied) {
+            QVERIFY(c.fold_error_after <= 1);
+            QVERIFY(c.fold_sigmas == 1 || c.fold_sigmas == 2);
+            QVERIFY(std::isfinite(c.chi2_increase));
+            const double s2 = std::max(1.0, r.chi2 / std::max(1, r.dof));
+            QVERIFY(c.chi2_increase / s2 < score(c.error_before, c.fold_error_before) - score(c.error_after, c.fold_error_after));
+            QVERIFY(c.history.back().kind == "preset" && c.history.back().finer_grid);
+            // The preset moved off the optimum, and its estimates say how.
+            QVERIFY(r.params[Param::BendWarp] < c.bend_warp_fitted);
+            QCOMPARE(est(r, Param::BendWarp).value, r.params[Param::BendWarp]);
+            QVERIFY(est(r, Param::BendWarp).note.find("profile") != std::string::npos);
+            QCOMPARE(est(r, Param::Shear).value, r.params[Param::Shear]);
+            // The report's drapes from flat are the calibrated preset's.
+            const RecordFit& rf = r.records[0];
+            cloth::DrapeSetup fine = rec.setup(33, o.seed + 1000);
+            fine.laying_load = o.laying_load;
+            const cloth::DrapeResult direct = cloth::simulate_drape(r.params, fine, o.rest, o.model_options);
+            QVERIFY(std::abs(rf.cold_fine_features.drape_coefficient_percent - direct.metrics.drape_coefficient_percent) < 1e-9);
+        } else {
+            QVERIFY(c.fold_search_failed);
+            QVERIFY(c.reason.find("not calibrated") != std::string::npos);
+            QCOMPARE(r.params[Param::BendWarp], c.bend_warp_fitted);
+            QCOMPARE(r.params[Param::BendWarp], est(r, Param::BendWarp).value);
+            QCOMPARE(r.params[Param::Shear], est(r, Param::Shear).value);
+        }
+        const auto j = fit_to_json(r);
+        QCOMPARE(j["fit"]["flat_calibration"]["fold_search"].get<bool>(), true);
+        QCOMPARE(j["fit"]["flat_calibration"]["steps_tried"].size(), c.history.size());
     }
 
     void untypicalUnseparatedAnisotropyIsTied()

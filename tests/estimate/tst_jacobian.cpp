@@ -105,6 +105,47 @@ private slots:
         }
     }
 
+    void aRadiusAtZeroGetsTheSecantOfSwitchingItOn()
+    {
+        // The stiffening radius enters the bending energy as r^2 |d|^4: at r = 0 (the
+        // baseline's start) its slope is 0, and a search that only saw the slope could
+        // never leave 0. Its column is the secant to a fifth of the range (6 mm), from a
+        // re-solve, and it sees the stiffening the record was made with.
+        const int grid = 25;
+        cloth::FabricParams truth = fabric(2e-5, 8e-6);
+        truth[Param::BendStiffeningRadius] = 0.01;
+        const std::vector<MeasuredDrape> recs{test::synthetic_record(truth, test::drape_setup(0.30, 0.15, grid, 7))};
+        FitOptions o = one_seed(grid);
+        o.model = ModelVariant::Stiffening;
+        const auto vars = fit_variables(o.model);
+        const int ir = static_cast<int>(vars.size()) - 1;
+        QCOMPARE(vars.back().params.front(), Param::BendStiffeningRadius);
+        cloth::FabricParams base = truth;
+        base[Param::BendStiffeningRadius] = 0;
+        Evaluator ev(recs, o, vars, base);
+        Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
+        for (std::size_t i = 0; i < vars.size(); ++i)
+            x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(std::max(base[vars[i].params.front()], 1e-300)); // as the fit stores a start
+        ev.objective(x, Start::Cold, "test");
+        QVERIFY(ev.best().at_rest());
+        const Eigen::MatrixXd J = ev.jacobian(x, ev.best());
+        const double h = 0.2 * (vars.back().upper - vars.back().lower);
+        Eigen::VectorXd xp = x;
+        xp[ir] += h;
+        const Evaluation ep = ev.evaluate(xp, Start::Best);
+        const auto& terms = ev.best().terms;
+        double norm = 0, diff = 0;
+        for (std::size_t k = 0; k < terms.size(); ++k) {
+            if (!terms[k].smooth || !terms[k].fitted || terms[k].kind == "closure" || !(terms[k].sigma > 0)) continue;
+            const double secant = (ep.terms[k].simulated - terms[k].simulated) / h / terms[k].sigma;
+            norm += secant * secant;
+            diff += (secant - J(static_cast<Eigen::Index>(k), ir)) * (secant - J(static_cast<Eigen::Index>(k), ir));
+        }
+        qInfo("radius at 0: |secant| %.3f per m, |J column - secant| %.2e", std::sqrt(norm), std::sqrt(diff));
+        QVERIFY2(std::sqrt(norm) > 1.0, "switching the stiffening on moves the residual");
+        QVERIFY(std::sqrt(diff) <= 1e-9 * std::sqrt(norm));
+    }
+
     void aDrapeNotAtRestIsNeverTheBestPoint()
     {
         // The objective keeps the best point for the next warm starts, the

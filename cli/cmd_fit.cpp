@@ -98,9 +98,12 @@ as not identifiable.
                       drapes, both grids) lays the record's fold count within 1 but misses its D
                       by more than the D channel's sigma, both bendings are scaled by one factor
                       (their ratio kept) until those drapes give the record's D (within that
-                      sigma, at most two steps, each checked by drapes); the report shows
-                      the contours' optimum, the scale and the chi2 it costs. off: the preset is
-                      the contours' optimum
+                      sigma, at most two steps, each checked by drapes); when it lays a count
+                      more than 1 off, the bendings step along the contours' profile (the other
+                      fitted parameters following; 1 then 2 sigma) and the step is kept if its
+                      drapes lay the count within 1 and gain more than the contours lose; the
+                      report shows the contours' optimum, what moved and the chi2 it costs.
+                      off: the preset is the contours' optimum
   --bending T         warp and weft bending: auto (default; fitted apart, and fitted again as one
                       bending when their ratio is beyond 3 but the data do not separate them - the
                       tied preset is kept unless chi2 rises by more than 9, the 3-sigma level), free (apart,

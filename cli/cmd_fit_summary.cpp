@@ -51,6 +51,7 @@ struct Entry {
     int fine_grid = 0;
     bool fine_at_rest = true;          ///< cold_fine_converged: a drape the budget stopped is shown, not counted
     double calibration = NAN;          ///< the bendings' scale from flat when applied (fit.flat_calibration)
+    bool calibration_profile = false;  ///< ... after a step along the contours' profile (other parameters moved too)
     double waviness_m = NAN;           ///< provenance.perturbation_m of the drapes from flat
     double chi2 = 0;
     int dof = 0;
@@ -101,8 +102,10 @@ Entry read_report(const std::string& label, const std::string& dir)
         e.fine_at_rest = r.value("cold_fine_converged", true);
     }
     if (const auto& fj = j["fit"]; fj.contains("flat_calibration") && fj["flat_calibration"].is_object() &&
-                                   fj["flat_calibration"].value("applied", false))
+                                   fj["flat_calibration"].value("applied", false)) {
         e.calibration = fj["flat_calibration"].value("scale", NAN);
+        e.calibration_profile = fj["flat_calibration"].value("fold_search", false);
+    }
     if (prov.contains("perturbation_m") && prov["perturbation_m"].is_number()) e.waviness_m = prov["perturbation_m"].get<double>();
     int fitted = 0;
     for (const auto& p : j["fit"].value("parameters", nlohmann::json::array()))
@@ -182,11 +185,11 @@ int run(const std::vector<std::string>& argv)
                 char cold_d[32] = "-", cold_n[32] = "-";
                 if (std::isfinite(e.d_cold)) std::snprintf(cold_d, sizeof cold_d, "%+.1f", e.d_cold - e.d_meas);
                 if (std::isfinite(e.n_cold)) std::snprintf(cold_n, sizeof cold_n, "%+.1f", e.n_cold - e.n_meas);
-                char fine_d[48] = "-", fine_n[32] = "-", cal[32] = "-";
+                char fine_d[48] = "-", fine_n[32] = "-", cal[64] = "-";
                 if (std::isfinite(e.d_fine))
                     std::snprintf(fine_d, sizeof fine_d, "%+.1f (grid %d%s)", e.d_fine - e.d_meas, e.fine_grid, e.fine_at_rest ? "" : ", not at rest");
                 if (std::isfinite(e.n_fine)) std::snprintf(fine_n, sizeof fine_n, "%+.1f", e.n_fine - e.n_meas);
-                if (std::isfinite(e.calibration)) std::snprintf(cal, sizeof cal, "x %.3f", e.calibration);
+                if (std::isfinite(e.calibration)) std::snprintf(cal, sizeof cal, "%sx %.3f", e.calibration_profile ? "profile, bendings " : "", e.calibration);
                 std::snprintf(buf, sizeof buf, "| %s | %s | %.1f | %.1f | %+.1f | %.0f | %.1f | %s | %s | %s | %s | %s | %.0f / %d | %.1f | %s | %s |\n",
                               id.c_str(), l.c_str(), e.d_meas, e.d_fit, e.d_fit - e.d_meas, e.n_meas, e.n_fit, cold_d, cold_n, fine_d, fine_n, cal,
                               e.chi2, e.dof, e.rim_z, e.exceeds ? "yes" : "no", cands.empty() ? "-" : cands.c_str());
@@ -200,6 +203,7 @@ int run(const std::vector<std::string>& argv)
                               {"cold_fine_grid", e.fine_grid > 0 ? nlohmann::json(e.fine_grid) : nlohmann::json(nullptr)},
                               {"cold_fine_converged", std::isfinite(e.d_fine) ? nlohmann::json(e.fine_at_rest) : nlohmann::json(nullptr)},
                               {"flat_calibration_scale", std::isfinite(e.calibration) ? nlohmann::json(e.calibration) : nlohmann::json(nullptr)},
+                              {"flat_calibration_profile", e.calibration_profile},
                               {"perturbation_m", std::isfinite(e.waviness_m) ? nlohmann::json(e.waviness_m) : nlohmann::json(nullptr)},
                               {"chi2", e.chi2}, {"dof", e.dof},
                               {"rim_z", e.rim_z}, {"exceeds_noise", e.exceeds}, {"candidate_effects", e.candidates}});

@@ -313,15 +313,16 @@ bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double&
 
 /// FitOptions::flat_calibration on the kept result, after its drapes from flat at
 /// the optimum x: the preset moved until, draped from flat, it gives the records'
-/// fold count and D (FitResult::FlatCalibration). Two parts:
+/// fold count and D (FitResult::FlatCalibration). Either:
 /// - fold count off by more than 1: a step of the bendings (warp/weft ratio kept)
 ///   along the contours' profile - the other fitted coordinates follow to where the
-///   linearised contours are best for that bending - at 1, 2 and 3 sigma of the
-///   profile (linearised chi2 cost 1, 4, 9, the level of the tie test), softer when
-///   the drapes lay too few folds; the first whose drapes lay the record's count
-///   within 1 and are closer to the record is kept;
-/// - then D: both bendings scaled by one factor until the mean D from flat is
-///   within the D channel's sigma.
+///   linearised contours are least for that bending - of 1, then 2 sigma of the
+///   profile, softer when the drapes lay too few folds, screened on the fit grid's
+///   drapes; one bending scale step for D on the same drapes; then the finer grid's
+///   drape; kept when all of them lay the count within 1, are closer to the record,
+///   and gain more than the contours' scaled linearised chi2 loses; or
+/// - fold count within 1: both bendings scaled by one factor until the mean D from
+///   flat is within the D channel's sigma (at most two steps).
 /// The contour fit's optimum stays the search's result (residuals, chi2,
 /// intervals); the preset (`params`), its estimates and the records' drapes from
 /// flat become the calibrated ones. Cancelled part-way: the optimum and its
@@ -458,42 +459,67 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                std::abs(std::log(ps[Param::BendWarp] / pf[Param::BendWarp])) >= 1e-6;
     };
     auto bend_scale = [&](const Eigen::VectorXd& xs) { return ev.params_at(xs)[Param::BendWarp] / c.bend_warp_fitted; };
+    // Whether the drapes from flat include the finer grid's (Evaluator::draw_from_flat).
+    const bool finer = ev.options().flat_check_grid > ev.options().grid && ev.options().random_start_seeds > 0;
     try {
         if (folds0 > 1) {
             // 1. The fold count: steps along the contours' profile of the bendings,
             // screened on the fit grid's drapes; then D by a bending scale on the same
             // drapes; the finer grid's drape once, for the preset that is kept.
             c.fold_search = true;
-            std::vector<int> other;
-            for (int i = 0; i < static_cast<int>(vars.size()); ++i)
-                if (std::find(bend.begin(), bend.end(), i) == bend.end()) other.push_back(i);
             // The profile's direction per decade of the bendings: the other coordinates
-            // where the linearised contours are best, from the rows the fit linearises.
+            // where the linearised contours are least for that bending, from the rows
+            // the fit linearises - a line through the optimum (the follower of the
+            // step; the optimum is the search's, not exactly the linearised minimum).
             const double sign = signed0 < 0 ? -1.0 : 1.0; // too few folds: softer bendings; too many: stiffer
             std::string why_not;
             if (!have_J) why_not = "without the contours' Jacobian at the optimum there is no profile to step along";
             else if (signed0 == 0) why_not = "its drapes lay as many folds too many as too few";
             double unit = 0;
             Eigen::VectorXd dir = Eigen::VectorXd::Zero(x.size());
-            if (why_not.empty()) {
-                std::vector<char> rows(kept.residuals.size());
-                for (std::size_t k = 0; k < rows.size(); ++k) rows[k] = linearised_term(kept.residuals[k]) ? 1 : 0;
-                dir = profile_direction(J_opt, rows, bend, unit);
-                if (!(unit > 0) || !std::isfinite(unit)) why_not = "the contours do not see the bendings at the optimum";
+            std::vector<char> rows(kept.residuals.size());
+            for (std::size_t k = 0; k < rows.size(); ++k) rows[k] = linearised_term(kept.residuals[k]) ? 1 : 0;
+            // A coordinate at a bound the profile would push it past is held there (its
+            // column out of J) and the profile found again for the others.
+            Eigen::MatrixXd Jp = have_J ? J_opt : Eigen::MatrixXd();
+            std::vector<int> held;
+            for (int round = 0; why_not.empty() && round <= static_cast<int>(vars.size()); ++round) {
+                dir = profile_direction(Jp, rows, bend, unit);
+                for (int i : held) dir[i] = 0;
+                int pushed = -1;
+                for (int i = 0; i < static_cast<int>(vars.size()) && pushed < 0; ++i) {
+                    if (std::find(bend.begin(), bend.end(), i) != bend.end() || std::find(held.begin(), held.end(), i) != held.end()) continue;
+                    const FitVariable& v = vars[static_cast<std::size_t>(i)];
+                    const double tiny = 1e-9 * (v.upper - v.lower);
+                    if ((sign * dir[i] > 0 && x[i] >= v.upper - tiny) || (sign * dir[i] < 0 && x[i] <= v.lower + tiny)) pushed = i;
+                }
+                if (pushed < 0) break;
+                held.push_back(pushed);
+                Jp.col(pushed).setZero();
             }
+            if (why_not.empty() && (!(unit > 0) || !std::isfinite(unit))) why_not = "the contours do not see the bendings at the optimum";
+            const double sigma_t = why_not.empty() ? std::sqrt(s2 / unit) : 0.0; // the profile's sigma [decades of bending]
             // The step of k sigma of the profile (its curvature: the linearised chi2
-            // rises by k^2 s2 from its minimum), shortened where a coordinate would
-            // leave the box or move more than k decades (k tenths of a linear range):
-            // the point stays on the profile's line.
+            // rises by k^2 s2 along it from a minimum), shortened where a coordinate
+            // would leave the box or move more than k decades (k tenths of a linear
+            // range): the point stays on the profile's line.
+            int limit_var = -1;       // the coordinate that shortened the last step
+            bool limit_by_cap = false; // ... by the cap, not the box
             auto step_of = [&](double k) {
-                double t = sign * k * std::sqrt(s2 / unit);
+                double t = sign * k * sigma_t;
+                limit_var = -1;
                 for (int i = 0; i < static_cast<int>(vars.size()); ++i) {
                     const FitVariable& v = vars[static_cast<std::size_t>(i)];
                     const double move = t * dir[i];
                     if (move == 0) continue;
                     const double cap = k * (v.log_scale ? 1.0 : 0.1 * (v.upper - v.lower));
-                    const double room = std::min(cap, move > 0 ? v.upper - x[i] : x[i] - v.lower);
-                    if (std::abs(move) > room) t *= std::max(0.0, room) / std::abs(move);
+                    const double box = move > 0 ? v.upper - x[i] : x[i] - v.lower;
+                    const double room = std::min(cap, box);
+                    if (std::abs(move) > room) {
+                        t *= std::max(0.0, room) / std::abs(move);
+                        limit_var = i;
+                        limit_by_cap = cap < box;
+                    }
                 }
                 return t;
             };
@@ -502,19 +528,32 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             // at once has no step to draw.
             if (why_not.empty()) {
                 bool follows = false;
-                for (int i : other) {
+                for (int i = 0; i < static_cast<int>(vars.size()); ++i) {
+                    if (std::find(bend.begin(), bend.end(), i) != bend.end()) continue;
                     const FitVariable& v = vars[static_cast<std::size_t>(i)];
                     follows = follows || std::abs(dir[i]) > 1e-3 * (v.log_scale ? 1.0 : v.upper - v.lower);
                 }
                 if (!follows)
-                    why_not = "the contours' profile moves the bendings alone (no other fitted coordinate follows them), and one bending "
-                              "scale does not mend the fold count without losing D";
-                else if (std::abs(step_of(1.0)) < 0.01)
-                    why_not = "the contours' profile leaves the fit's box at once (a coordinate it moves is at its bound)";
+                    why_not = std::string("the contours' profile moves the bendings alone (") +
+                              (held.empty() ? "no other fitted coordinate follows them" : "the others that would follow are at their bounds") +
+                              "), and one bending scale does not mend the fold count without losing D";
+                else if (std::abs(step_of(1.0)) < 0.01) {
+                    const FitVariable& v = vars[static_cast<std::size_t>(std::max(limit_var, 0))];
+                    char w[300];
+                    if (limit_var >= 0 && limit_by_cap)
+                        std::snprintf(w, sizeof w,
+                                      "the contours' profile is too steep to step along (%s would move %.3g %s per decade of the bendings: the "
+                                      "contours hardly see the bendings along it)",
+                                      v.name.c_str(), std::abs(dir[limit_var]), v.log_scale ? "decades" : "of its unit");
+                    else
+                        std::snprintf(w, sizeof w, "the contours' profile leaves the fit's box at once (%s at its bound)",
+                                      limit_var >= 0 ? v.name.c_str() : "a coordinate");
+                    why_not = w;
+                }
             }
             c.fold_direction = why_not.empty() ? sign : 0;
             Eigen::VectorXd cand;
-            double cand_e = 0, cand_score = best_score;
+            double cand_e = 0, cand_score = best_score, cand_sigmas = 0;
             bool last_is_cand = false;
             double t_prev = 0;
             for (double k : {1.0, 2.0}) {
@@ -528,19 +567,19 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                     const FitVariable& v = vars[static_cast<std::size_t>(i)];
                     xs[i] = std::clamp(xs[i], v.lower, v.upper); // rounding only: step_of kept it inside
                 }
-                const double cost = lin_cost(xs - x);
+                const double sigmas = std::abs(t) / sigma_t; // k, or less where the box shortened it
                 ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
                 ev.report("from flat, fold count");
                 ++c.steps;
+                last_is_cand = false;
                 double e = 0, folds = 0;
                 if (measure(e, folds, nullptr) != n_used) break;
-                c.history.push_back({bend_scale(xs), e, folds, "fold count", k, cost, false});
+                c.history.push_back({bend_scale(xs), e, folds, "fold count", sigmas, lin_cost(xs - x), false});
                 if (folds <= 1 && score(e, folds) < cand_score) {
                     cand = xs;
                     cand_e = e;
                     cand_score = score(e, folds);
-                    c.fold_sigmas = k;
-                    c.fold_cost = cost;
+                    cand_sigmas = sigmas;
                     last_is_cand = true;
                     break;
                 }
@@ -554,26 +593,24 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 c.fold_search_failed = true;
                 return;
             }
-            // D on the fit grid's drapes, from the step's point.
+            // D on the fit grid's drapes, from the step's point: one step (each costs a
+            // set of drapes; the fit's time is bounded).
             if (std::abs(cand_e) > c.tolerance && slope_ok) {
-                const Eigen::VectorXd from = cand;
-                const double ln_s = std::clamp(-cand_e / slope, -max_step, max_step);
-                // One step (each costs a set of drapes; the fit's time is bounded).
-                for (int step = 0; step < 1; ++step) {
-                    Eigen::VectorXd xs;
-                    if (!scaled(from, ln_s, xs)) break;
+                Eigen::VectorXd xs;
+                if (scaled(cand, std::clamp(-cand_e / slope, -max_step, max_step), xs)) {
                     ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
                     ev.report("from flat, calibrated");
                     ++c.steps;
+                    last_is_cand = false; // the evaluator's drapes are this step's now
                     double e = 0, folds = 0;
-                    if (measure(e, folds, nullptr) != n_used) break;
-                    c.history.push_back({bend_scale(xs), e, folds, "D", 0, lin_cost(xs - x), false});
-                    last_is_cand = false;
-                    if (folds <= 1 && score(e, folds) < cand_score) {
-                        cand = xs;
-                        cand_e = e;
-                        cand_score = score(e, folds);
-                        last_is_cand = true;
+                    if (measure(e, folds, nullptr) == n_used) {
+                        c.history.push_back({bend_scale(xs), e, folds, "D", 0, lin_cost(xs - x), false});
+                        if (folds <= 1 && score(e, folds) < cand_score) {
+                            cand = xs;
+                            cand_e = e;
+                            cand_score = score(e, folds);
+                            last_is_cand = true;
+                        }
                     }
                 }
             }
@@ -582,18 +619,25 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             ev.draw_from_flat(cand, last_is_cand ? Evaluator::FlatDraw::FinerGrid : Evaluator::FlatDraw::All);
             ev.report("from flat, calibrated");
             double e = 0, folds = 0;
-            if (measure(e, folds, nullptr) != n_used) {
-                c.reason = "draped from flat the calibrated preset did not come to rest on the finer grid: kept as fitted";
+            bool fine_rested = true;
+            for (std::size_t r = 0; r < R && finer; ++r)
+                if (const Evaluator::FineDrape* f = ev.cold_fine(r); used[r] && (!f || !f->at_rest)) fine_rested = false;
+            if (measure(e, folds, nullptr) != n_used || !fine_rested) {
+                std::snprintf(buf, sizeof buf,
+                              "draped from flat the preset lays a fold count %.0f off the record's (D %+.1f points%s); a step along the contours' "
+                              "profile laid it within 1 on the fit grid, but its drape on the finer grid did not come to rest: not calibrated",
+                              folds0, e0, over.c_str());
+                c.reason = buf;
                 c.fold_search_failed = true;
                 return;
             }
             const double cost = lin_cost(cand - x);
-            c.history.push_back({bend_scale(cand), e, folds, "preset", 0, cost, true});
+            c.history.push_back({bend_scale(cand), e, folds, "preset", 0, cost, finer});
             // Kept when its drapes are within 1 fold and closer to the record by more
-            // than the contours lose: the record's fold count and D from flat and its
-            // contours on the fold branch weighed in one likelihood (the drapes' score
-            // in the sigmas of D and of the node count, the contours' linearised chi2
-            // scaled as the intervals are).
+            // than the contours lose: the drapes' score (D error in the D channel's
+            // sigma, the worst drape's fold error in the node channel's, squared and
+            // summed) against the contours' linearised chi2 increase scaled as the
+            // intervals are - both the record's data, weighed on one chi2 scale.
             if (folds <= 1 && score(e, folds) < best_score && !(cost / s2 < best_score - score(e, folds))) {
                 std::snprintf(buf, sizeof buf,
                               "draped from flat the preset lays a fold count %.0f off the record's (D %+.1f points%s); a step along the contours' "
@@ -613,6 +657,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 c.fold_search_failed = true;
                 return;
             }
+            c.fold_sigmas = cand_sigmas;
             keep(cand, e, folds);
         } else if (std::abs(e0) > c.tolerance && slope_ok) {
             // 2. D alone (the fold count within 1): both bendings scaled by one factor.
@@ -627,7 +672,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 ++c.steps;
                 double e = 0, folds = 0;
                 if (measure(e, folds, nullptr) != n_used) break;
-                c.history.push_back({scale, e, folds, "D", 0, lin_cost(xs - x), true});
+                c.history.push_back({scale, e, folds, "D", 0, lin_cost(xs - x), finer});
                 // Kept when its drapes are closer to the record, the fold count within 1.
                 if (folds <= 1 && score(e, folds) < best_score) keep(xs, e, folds);
                 // Done within the D channel's sigma: D from flat scatters with the fold
@@ -681,10 +726,18 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
     c.chi2_increase = lin_cost(best_x - x);
     std::string others;
     for (Param q : moved) {
-        if (q == Param::BendWarp || q == Param::BendWeft) continue;
+        if (q == Param::BendWarp || q == Param::BendWeft) {
+            c.moved.push_back({std::string(cloth::spec(q).key), ev.params_at(x)[q], pb[q]});
+            continue;
+        }
         char o[160];
         const std::string key(cloth::spec(q).key);
-        std::snprintf(o, sizeof o, "%s%s x %.3f", others.empty() ? "" : ", ", key.c_str(), pb[q] / ev.params_at(x)[q]);
+        const double before = ev.params_at(x)[q];
+        c.moved.push_back({key, before, pb[q]});
+        if (before > 0 && cloth::spec(q).log_scale)
+            std::snprintf(o, sizeof o, "%s%s x %.3f", others.empty() ? "" : ", ", key.c_str(), pb[q] / before);
+        else
+            std::snprintf(o, sizeof o, "%s%s %.3g -> %.3g", others.empty() ? "" : ", ", key.c_str(), before, pb[q]);
         others += o;
     }
     for (auto& e : kept.estimates) {
@@ -695,7 +748,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
         if (c.fold_search)
             std::snprintf(buf, sizeof buf,
                           "the contours' optimum %.3g moved along their profile to %.3g so the preset draped from flat lays the record's fold count "
-                          "within 1 and gives its D (%s its 95 %% interval; the notes before are the optimum's)",
+                          "within 1 and comes closer to its D (%s its 95 %% interval; the notes before are the optimum's)",
                           fitted, e.value, inside ? "inside" : "outside");
         else
             std::snprintf(buf, sizeof buf,

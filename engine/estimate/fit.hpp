@@ -305,13 +305,16 @@ struct FitResult {
         double delta_chi2 = 0;      ///< (tied - free) / max(1, free chi2 / dof)
         std::string reason;         ///< one sentence for the report
     } anisotropy;
-    /// FitOptions::flat_calibration: the bendings rescaled so that the preset draped
-    /// from flat gives the record's D (the contour fit's optimum is the search's;
-    /// `params` and the bending estimates are the calibrated preset's).
+    /// FitOptions::flat_calibration: the preset moved so that, draped from flat, it
+    /// gives the record's D - the bendings rescaled - or, where its fold count was
+    /// more than 1 off, the record's fold count within 1 - a step along the contours'
+    /// profile, where the other fitted parameters follow the bendings (the contour
+    /// fit's optimum is the search's; `params` and the moved estimates are the
+    /// calibrated preset's).
     struct FlatCalibration {
         bool tried = false;         ///< the stage ran (drapes from flat available)
-        bool applied = false;       ///< the preset's bendings were rescaled
-        double scale = 1;           ///< factor on both bendings (1: not applied)
+        bool applied = false;       ///< the preset was moved (its bendings, and with fold_search the other fitted parameters)
+        double scale = 1;           ///< factor on both bendings (1: not applied; the other moved parameters: the estimates' notes)
         double error_before = 0;    ///< mean D from flat - measured D over the records, at the contour optimum [points]
         double error_after = 0;     ///< the same at the calibrated preset (= before when not applied)
         double tolerance = 0;       ///< the D channel's sigma: errors within it are left alone [points]
@@ -322,14 +325,18 @@ struct FitResult {
         bool fold_search = false;   ///< the fold count was off by more than 1: steps along the contours' profile were tried
         bool fold_search_failed = false; ///< none of them laid it within 1 (not calibrated)
         double fold_direction = 0;  ///< -1: softer bendings (too few folds), +1 stiffer, 0: no profile (no Jacobian)
-        double fold_sigmas = 0;     ///< the kept step, in sigmas of the profile (1, 2, 3; 0: none)
-        double fold_cost = 0;       ///< its linearised chi2 increase of the fitted terms
+        double fold_sigmas = 0;     ///< the kept step's size in sigmas of the profile (1 or 2, less where the box shortened it; 0: none kept)
+        struct Moved {
+            std::string key;         ///< parameter table key
+            double before = 0, after = 0; ///< the contours' optimum's value and the preset's
+        };
+        std::vector<Moved> moved;   ///< every parameter the calibration moved (applied only)
         struct Step {
             double scale = 1, error = 0, fold_error = 0; ///< the bendings' factor, the mean D error from flat [points], worst fold-count error
             std::string kind = "D";  ///< "fold count": a step along the contours' profile; "D": a bending scale
-            double sigmas = 0;       ///< a profile step's size in its sigmas
+            double sigmas = 0;       ///< a profile step's size in its sigmas (0 for the others)
             double chi2_cost = 0;    ///< linearised chi2 increase of the fitted terms (NaN: no Jacobian)
-            bool finer_grid = true;  ///< the flat_check_grid drape was drawn too (a profile step screened out on the fit grid: not)
+            bool finer_grid = true;  ///< the flat_check_grid drape was drawn too (not for the fold search's screening steps, nor when that grid is off)
         };
         std::vector<Step> history;  ///< every step drawn, in order
         std::string reason;         ///< one sentence for the report

@@ -91,7 +91,6 @@ json fit_to_json(const FitResult& r)
                                    {"fold_error_after", c.fold_error_after},
                                    {"fold_search", c.fold_search},
                                    {"fold_sigmas", c.fold_sigmas},
-                                   {"fold_chi2_increase_linearised", c.fold_sigmas > 0 && std::isfinite(c.fold_cost) ? json(c.fold_cost) : json(nullptr)},
                                    {"reason", c.reason}};
         json tried = json::array();
         for (const auto& t : c.history)
@@ -103,6 +102,9 @@ json fit_to_json(const FitResult& r)
                              {"finer_grid", t.finer_grid},
                              {"chi2_increase_linearised", std::isfinite(t.chi2_cost) ? json(t.chi2_cost) : json(nullptr)}});
         fit["flat_calibration"]["steps_tried"] = tried;
+        json moved = json::object();
+        for (const auto& m : c.moved) moved[m.key] = {{"before", m.before}, {"after", m.after}};
+        fit["flat_calibration"]["moved"] = moved;
     }
     if (r.anisotropy.assessed) {
         const auto& a = r.anisotropy;

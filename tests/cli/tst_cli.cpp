@@ -119,6 +119,10 @@ private slots:
                 QVERIFY(std::isfinite(r["dc_cold_fine"].toDouble(NAN)));
                 QCOMPARE(r["perturbation_m"].toDouble(), 0.006); // drape fit's default, the lab's
             }
+            // Whether a calibration from flat moved the preset along the contours' profile
+            // (no Jacobian here: --no-uncertainty), and the bendings' factor only when applied.
+            QVERIFY(r["flat_calibration_profile"].isBool());
+            QVERIFY(!r["flat_calibration_profile"].toBool());
         }
         QVERIFY(QFile::exists(out + "/dc_error.png"));
         QVERIFY(QFile::exists(out + "/dc_error_flat.png"));

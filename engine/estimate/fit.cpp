@@ -284,27 +284,35 @@ std::string fmt_chi2(double d)
 
 /// Record r's mean D error from flat (the fit grid's seeds and the finer grid's
 /// drape at rest, each drape one vote) and the largest fold-count error of any
-/// one of those drapes; false when the record has no drape from flat on its fold
+/// one of those drapes (and, given the pointers, adds each drape's signed
+/// fold-count error and counts the drapes); false when the record has no drape from flat on its fold
 /// branch (a record fitted from the random mix keeps the spread stage's drapes of
 /// the optimum, which draw_from_flat does not redraw) or no measured D.
-bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double& d_error, double& fold_error)
+bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double& d_error, double& fold_error, double* signed_fold_sum = nullptr,
+                int* fold_drapes = nullptr)
 {
     const double dm = rf.measured_features.drape_coefficient_percent, nm = rf.measured_features.node_count;
     if (ev.branch_of(static_cast<int>(r)) == 0 || !std::isfinite(dm)) return false;
     double sum = 0;
     int n = 0;
     fold_error = 0;
+    // One drape's fold-count error: the worst, and the signed sum for the caller.
+    auto fold = [&](double err) {
+        fold_error = std::max(fold_error, std::abs(err));
+        if (signed_fold_sum) *signed_fold_sum += err;
+        if (fold_drapes) ++*fold_drapes;
+    };
     if (r < ev.cold_features().size() && ev.cold_seeds(r) > 0) {
         const int s = ev.cold_seeds(r);
         sum += s * ev.cold_features()[r].drape_coefficient_percent;
         n += s;
         if (std::isfinite(nm))
-            for (double k : ev.cold_node_counts(r)) fold_error = std::max(fold_error, std::abs(k - nm));
+            for (double k : ev.cold_node_counts(r)) fold(k - nm);
     }
     if (const Evaluator::FineDrape* f = ev.cold_fine(r); f && f->at_rest) {
         sum += f->features.drape_coefficient_percent;
         ++n;
-        if (std::isfinite(nm)) fold_error = std::max(fold_error, std::abs(f->features.node_count - nm));
+        if (std::isfinite(nm)) fold(f->features.node_count - nm);
     }
     if (n == 0 || !std::isfinite(sum)) return false;
     d_error = sum / n - dm;
@@ -345,17 +353,15 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
         folds = 0;
         if (used) used->assign(R, 0);
         for (std::size_t r = 0; r < R; ++r) {
-            double de = 0, fe = 0;
-            if (!flat_error(ev, kept.records[r], r, de, fe)) continue;
+            double de = 0, fe = 0, fs = 0;
+            int fn = 0;
+            if (!flat_error(ev, kept.records[r], r, de, fe, &fs, &fn)) continue;
             sum += de;
             folds = std::max(folds, fe);
+            fsum += fs;
+            nf += fn;
             ++n;
             if (used) (*used)[r] = 1;
-            const double nm = kept.records[r].measured_features.node_count;
-            if (!std::isfinite(nm)) continue;
-            if (r < ev.cold_features().size() && ev.cold_seeds(r) > 0)
-                for (double k : ev.cold_node_counts(r)) fsum += k - nm, ++nf;
-            if (const Evaluator::FineDrape* f = ev.cold_fine(r); f && f->at_rest) fsum += f->features.node_count - nm, ++nf;
         }
         e = n ? sum / n : std::numeric_limits<double>::quiet_NaN();
         if (signed_folds) *signed_folds = nf ? fsum / nf : 0.0;
@@ -724,16 +730,14 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             }
     kept.records = std::move(best_records);
     c.chi2_increase = lin_cost(best_x - x);
-    std::string others;
+    const cloth::FabricParams p0 = ev.params_at(x);
+    std::string others; // the moved parameters besides the bendings, for the reason
     for (Param q : moved) {
-        if (q == Param::BendWarp || q == Param::BendWeft) {
-            c.moved.push_back({std::string(cloth::spec(q).key), ev.params_at(x)[q], pb[q]});
-            continue;
-        }
-        char o[160];
         const std::string key(cloth::spec(q).key);
-        const double before = ev.params_at(x)[q];
+        const double before = p0[q];
         c.moved.push_back({key, before, pb[q]});
+        if (q == Param::BendWarp || q == Param::BendWeft) continue;
+        char o[160];
         if (before > 0 && cloth::spec(q).log_scale)
             std::snprintf(o, sizeof o, "%s%s x %.3f", others.empty() ? "" : ", ", key.c_str(), pb[q] / before);
         else
@@ -761,7 +765,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
     if (c.fold_search) {
         std::snprintf(buf, sizeof buf,
                       "draped from flat the contours' optimum laid a fold count %.0f off the record's (D %+.1f points%s); a step along the contours' "
-                      "profile, %.0f sigma (bendings x %.3f%s%s), lays it within %.0f (D %+.1f points, sigma %.1f); the fitted terms' chi2 %s",
+                      "profile, %.1f sigma (bendings x %.3f%s%s), lays it within %.0f (D %+.1f points, sigma %.1f); the fitted terms' chi2 %s",
                       folds0, e0, over.c_str(), c.fold_sigmas, c.scale, others.empty() ? "" : ", ", others.c_str(), best_folds, best_e, c.tolerance,
                       cost.c_str());
     } else {

@@ -31,6 +31,20 @@ MeasuredDrape synthetic(const cloth::FabricParams& p, double D1, double D2, int 
     return test::synthetic_record(p, test::drape_setup(D1, D2, grid, seed));
 }
 
+/// The calibration from flat's tests: grid 25, its drapes from flat also on grid
+/// 33, warp and weft free, no effect tests, the calibration on.
+FitOptions calibration_options()
+{
+    FitOptions o;
+    o.grid = 25;
+    o.seed = 1;
+    o.flat_check_grid = 33;
+    o.bending = BendingTie::Free;
+    o.effects = false;
+    o.flat_calibration = true;
+    return o;
+}
+
 const ParamEstimate& est(const FitResult& r, Param p)
 {
     for (const auto& e : r.estimates)
@@ -210,13 +224,7 @@ private slots:
         p[Param::BendWarp] = p[Param::BendWeft] = 1.0e-5;
         MeasuredDrape rec = synthetic(p, 0.30, 0.15, 25, 11);
         rec.drape_coefficient_percent += 5.0;
-        FitOptions o;
-        o.grid = 25;
-        o.seed = 1;
-        o.flat_check_grid = 33;
-        o.bending = BendingTie::Free;
-        o.effects = false;
-        o.flat_calibration = true;
+        FitOptions o = calibration_options();
         const FitResult r = fit_fabric({rec}, o);
         QVERIFY(!r.cancelled);
         const auto& c = r.flat_calibration;
@@ -315,13 +323,7 @@ private slots:
         p[Param::BendWeft] = 1.2e-5;
         p[Param::Shear] = 30;
         MeasuredDrape rec = synthetic(p, 0.30, 0.15, 25, 11);
-        FitOptions o;
-        o.grid = 25;
-        o.seed = 1;
-        o.flat_check_grid = 33;
-        o.bending = BendingTie::Free;
-        o.effects = false;
-        o.flat_calibration = true;
+        FitOptions o = calibration_options();
         {
             // The count the fabric lays from flat (the calibration's first seed), and a
             // photo that "reads" two more.

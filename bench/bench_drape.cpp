@@ -16,6 +16,16 @@
 // once; --laying F: first under F g, e.g. 0.4, the drape lab's); --mesh: the
 // specimen's mesh (DrapeSetup::mesh, grid by default); --preset FILE: a preset
 // file's row after the starters' (e.g. a fitted one; repeatable).
+//
+//   build/bin/bench_drape --late-shift [--grids 41,61] [--seeds 1001,1002] [--preset FILE]...
+//
+// --late-shift (twenty-second session): every preset (the starters without
+// --preset) draped from flat as `drape simulate` drapes it, per grid and seed,
+// with (the default) and without (late_shift_residual -1) the late shift (near
+// rest, a failed exact factorisation shifts before it projects): D (folds), Newton iterations and wall
+// time of both in one run, each drape in its own child process, then the
+// totals' ratios, the drapes whose fold count or D (by more than 0.05 point)
+// differ, and the load average.
 #include "engine/fabric/preset.hpp"
 #include "engine/cloth/drape.hpp"
 #include "engine/fabric/seed_format.hpp"
@@ -27,6 +37,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -164,16 +175,90 @@ int starters_table(const std::vector<int>& grids, bool plain, double laying, Dra
     return 0;
 }
 
+/// The late shift's A/B: the same drapes from flat with and without it.
+int late_shift_table(const std::vector<int>& grids, const std::vector<int>& seeds, const std::vector<std::string>& extra)
+{
+    std::vector<std::pair<std::string, drape::fabric::FabricPreset>> rows;
+    if (extra.empty())
+        for (const auto& st : drape::library::starters()) rows.emplace_back(st.short_name, st.preset);
+    for (const auto& f : extra) rows.emplace_back(f, drape::fabric::load_fabric(f));
+    std::printf("drapes from flat, 300 / 150 mm, each preset laid as `drape simulate` lays it; without -> with "
+                "the late shift (RestOptions::late_shift_residual = kLateShiftResidual = %g)\n\n",
+                kLateShiftResidual);
+    std::printf("| preset | grid | seed | without: D [%%] (folds), iterations, wall [s] | with | iterations with / without | load avg |\n");
+    std::printf("|---|---|---|---|---|---|---|\n");
+    long it_off = 0, it_on = 0;
+    double wall_off = 0, wall_on = 0;
+    int n = 0, changed = 0, failed = 0;
+    for (const auto& [name, p] : rows)
+        for (int g : grids)
+            for (int seed : seeds) {
+                DrapeSetup setup;
+                setup.sample_diameter = 0.30;
+                setup.disc_diameter = 0.15;
+                setup.grid = g;
+                setup = p.laid(setup);
+                setup.seed = static_cast<std::uint64_t>(seed);
+                RestOptions off;
+                off.late_shift_residual = -1;
+                const Row a = in_child([&] { return to_row(simulate_drape(p.material(), setup, off, p.model), 0); });
+                const Row b = in_child([&] { return to_row(simulate_drape(p.material(), setup, {}, p.model), 0); });
+                double load[1] = {0};
+                if (getloadavg(load, 1) < 1) load[0] = -1;
+                const bool ok = !std::strcmp(a.status, "converged") && !std::strcmp(b.status, "converged");
+                const bool differs = a.nodes != b.nodes || std::abs(a.dc - b.dc) > 0.05;
+                std::printf("| %s | %d | %d | %.2f (%d), %ld, %.1f%s | %.2f (%d), %ld, %.1f%s | %.2f%s | %.2f |\n", name.c_str(), g, seed, a.dc, a.nodes,
+                            a.iters, a.wall, ok ? "" : (std::string(", ") + a.status).c_str(), b.dc, b.nodes, b.iters, b.wall,
+                            ok ? "" : (std::string(", ") + b.status).c_str(), a.iters > 0 ? double(b.iters) / a.iters : 0.0,
+                            differs ? " (differs)" : "", load[0]);
+                std::fflush(stdout);
+                if (!ok) {
+                    ++failed;
+                    continue;
+                }
+                ++n;
+                changed += differs ? 1 : 0;
+                it_off += a.iters;
+                it_on += b.iters;
+                wall_off += a.wall;
+                wall_on += b.wall;
+            }
+    double load[1] = {0};
+    if (getloadavg(load, 1) < 1) load[0] = -1;
+    std::printf("\n%d drapes at rest both ways (%d not): Newton iterations %ld -> %ld (ratio %.3f), wall %.1f -> %.1f s (ratio %.3f); "
+                "%d with another fold count or D; load average %.2f\n",
+                n, failed, it_off, it_on, it_off ? double(it_on) / it_off : 0.0, wall_off, wall_on, wall_off > 0 ? wall_on / wall_off : 0.0,
+                changed, load[0]);
+    return 0;
+}
+
 int main(int argc, char** argv)
 {
     double rk4_limit = 900, tol = 1e-6;
-    bool quick = false, static_only = false, starters = false, plain = false, starters_option = false;
+    bool quick = false, static_only = false, starters = false, plain = false, starters_option = false, late_shift = false;
+    std::vector<int> seeds = {1};
+    bool seeds_given = false, grids_given = false;
     double laying = 0; // 0: each preset's own (FabricPreset::laying: a starter at once)
     std::vector<int> grids = {41, 61, 81, 101};
     DrapeMesh mesh = DrapeMesh::Grid;
     std::vector<std::string> extra;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--starters")) starters = true;
+        else if (!std::strcmp(argv[i], "--late-shift")) late_shift = true;
+        else if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) {
+            seeds_given = true;
+            seeds.clear();
+            for (const char* c = argv[++i]; *c;) {
+                char* end = nullptr;
+                const long k = std::strtol(c, &end, 10);
+                if (end == c || k < 0 || k > 1000000) {
+                    std::fprintf(stderr, "bench_drape: --seeds: '%s' is not a list of seeds in [0, 1000000]\n", argv[i]);
+                    return 2;
+                }
+                seeds.push_back(static_cast<int>(k));
+                c = *end == ',' ? end + 1 : end;
+            }
+        }
         else if (!std::strcmp(argv[i], "--plain")) plain = true;
         else if (!std::strcmp(argv[i], "--laying") && i + 1 < argc) {
             starters_option = true;
@@ -197,6 +282,7 @@ int main(int argc, char** argv)
         }
         else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) {
             starters_option = true;
+            grids_given = true;
             grids.clear();
             for (const char* c = argv[++i]; *c;) {
                 char* end = nullptr;
@@ -214,9 +300,27 @@ int main(int argc, char** argv)
         else if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc) tol = std::atof(argv[++i]);
         else {
             std::fprintf(stderr, "usage: bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]\n"
-                                 "       bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F] [--mesh grid|rings] [--preset FILE]...\n");
+                                 "       bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F] [--mesh grid|rings] [--preset FILE]...\n"
+                                 "       bench_drape --late-shift [--grids 41,61] [--seeds 1001,1002] [--preset FILE]...\n");
             return 2;
         }
+    }
+    if (late_shift) {
+        if (!grids_given) grids = {41, 61};
+        if (grids.empty() || seeds.empty() || starters || plain || laying > 0 || mesh != DrapeMesh::Grid) {
+            std::fprintf(stderr, "bench_drape: --late-shift takes --grids, --seeds and --preset only\n");
+            return 2;
+        }
+        try {
+            return late_shift_table(grids, seeds, extra);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "bench_drape: %s\n", e.what());
+            return 1;
+        }
+    }
+    if (seeds_given) {
+        std::fprintf(stderr, "bench_drape: --seeds goes with --late-shift\n");
+        return 2;
     }
     if (starters) {
         if (grids.empty()) {

@@ -139,10 +139,17 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
         }
         ++st.steps;
         if (llt.info() != Eigen::Success) ++prof.failed_factorizations;
-        if (llt.info() != Eigen::Success && exact && opt.shift_before_projection > 0 && h > opt.shift_before_projection) {
+        // How far h may shrink on the exact Hessian before the projected one: the
+        // caller's floor, or near rest kLateShiftPseudoTime (a saddle's negative
+        // curvature, not the fold branch's choice; RestOptions::late_shift_residual).
+        double shift_floor = 0;
+        if (opt.shift_before_projection > 0) shift_floor = opt.shift_before_projection;
+        else if (opt.shift_before_projection == 0 && opt.late_shift_residual > 0 && st.residual < opt.late_shift_residual)
+            shift_floor = kLateShiftPseudoTime;
+        if (llt.info() != Eigen::Success && exact && shift_floor > 0 && h > shift_floor) {
             // A larger proximal shift M / h^2 on the exact Hessian first
-            // (RestOptions::shift_before_projection; 0: never).
-            h = std::max(0.25 * h, opt.shift_before_projection);
+            // (RestOptions::shift_before_projection, late_shift_residual).
+            h = std::max(0.25 * h, shift_floor);
             continue;
         }
         if (llt.info() != Eigen::Success && exact) {

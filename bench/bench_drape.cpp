@@ -17,13 +17,15 @@
 // specimen's mesh (DrapeSetup::mesh, grid by default); --preset FILE: a preset
 // file's row after the starters' (e.g. a fitted one; repeatable).
 //
-//   build/bin/bench_drape --late-shift [--grids 41,61] [--seeds 1001,1002] [--preset FILE]...
+//   build/bin/bench_drape --late-shift [--grids 41,61] [--seeds K,K,...] [--preset FILE]...
 //
 // --late-shift (twenty-second session): every preset (the starters without
 // --preset) draped from flat as `drape simulate` drapes it, per grid and seed,
 // with (the default) and without (late_shift_residual -1) the late shift (near
 // rest, a failed exact factorisation shifts before it projects): D (folds), Newton iterations and wall
-// time of both in one run, each drape in its own child process, then the
+// time of both in one run (solver steps too: factorisations, the failed ones
+// included, which RestOptions::max_newton counts), seeds 1 unless --seeds, each
+// drape in its own child process, then the
 // totals' ratios, the drapes whose fold count or D (by more than 0.05 point)
 // differ, and the load average.
 #include "engine/fabric/preset.hpp"
@@ -52,6 +54,7 @@ struct Row {
     std::string name;
     double wall = 0;
     long iters = 0, fevals = 0;
+    long steps = 0; ///< static solver: factorisations, the failed ones included (what max_newton counts)
     double residual = 0, dc = 0;
     int nodes = 0;
     long vertices = 0;
@@ -76,7 +79,7 @@ Row in_child(F fn)
             _exit(1); // the parent reads no row: "crashed"
         }
         if (write(fd[1], &r.wall, sizeof(double) * 1) < 0) _exit(1);
-        const long ints[4] = {r.iters, r.fevals, r.nodes, r.vertices};
+        const long ints[5] = {r.iters, r.fevals, r.nodes, r.vertices, r.steps};
         const double dbl[2] = {r.residual, r.dc};
         if (write(fd[1], ints, sizeof ints) < 0 || write(fd[1], dbl, sizeof dbl) < 0 || write(fd[1], r.status, sizeof r.status) < 0)
             _exit(1);
@@ -84,7 +87,7 @@ Row in_child(F fn)
     }
     close(fd[1]);
     Row r;
-    long ints[4] = {0, 0, 0, 0};
+    long ints[5] = {0, 0, 0, 0, 0};
     double dbl[2] = {0, 0};
     if (read(fd[0], &r.wall, sizeof(double)) <= 0 || read(fd[0], ints, sizeof ints) <= 0 || read(fd[0], dbl, sizeof dbl) <= 0 ||
         read(fd[0], r.status, sizeof r.status) <= 0)
@@ -97,6 +100,7 @@ Row in_child(F fn)
     r.fevals = ints[1];
     r.nodes = static_cast<int>(ints[2]);
     r.vertices = ints[3];
+    r.steps = ints[4];
     r.residual = dbl[0];
     r.dc = dbl[1];
     r.peak_kb = ru.ru_maxrss;
@@ -109,6 +113,7 @@ Row to_row(const DrapeResult& d, long vertices)
     r.wall = d.status.wall_seconds;
     r.iters = d.status.integrator_steps();
     r.fevals = d.status.force_evaluations;
+    r.steps = d.status.steps;
     r.residual = d.status.residual;
     r.dc = d.metrics.drape_coefficient_percent;
     r.nodes = d.metrics.node_count;
@@ -185,9 +190,9 @@ int late_shift_table(const std::vector<int>& grids, const std::vector<int>& seed
     std::printf("drapes from flat, 300 / 150 mm, each preset laid as `drape simulate` lays it; without -> with "
                 "the late shift (RestOptions::late_shift_residual = kLateShiftResidual = %g)\n\n",
                 kLateShiftResidual);
-    std::printf("| preset | grid | seed | without: D [%%] (folds), iterations, wall [s] | with | iterations with / without | load avg |\n");
+    std::printf("| preset | grid | seed | without: D [%%] (folds), Newton iterations (solver steps), wall [s] | with | iterations with / without | load avg |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
-    long it_off = 0, it_on = 0;
+    long it_off = 0, it_on = 0, st_off = 0, st_on = 0;
     double wall_off = 0, wall_on = 0;
     int n = 0, changed = 0, failed = 0;
     for (const auto& [name, p] : rows)
@@ -207,8 +212,8 @@ int late_shift_table(const std::vector<int>& grids, const std::vector<int>& seed
                 if (getloadavg(load, 1) < 1) load[0] = -1;
                 const bool ok = !std::strcmp(a.status, "converged") && !std::strcmp(b.status, "converged");
                 const bool differs = a.nodes != b.nodes || std::abs(a.dc - b.dc) > 0.05;
-                std::printf("| %s | %d | %d | %.2f (%d), %ld, %.1f%s | %.2f (%d), %ld, %.1f%s | %.2f%s | %.2f |\n", name.c_str(), g, seed, a.dc, a.nodes,
-                            a.iters, a.wall, ok ? "" : (std::string(", ") + a.status).c_str(), b.dc, b.nodes, b.iters, b.wall,
+                std::printf("| %s | %d | %d | %.2f (%d), %ld (%ld), %.1f%s | %.2f (%d), %ld (%ld), %.1f%s | %.2f%s | %.2f |\n", name.c_str(), g, seed, a.dc,
+                            a.nodes, a.iters, a.steps, a.wall, ok ? "" : (std::string(", ") + a.status).c_str(), b.dc, b.nodes, b.iters, b.steps, b.wall,
                             ok ? "" : (std::string(", ") + b.status).c_str(), a.iters > 0 ? double(b.iters) / a.iters : 0.0,
                             differs ? " (differs)" : "", load[0]);
                 std::fflush(stdout);
@@ -220,15 +225,17 @@ int late_shift_table(const std::vector<int>& grids, const std::vector<int>& seed
                 changed += differs ? 1 : 0;
                 it_off += a.iters;
                 it_on += b.iters;
+                st_off += a.steps;
+                st_on += b.steps;
                 wall_off += a.wall;
                 wall_on += b.wall;
             }
     double load[1] = {0};
     if (getloadavg(load, 1) < 1) load[0] = -1;
-    std::printf("\n%d drapes at rest both ways (%d not): Newton iterations %ld -> %ld (ratio %.3f), wall %.1f -> %.1f s (ratio %.3f); "
-                "%d with another fold count or D; load average %.2f\n",
-                n, failed, it_off, it_on, it_off ? double(it_on) / it_off : 0.0, wall_off, wall_on, wall_off > 0 ? wall_on / wall_off : 0.0,
-                changed, load[0]);
+    std::printf("\n%d drapes at rest both ways (%d not): Newton iterations %ld -> %ld (ratio %.3f), solver steps %ld -> %ld (ratio %.3f), "
+                "wall %.1f -> %.1f s (ratio %.3f); %d with another fold count or a D more than 0.05 point off; load average %.2f\n",
+                n, failed, it_off, it_on, it_off ? double(it_on) / it_off : 0.0, st_off, st_on, st_off ? double(st_on) / st_off : 0.0, wall_off,
+                wall_on, wall_off > 0 ? wall_on / wall_off : 0.0, changed, load[0]);
     return 0;
 }
 
@@ -301,14 +308,18 @@ int main(int argc, char** argv)
         else {
             std::fprintf(stderr, "usage: bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]\n"
                                  "       bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F] [--mesh grid|rings] [--preset FILE]...\n"
-                                 "       bench_drape --late-shift [--grids 41,61] [--seeds 1001,1002] [--preset FILE]...\n");
+                                 "       bench_drape --late-shift [--grids 41,61] [--seeds K,K,...] [--preset FILE]...\n");
             return 2;
         }
     }
     if (late_shift) {
         if (!grids_given) grids = {41, 61};
-        if (grids.empty() || seeds.empty() || starters || plain || laying > 0 || mesh != DrapeMesh::Grid) {
-            std::fprintf(stderr, "bench_drape: --late-shift takes --grids, --seeds and --preset only\n");
+        if (grids.empty() || seeds.empty()) {
+            std::fprintf(stderr, "bench_drape: --%s: no %s\n", grids.empty() ? "grids" : "seeds", grids.empty() ? "grid" : "seed");
+            return 2;
+        }
+        if (starters || plain || laying > 0 || mesh != DrapeMesh::Grid || quick || static_only || rk4_limit != 900 || tol != 1e-6) {
+            std::fprintf(stderr, "bench_drape: --late-shift goes with --grids, --seeds and --preset only\n");
             return 2;
         }
         try {

@@ -291,8 +291,21 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
     return r;
 }
 
-SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const RestOptions& ropt)
+RestOptions from_flat_options(RestOptions ropt, const DrapeSetup& setup)
 {
+    // A drape from the random mix shifts the exact Hessian near rest
+    // (RestOptions::late_shift_residual): it leaves a saddle there at Newton's pace
+    // instead of creeping off it. A prescribed fold branch (the fits' drapes on the
+    // record's branch) keeps the solver's path: shifting there too moved six of the
+    // ten set-a fits' optima (chi2 -2.3 .. +14) for no clear gain
+    // (docs/performance.md, twenty-second session).
+    if (ropt.late_shift_residual == 0 && setup.fold_mode == 0) ropt.late_shift_residual = kLateShiftResidual;
+    return ropt;
+}
+
+SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const RestOptions& ropt_in)
+{
+    const RestOptions ropt = from_flat_options(ropt_in, setup);
     if (ropt.integrator != Integrator::Static || !(setup.laying_load < 1)) return run_to_rest(sys, ropt);
     // The first rest under part of the load (DrapeSetup::laying_load), then the
     // whole load from there.
@@ -316,14 +329,7 @@ SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const Res
 
 DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt_in, const ModelOptions& mopt)
 {
-    // A drape from the random mix shifts the exact Hessian near rest
-    // (RestOptions::late_shift_residual): it leaves a saddle there at Newton's pace
-    // instead of creeping off it. A prescribed fold branch (the fits' drapes) keeps
-    // the solver's path: shifting there too moved six of the ten set-a fits'
-    // optima (chi2 -2.3 .. +14) for no clear gain (docs/performance.md,
-    // twenty-second session).
-    RestOptions ropt = ropt_in;
-    if (ropt.late_shift_residual == 0 && setup.fold_mode == 0) ropt.late_shift_residual = kLateShiftResidual;
+    const RestOptions ropt = from_flat_options(ropt_in, setup);
     auto sys = make_drape_system(fabric, setup, mopt);
     const bool continuation = ropt.integrator == Integrator::Static && !fabric.grid_springs && setup.grid > kCoarsestLevel;
     SolverStatus pre;

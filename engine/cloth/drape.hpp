@@ -187,19 +187,26 @@ inline constexpr double kLabWaviness = 0.006;
 /// the next level of the continuation.
 Positions interpolate_positions(const ClothMesh& coarse, const Positions& xc, const ClothMesh& fine);
 
+/// `ropt` as a drape of `setup` from its start uses it: with the late shift
+/// near rest (RestOptions::late_shift_residual = kLateShiftResidual) when the
+/// start is the random mix (fold_mode 0) and the caller left it 0. Used by
+/// rest_from_flat and simulate_drape.
+RestOptions from_flat_options(RestOptions ropt, const DrapeSetup& setup);
+
 /// The drape of `sys` (made by make_drape_system for `setup`, at its start) to
 /// rest on its own mesh, laid as the set-up says: with the static solver and
 /// laying_load < 1 a first rest under that fraction of gravity (residual
 /// 1e-4 or the options', whichever is larger), then run_to_rest under the
-/// whole load; counters summed. Otherwise run_to_rest. What simulate_drape
-/// does below the continuation's coarsest level, and the widget on its own
-/// system (live frames).
+/// whole load; counters summed. Otherwise run_to_rest. Options as
+/// from_flat_options makes them. What simulate_drape does below the
+/// continuation's coarsest level, and the widget on its own system (live frames).
 SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const RestOptions& ropt);
 
 /// Simulates a drape to rest and measures it. For the static solver with a
 /// grid finer than kCoarsestLevel (41) this solves the largest of the levels 41,
 /// 81, 161, 321 below it first and interpolates (continuation): the cold start
 /// stays fast, and every finer grid shows the fold branch grid 41 takes from flat.
+/// Options as from_flat_options makes them (the late shift from the random mix).
 DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt = {},
                            const ModelOptions& mopt = {});
 

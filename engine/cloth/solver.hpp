@@ -71,9 +71,9 @@ struct RestOptions {
     /// of DL-A08's preset, 924 Newton iterations; 332 with the shift, the same rest
     /// state - docs/performance.md, twenty-second session). 0: the solver does not
     /// (warm re-solves, a prescribed fold branch, garments - as before 2026-12-02);
-    /// simulate_drape then sets kLateShiftResidual for a drape from the random mix
-    /// (DrapeSetup::fold_mode 0). Negative: off there too; so is a negative
-    /// shift_before_projection.
+    /// from_flat_options (drape.hpp: simulate_drape, rest_from_flat) then sets
+    /// kLateShiftResidual for a drape from the random mix (DrapeSetup::fold_mode 0).
+    /// Negative: off there too; so is a negative shift_before_projection.
     double late_shift_residual = 0;
     /// Called now and then with the status so far; return false to cancel.
     std::function<bool(const SolverStatus&)> progress;
@@ -87,7 +87,7 @@ struct RestOptions {
 inline constexpr double kLateShiftPseudoTime = 0.01;
 
 /// RestOptions::late_shift_residual of a drape from the random mix
-/// (simulate_drape with fold_mode 0): forces below 1 % of the weight. On 60 drapes
+/// (from_flat_options, fold_mode 0): forces below 1 % of the weight. On 60 drapes
 /// of the set-a presets from flat (grids 41 and 61, 4 + 2 seeds) the fold count
 /// and D were the same at 1e-3, 1e-2 and 1e-1 (one D moved by 0.06 point), one
 /// fold count changed at 1; Newton iterations -4 %, -8 %, -13 %.

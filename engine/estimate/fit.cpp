@@ -562,6 +562,8 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             double cand_e = 0, cand_score = best_score, cand_sigmas = 0;
             bool last_is_cand = false;
             double t_prev = 0;
+            double reached = 0;          // the farthest step drawn [sigmas of the profile]
+            int reach_limit = -1;        // ... and the coordinate whose cap shortened it (-1: none)
             for (double k : {1.0, 2.0}) {
                 if (!why_not.empty()) break;
                 const double t = step_of(k);
@@ -574,6 +576,8 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                     xs[i] = std::clamp(xs[i], v.lower, v.upper); // rounding only: step_of kept it inside
                 }
                 const double sigmas = std::abs(t) / sigma_t; // k, or less where the box shortened it
+                reached = sigmas;
+                reach_limit = limit_var >= 0 && limit_by_cap ? limit_var : -1;
                 ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
                 ev.report("from flat, fold count");
                 ++c.steps;
@@ -591,8 +595,27 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 }
             }
             if (cand.size() == 0) {
-                if (why_not.empty())
-                    why_not = "no step of the bendings along the contours' profile within 2 sigma laid it within 1 with its drapes closer to the record";
+                if (why_not.empty()) {
+                    // How far the steps reached: a coordinate the contours hardly see moves
+                    // many decades per decade of the bendings, and its cap (k decades at k
+                    // sigma) shortens the step to a fraction of a sigma (DL-A05: shear 29.7
+                    // decades per decade, 2 sigma -> 0.46).
+                    char w[400];
+                    if (reach_limit >= 0) {
+                        const FitVariable& v = vars[static_cast<std::size_t>(reach_limit)];
+                        std::snprintf(w, sizeof w,
+                                      "no step of the bendings along the contours' profile laid it within 1 with its drapes closer to the record "
+                                      "(the steps reached %.2f sigma: %s moves %.3g %s per decade of the bendings along the profile, and its "
+                                      "move is capped at %s per sigma)",
+                                      reached, v.name.c_str(), std::abs(dir[reach_limit]), v.log_scale ? "decades" : "of its unit",
+                                      v.log_scale ? "a decade" : "a tenth of its range");
+                    } else
+                        std::snprintf(w, sizeof w,
+                                      "no step of the bendings along the contours' profile within %.2g sigma laid it within 1 with its drapes closer "
+                                      "to the record",
+                                      reached > 0 ? reached : 2.0);
+                    why_not = w;
+                }
                 std::snprintf(buf, sizeof buf, "draped from flat the preset lays a fold count %.0f off the record's (D %+.1f points%s); %s: not calibrated",
                               folds0, e0, over.c_str(), why_not.c_str());
                 c.reason = buf;

@@ -180,6 +180,21 @@ int starters_table(const std::vector<int>& grids, bool plain, double laying, Dra
     return 0;
 }
 
+/// `text` as a comma-separated list of integers in [lo, hi] into `out` (replaced);
+/// false at the first item that is not one (--grids, --seeds).
+static bool parse_ints(const char* text, long lo, long hi, std::vector<int>& out)
+{
+    out.clear();
+    for (const char* c = text; *c;) {
+        char* end = nullptr;
+        const long v = std::strtol(c, &end, 10);
+        if (end == c || v < lo || v > hi) return false;
+        out.push_back(static_cast<int>(v));
+        c = *end == ',' ? end + 1 : end;
+    }
+    return true;
+}
+
 /// The late shift's A/B: the same drapes from flat with and without it.
 int late_shift_table(const std::vector<int>& grids, const std::vector<int>& seeds, const std::vector<std::string>& extra)
 {
@@ -254,16 +269,9 @@ int main(int argc, char** argv)
         else if (!std::strcmp(argv[i], "--late-shift")) late_shift = true;
         else if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) {
             seeds_given = true;
-            seeds.clear();
-            for (const char* c = argv[++i]; *c;) {
-                char* end = nullptr;
-                const long k = std::strtol(c, &end, 10);
-                if (end == c || k < 0 || k > 1000000) {
-                    std::fprintf(stderr, "bench_drape: --seeds: '%s' is not a list of seeds in [0, 1000000]\n", argv[i]);
-                    return 2;
-                }
-                seeds.push_back(static_cast<int>(k));
-                c = *end == ',' ? end + 1 : end;
+            if (!parse_ints(argv[++i], 0, 1000000, seeds)) {
+                std::fprintf(stderr, "bench_drape: --seeds: '%s' is not a list of seeds in [0, 1000000]\n", argv[i]);
+                return 2;
             }
         }
         else if (!std::strcmp(argv[i], "--plain")) plain = true;
@@ -290,16 +298,9 @@ int main(int argc, char** argv)
         else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) {
             starters_option = true;
             grids_given = true;
-            grids.clear();
-            for (const char* c = argv[++i]; *c;) {
-                char* end = nullptr;
-                const long g = std::strtol(c, &end, 10);
-                if (end == c || g < 5 || g > 401) {
-                    std::fprintf(stderr, "bench_drape: --grids: '%s' is not a list of grids in [5, 401]\n", argv[i]);
-                    return 2;
-                }
-                grids.push_back(static_cast<int>(g));
-                c = *end == ',' ? end + 1 : end;
+            if (!parse_ints(argv[++i], 5, 401, grids)) {
+                std::fprintf(stderr, "bench_drape: --grids: '%s' is not a list of grids in [5, 401]\n", argv[i]);
+                return 2;
             }
         } else if (!std::strcmp(argv[i], "--quick")) quick = true;
         else if (!std::strcmp(argv[i], "--static-only")) static_only = true;

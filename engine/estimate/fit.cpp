@@ -399,6 +399,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             linear = linear || !vars[static_cast<std::size_t>(i)].log_scale;
         }
     }
+    auto is_bend = [&](int i) { return std::find(bend.begin(), bend.end(), i) != bend.end(); };
     const std::string miss = folds0 > 1 ? "lays a fold count " + std::to_string(static_cast<int>(std::lround(folds0))) + " off the record's" : "misses the record's D";
     if (bend.empty() || linear) {
         std::snprintf(buf, sizeof buf, "draped from flat the preset %s (D %+.1f points%s), but the bendings are %s: not calibrated", miss.c_str(), e0,
@@ -494,7 +495,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 for (int i : held) dir[i] = 0;
                 int pushed = -1;
                 for (int i = 0; i < static_cast<int>(vars.size()) && pushed < 0; ++i) {
-                    if (std::find(bend.begin(), bend.end(), i) != bend.end() || std::find(held.begin(), held.end(), i) != held.end()) continue;
+                    if (is_bend(i) || std::find(held.begin(), held.end(), i) != held.end()) continue;
                     const FitVariable& v = vars[static_cast<std::size_t>(i)];
                     const double tiny = 1e-9 * (v.upper - v.lower);
                     if ((sign * dir[i] > 0 && x[i] >= v.upper - tiny) || (sign * dir[i] < 0 && x[i] <= v.lower + tiny)) pushed = i;
@@ -511,6 +512,14 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             // range): the point stays on the profile's line.
             int limit_var = -1;       // the coordinate that shortened the last step
             bool limit_by_cap = false; // ... by the cap, not the box
+            // How fast coordinate i follows the bendings along the profile, for the
+            // reasons below: e.g. "shear_N_m moves 29.7 decades" (verb "moves").
+            auto follower_rate = [&](int i, const char* verb) {
+                const FitVariable& v = vars[static_cast<std::size_t>(i)];
+                char r[160];
+                std::snprintf(r, sizeof r, "%s %s %.3g %s", v.name.c_str(), verb, std::abs(dir[i]), v.log_scale ? "decades" : "of its unit");
+                return std::string(r);
+            };
             auto step_of = [&](double k) {
                 double t = sign * k * sigma_t;
                 limit_var = -1;
@@ -535,7 +544,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             if (why_not.empty()) {
                 bool follows = false;
                 for (int i = 0; i < static_cast<int>(vars.size()); ++i) {
-                    if (std::find(bend.begin(), bend.end(), i) != bend.end()) continue;
+                    if (is_bend(i)) continue;
                     const FitVariable& v = vars[static_cast<std::size_t>(i)];
                     follows = follows || std::abs(dir[i]) > 1e-3 * (v.log_scale ? 1.0 : v.upper - v.lower);
                 }
@@ -548,9 +557,9 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                     char w[300];
                     if (limit_var >= 0 && limit_by_cap)
                         std::snprintf(w, sizeof w,
-                                      "the contours' profile is too steep to step along (%s would move %.3g %s per decade of the bendings: the "
+                                      "the contours' profile is too steep to step along (%s per decade of the bendings: the "
                                       "contours hardly see the bendings along it)",
-                                      v.name.c_str(), std::abs(dir[limit_var]), v.log_scale ? "decades" : "of its unit");
+                                      follower_rate(limit_var, "would move").c_str());
                     else
                         std::snprintf(w, sizeof w, "the contours' profile leaves the fit's box at once (%s at its bound)",
                                       limit_var >= 0 ? v.name.c_str() : "a coordinate");
@@ -562,6 +571,13 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             double cand_e = 0, cand_score = best_score, cand_sigmas = 0;
             bool last_is_cand = false;
             double t_prev = 0;
+            // The step whose drapes are the candidate (the evaluator's drapes are its).
+            auto take = [&](const Eigen::VectorXd& xs, double e, double folds) {
+                cand = xs;
+                cand_e = e;
+                cand_score = score(e, folds);
+                last_is_cand = true;
+            };
             double reached = 0;          // the farthest step drawn [sigmas of the profile]
             int reach_limit = -1;        // ... and the coordinate whose cap shortened it (-1: none)
             for (double k : {1.0, 2.0}) {
@@ -586,11 +602,8 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 if (measure(e, folds, nullptr) != n_used) break;
                 c.history.push_back({bend_scale(xs), e, folds, "fold count", sigmas, lin_cost(xs - x), false});
                 if (folds <= 1 && score(e, folds) < cand_score) {
-                    cand = xs;
-                    cand_e = e;
-                    cand_score = score(e, folds);
+                    take(xs, e, folds);
                     cand_sigmas = sigmas;
-                    last_is_cand = true;
                     break;
                 }
             }
@@ -601,15 +614,14 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                     // sigma) shortens the step to a fraction of a sigma (DL-A05: shear 29.7
                     // decades per decade, 2 sigma -> 0.46).
                     char w[400];
-                    if (reach_limit >= 0) {
-                        const FitVariable& v = vars[static_cast<std::size_t>(reach_limit)];
+                    if (reach_limit >= 0)
                         std::snprintf(w, sizeof w,
                                       "no step of the bendings along the contours' profile laid it within 1 with its drapes closer to the record "
-                                      "(the steps reached %.2f sigma: %s moves %.3g %s per decade of the bendings along the profile, and its "
+                                      "(the steps reached %.2f sigma: %s per decade of the bendings along the profile, and its "
                                       "move is capped at %s per sigma)",
-                                      reached, v.name.c_str(), std::abs(dir[reach_limit]), v.log_scale ? "decades" : "of its unit",
-                                      v.log_scale ? "a decade" : "a tenth of its range");
-                    } else
+                                      reached, follower_rate(reach_limit, "moves").c_str(),
+                                      vars[static_cast<std::size_t>(reach_limit)].log_scale ? "a decade" : "a tenth of its range");
+                    else
                         std::snprintf(w, sizeof w,
                                       "no step of the bendings along the contours' profile within %.2g sigma laid it within 1 with its drapes closer "
                                       "to the record",
@@ -634,12 +646,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                     double e = 0, folds = 0;
                     if (measure(e, folds, nullptr) == n_used) {
                         c.history.push_back({bend_scale(xs), e, folds, "D", 0, lin_cost(xs - x), false});
-                        if (folds <= 1 && score(e, folds) < cand_score) {
-                            cand = xs;
-                            cand_e = e;
-                            cand_score = score(e, folds);
-                            last_is_cand = true;
-                        }
+                        if (folds <= 1 && score(e, folds) < cand_score) take(xs, e, folds);
                     }
                 }
             }

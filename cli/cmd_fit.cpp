@@ -108,6 +108,10 @@ as not identifiable.
                       bending when their ratio is beyond 3 but the data do not separate them - the
                       tied preset is kept unless chi2 rises by more than 9, the 3-sigma level), free (apart,
                       no test) or tied (one bending for both: an isotropic fabric)
+  --shear S           in-plane shear: auto (default; fitted, and held at the typical woven
+                      56.2 N/m = 1 gf/(cm*deg) with the rest refitted when its 95 % interval spans
+                      more than a decade - the held preset is kept unless chi2 rises by more than 9)
+                      or free (fitted, whatever the data say); --method nlopt fits it free
   --cold-global       global stage from flat starts (default: from the best point's rest
                       states, faster, but each seed keeps its fold pattern)
   --cold-local        local stage from flat starts too (every simulation is a fresh drop,
@@ -157,7 +161,7 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--shear", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
             "--bending-correction", "--plain-bending", "--arc-membrane"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
@@ -200,6 +204,7 @@ int run(const std::vector<std::string>& argv)
     try {
         if (const auto b = a.get("--branch")) fo.branch = estimate::parse_fold_branch(*b);
         if (const auto b = a.get("--bending")) fo.bending = estimate::parse_bending_tie(*b);
+        if (const auto b = a.get("--shear")) fo.shear = estimate::parse_shear_hold(*b);
     } catch (const Error& e) {
         throw UsageError(std::string("--") + e.what());
     }
@@ -326,6 +331,7 @@ int run(const std::vector<std::string>& argv)
         else if (!r.residual.unexplained.empty()) std::printf("%s\n", r.residual.unexplained.c_str());
         if (r.refinement.from_grid > 0) std::printf("grid refinement: %s\n", r.refinement.reason.c_str());
         if (r.anisotropy.assessed && !r.anisotropy.reason.empty()) std::printf("bending: %s\n", r.anisotropy.reason.c_str());
+        if (r.shear_hold.assessed && !r.shear_hold.reason.empty()) std::printf("shear: %s\n", r.shear_hold.reason.c_str());
         if (r.flat_calibration.tried) std::printf("from flat: %s\n", r.flat_calibration.reason.c_str());
         if (r.grid_bound)
             std::printf("WARNING: grid-bound preset: a fitted bending length is below the mesh spacing of grid %d; "

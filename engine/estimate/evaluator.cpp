@@ -308,6 +308,16 @@ double Evaluator::objective_from(const Eigen::VectorXd& x, const std::vector<std
     return f;
 }
 
+void Evaluator::set_best(const Evaluation& e, const Eigen::VectorXd& x)
+{
+    m_best = e;
+    m_best_x = x;
+    m_states.assign(e.sims.size(), {});
+    for (std::size_t r = 0; r < e.sims.size(); ++r)
+        for (const auto& s : e.sims[r]) m_states[r].push_back(s.x);
+    m_have_states = true;
+}
+
 double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::string& stage)
 {
     Evaluation e = evaluate(x, from);
@@ -317,14 +327,7 @@ double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::str
     // ran to the iteration cap, became the best point at a lower chi2 and the
     // fit went on from its state.)
     const bool eligible = e.at_rest() || !m_best.at_rest();
-    if (e.chi2 < m_best.chi2 && eligible) {
-        m_best = e;
-        m_best_x = x;
-        m_states.assign(e.sims.size(), {});
-        for (std::size_t r = 0; r < e.sims.size(); ++r)
-            for (const auto& s : e.sims[r]) m_states[r].push_back(s.x);
-        m_have_states = true;
-    }
+    if (e.chi2 < m_best.chi2 && eligible) set_best(e, x);
     report(stage);
     return eligible ? e.chi2 : std::max(e.chi2, m_best.chi2);
 }

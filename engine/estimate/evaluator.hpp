@@ -119,6 +119,11 @@ public:
     const std::vector<DrapeFeatures>& measured() const { return m_meas; }
     const Evaluation& best() const { return m_best; }
     const Eigen::VectorXd& best_x() const { return m_best_x; }
+    /// Makes e (an evaluation at x, at rest) the best point whatever its chi2, its
+    /// rest states the warm starts: a search that goes on under a constraint (a
+    /// held coordinate) starts there, and returning to an earlier best point
+    /// restores it exactly.
+    void set_best(const Evaluation& e, const Eigen::VectorXd& x);
     bool spread_calibrated() const { return m_spread_calibrated; }
     long simulations() const { return m_simulations; }
     int evaluations() const { return m_evaluations; }

@@ -78,22 +78,34 @@ BendingTie parse_bending_tie(const std::string& name)
     throw ParameterError("bending: '" + name + "' is not one of auto, free, tied");
 }
 
+std::string to_string(ShearHold h) { return h == ShearHold::Auto ? "auto" : "free"; }
+
+ShearHold parse_shear_hold(const std::string& name)
+{
+    if (name == "auto") return ShearHold::Auto;
+    if (name == "free") return ShearHold::Free;
+    throw ParameterError("shear: '" + name + "' is not one of auto, free");
+}
+
 namespace {
 
-/// Largest rise of chi2 (scaled) at which the tied fit is kept (BendingTie::Auto).
+/// Largest rise of chi2 (scaled) at which the tied fit is kept (BendingTie::Auto),
+/// and the held shear (ShearHold::Auto).
 constexpr double kTieChi2 = 9.0;
+
+/// The fitted coordinate that sets q alone (-1: none, or q is tied to another).
+int sole_variable(const std::vector<FitVariable>& vars, Param q)
+{
+    for (int i = 0; i < static_cast<int>(vars.size()); ++i)
+        if (vars[static_cast<std::size_t>(i)].params.size() == 1 && vars[static_cast<std::size_t>(i)].params.front() == q) return i;
+    return -1;
+}
 
 /// The free fit's warp/weft bending ratio and its 95 % interval from the
 /// covariance of the two log10 coordinates (FitResult::Anisotropy).
 void assess_anisotropy(FitResult& out)
 {
-    int w = -1, f = -1;
-    for (int i = 0; i < static_cast<int>(out.variables.size()); ++i) {
-        const auto& ps = out.variables[static_cast<std::size_t>(i)].params;
-        if (ps.size() != 1) continue;
-        if (ps.front() == Param::BendWarp) w = i;
-        if (ps.front() == Param::BendWeft) f = i;
-    }
+    const int w = sole_variable(out.variables, Param::BendWarp), f = sole_variable(out.variables, Param::BendWeft);
     auto& a = out.anisotropy;
     a = {};
     if (w < 0 || f < 0 || out.best_coords.size() != static_cast<Eigen::Index>(out.variables.size())) return;
@@ -490,6 +502,13 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             // column out of J) and the profile found again for the others.
             Eigen::MatrixXd Jp = have_J ? J_opt : Eigen::MatrixXd();
             std::vector<int> held;
+            // A shear held at the typical value (ShearHold::Auto) stays held.
+            const int shear_var = sole_variable(vars, Param::Shear);
+            const bool shear_held = kept.shear_hold.held && have_J && shear_var >= 0;
+            if (shear_held) {
+                held.push_back(shear_var);
+                Jp.col(shear_var).setZero();
+            }
             for (int round = 0; why_not.empty() && round <= static_cast<int>(vars.size()); ++round) {
                 dir = profile_direction(Jp, rows, bend, unit);
                 for (int i : held) dir[i] = 0;
@@ -550,7 +569,10 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 }
                 if (!follows)
                     why_not = std::string("the contours' profile moves the bendings alone (") +
-                              (held.empty() ? "no other fitted coordinate follows them" : "the others that would follow are at their bounds") +
+                              (held.empty() ? "no other fitted coordinate follows them"
+                                             : held.size() == 1 && shear_held ? "the shear is held at the typical value"
+                                             : shear_held ? "the shear is held at the typical value, the others that would follow are at their bounds"
+                                                          : "the others that would follow are at their bounds") +
                               "), and one bending scale does not mend the fold count without losing D";
                 else if (std::abs(step_of(1.0)) < 0.01) {
                     const FitVariable& v = vars[static_cast<std::size_t>(std::max(limit_var, 0))];
@@ -842,6 +864,92 @@ void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r)
     }
 }
 
+/// ShearHold::Auto on the search's optimum (the evaluator's best point): the
+/// shear's 95 % interval from the exact Jacobian there (the search's sigmas,
+/// before the spread calibration, which only widens it); spanning more than a
+/// decade, the shear is moved to options.typical_shear_N_m, the other coordinates
+/// refitted by Levenberg-Marquardt with it held (warm from the optimum's rest
+/// states, `budget` evaluations), and the held point stays the best point unless
+/// its chi2 is above the fitted one's by more than kTieChi2 (scaled by chi2 / dof
+/// when that exceeds 1); else the fitted optimum is restored exactly. True when
+/// cancelled (the fitted optimum is then restored).
+bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, const FitOptions& options, int budget, Start from,
+                       FitResult::ShearHeld& h)
+{
+    h = {};
+    const int n = static_cast<int>(vars.size());
+    const int is = sole_variable(vars, Param::Shear);
+    if (options.shear != ShearHold::Auto || is < 0 || ev.best_x().size() != n || !ev.best().at_rest()) return false;
+    const FitVariable& v = vars[static_cast<std::size_t>(is)];
+    const Eigen::VectorXd x = ev.best_x();
+    const Evaluation fitted = ev.best();
+    char buf[500];
+    try {
+        int fitted_terms = 0;
+        for (const auto& t : fitted.terms) fitted_terms += t.fitted ? 1 : 0;
+        FitResult scratch; // sigmas_from_jacobian's chi2 / dof scaling and its outputs
+        scratch.chi2 = fitted.chi2;
+        scratch.dof = std::max(1, fitted_terms - n);
+        scratch.correlation = Eigen::MatrixXd::Zero(n, n);
+        const Eigen::MatrixXd J = ev.jacobian(x, fitted);
+        ev.report("shear");
+        const double half = 1.96 * sigmas_from_jacobian(J, scratch)[static_cast<std::size_t>(is)];
+        h.assessed = true;
+        h.fitted_N_m = v.to_value(x[is]);
+        h.fitted_chi2 = fitted.chi2;
+        h.lower95_N_m = v.to_value(std::isfinite(half) ? std::max(x[is] - half, v.lower) : v.lower);
+        h.upper95_N_m = v.to_value(std::isfinite(half) ? std::min(x[is] + half, v.upper) : v.upper);
+        h.constrained = std::isfinite(half) && 2 * half <= (v.log_scale ? 1.0 : 0.5 * (v.upper - v.lower));
+        if (h.constrained) {
+            std::snprintf(buf, sizeof buf, "shear %.3g N/m (95 %%: %.3g..%.3g) is constrained by the data: fitted", h.fitted_N_m, h.lower95_N_m,
+                          h.upper95_N_m);
+            h.reason = buf;
+            return false;
+        }
+        const double target = std::clamp(v.to_coord(options.typical_shear_N_m), v.lower, v.upper);
+        h.tried = true;
+        h.held_N_m = v.to_value(target);
+        Eigen::VectorXd xh = x;
+        xh[is] = target;
+        const Evaluation eh = ev.evaluate(xh, Start::Best);
+        ev.report("shear");
+        if (!eh.at_rest()) {
+            std::snprintf(buf, sizeof buf,
+                          "shear %.3g N/m (95 %%: %.3g..%.3g) is not constrained by the data, but the drapes at the typical %.3g N/m did not "
+                          "come to rest: fitted value kept",
+                          h.fitted_N_m, h.lower95_N_m, h.upper95_N_m, h.held_N_m);
+            h.reason = buf;
+            return false;
+        }
+        ev.set_best(eh, xh);
+        Box box;
+        for (const auto& w : vars) box.push_back({w.lower, w.upper});
+        box[static_cast<std::size_t>(is)] = {target, target};
+        const bool cancelled = levenberg_marquardt(ev, vars, xh, box, budget, "shear", from);
+        h.held_chi2 = ev.best().chi2;
+        h.delta_chi2 = (h.held_chi2 - h.fitted_chi2) / std::max(1.0, fitted.chi2 / scratch.dof);
+        if (cancelled) {
+            ev.set_best(fitted, x);
+            h.reason = "shear not constrained by the data; its held refit was cancelled: fitted value kept";
+            return true;
+        }
+        h.held = h.delta_chi2 < kTieChi2;
+        if (!h.held) ev.set_best(fitted, x);
+        std::snprintf(buf, sizeof buf,
+                      "shear %.3g N/m (95 %%: %.3g..%.3g) is not constrained by the data; held at the typical woven %.3g N/m (1 gf/(cm*deg)) "
+                      "and the rest refitted: chi2 %.1f against %.1f fitted (scaled delta %.2f %s %.0f): %s",
+                      h.fitted_N_m, h.lower95_N_m, h.upper95_N_m, h.held_N_m, h.held_chi2, h.fitted_chi2, h.delta_chi2, h.held ? "<" : ">=",
+                      kTieChi2, h.held ? "held" : "the data need the fitted value, kept");
+        h.reason = buf;
+        return false;
+    } catch (const CancelledFit&) {
+        ev.set_best(fitted, x);
+        h.held = false;
+        h.reason = "shear hold cancelled: fitted value kept";
+        return true;
+    }
+}
+
 /// One fit at options.grid: scan, global, local, mirror, spread, uncertainty;
 /// its candidate-effect tests (options.effects) are handed back through
 /// `deferred` (empty when there are none to run) for the caller to run on the
@@ -907,6 +1015,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     // An upper bound: CRS2 may overrun its budget by a few evaluations, and the
     // mirror check may add a second local stage of half the budget.
     ev.set_planned((options.start ? 1 : 0) + options.scan_evaluations + global + n + 2 + local + 1 + local / 2 + (options.spread_seeds > 0 ? 1 : 0) +
+                   (lm && options.shear == ShearHold::Auto ? 1 + local / 2 : 0) +
                    (options.uncertainty && !lm ? 2 * n : 0));
 
     bool cancelled = false;
@@ -952,6 +1061,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         cancelled = run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, local_start, "local", options.seed + 1);
     }
     if (!cancelled) cancelled = mirror_check(ev, vars, bend_vars, x, local / 2, local_start, options.seed + 2, lm);
+    if (!cancelled && lm) cancelled = hold_unseen_shear(ev, vars, options, local / 2, local_start, out.shear_hold);
     if (!cancelled && options.spread_seeds > 0 && ev.best_x().size() == n) {
         try {
             // The drapes from flat of the report's cold_* columns wait for the
@@ -1022,6 +1132,15 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     const double spacing = first.sample_diameter / std::max(1, options.grid - 1);
     const double rim_spacing = spacing * (options.mesh == cloth::DrapeMesh::Rings ? cloth::drapemeter_rim_grading(first).factor : 1.0);
     parameter_estimates(out, vars, x, sigma, options.uncertainty, spacing, rim_lever, rim_spacing);
+    if (out.shear_hold.held)
+        for (auto& e : out.estimates)
+            if (e.id == Param::Shear) {
+                char buf[300];
+                std::snprintf(buf, sizeof buf, "held at the typical woven value %.3g N/m (1 gf/(cm*deg)): the data do not constrain it (95 %% when fitted: %.3g..%.3g N/m)",
+                              out.shear_hold.held_N_m, out.shear_hold.lower95_N_m, out.shear_hold.upper95_N_m);
+                e.constrained = false;
+                e.note = buf;
+            }
     if (options.uncertainty && !out.cancelled) assess_anisotropy(out);
 
     // ---- per-record comparison ---------------------------------------------

@@ -90,6 +90,26 @@ BendingTie parse_bending_tie(const std::string& name); ///< "auto" | "free" | "t
 /// tests the two tied.
 inline constexpr double kTypicalBendingAnisotropy = 3.0;
 
+/// In-plane shear: fitted, and held at the typical value when the data do not
+/// constrain it (Auto), or fitted whatever the data say (Free). A drape test's
+/// contours hardly see the shear stiffness (every set-a record's 95 % interval
+/// spanned more than a decade, its value anywhere from 4 to the bound 1000 N/m
+/// where the search happened to stop): a preset should not carry such a value
+/// into a garment, where shear is what lets the cloth follow a body. Auto: when
+/// the fitted shear's 95 % interval spans more than a decade, the fit moves it
+/// to FitOptions::typical_shear_N_m, refits the other coordinates with it held,
+/// and keeps the held fit unless chi2 rises by more than 9 (scaled by chi2 / dof
+/// when that exceeds 1; the tie's 3-sigma level).
+enum class ShearHold { Auto, Free };
+std::string to_string(ShearHold h);
+ShearHold parse_shear_hold(const std::string& name); ///< "auto" | "free"; ParameterError otherwise
+
+/// The typical KES-FB1 shear rigidity of woven apparel fabrics, 1 gf/(cm*deg)
+/// = 56.2 N/m per radian: the geometric middle of the 0.3..3 gf/(cm*deg) range
+/// (17..170 N/m; Kawabata's measurements as summarised in textile handbooks,
+/// cloth/params.cpp).
+inline constexpr double kTypicalShearNm = 56.2;
+
 struct FitOptions {
     ModelVariant model = ModelVariant::Baseline;
     FitMethod method = FitMethod::Sensitivity;
@@ -122,6 +142,9 @@ struct FitOptions {
     BendingTie bending = BendingTie::Auto;
     /// BendingTie::Auto tests the tie when the free ratio (or its inverse) exceeds this.
     double typical_bending_anisotropy = kTypicalBendingAnisotropy;
+    ShearHold shear = ShearHold::Auto;
+    /// ShearHold::Auto holds an unconstrained shear here [N/m].
+    double typical_shear_N_m = kTypicalShearNm;
     /// Per residual term (in the evaluator's order): sigmas that replace the noise
     /// model's and the spread calibration's. The tied refit of BendingTie::Auto
     /// runs on the free fit's final sigmas, so that the two chi2 compare (each
@@ -305,6 +328,20 @@ struct FitResult {
         double delta_chi2 = 0;      ///< (tied - free) / max(1, free chi2 / dof)
         std::string reason;         ///< one sentence for the report
     } anisotropy;
+    /// In-plane shear (ShearHold): whether the data constrain it, and the held
+    /// refit when it was tried.
+    struct ShearHeld {
+        bool assessed = false;      ///< the shear was fitted and had an interval before the hold
+        double fitted_N_m = 0;      ///< the fitted value
+        double lower95_N_m = 0, upper95_N_m = 0; ///< its 95 % interval (the Jacobian at that optimum, before the spread calibration)
+        bool constrained = false;   ///< the interval spans at most a decade: fitted, not held
+        bool tried = false;         ///< the held refit was made
+        bool held = false;          ///< this result's shear is held at held_N_m
+        double held_N_m = 0;
+        double fitted_chi2 = 0, held_chi2 = 0; ///< before the spread calibration (the search's sigmas)
+        double delta_chi2 = 0;      ///< (held - fitted) / max(1, fitted chi2 / dof)
+        std::string reason;         ///< one sentence for the report
+    } shear_hold;
     /// FitOptions::flat_calibration: the preset moved so that, draped from flat, it
     /// gives the record's D - the bendings rescaled - or, where its fold count was
     /// more than 1 off, the record's fold count within 1 - a step along the contours'

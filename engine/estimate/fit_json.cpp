@@ -124,6 +124,24 @@ json fit_to_json(const FitResult& r)
         }
         fit["bending_anisotropy"] = an;
     }
+    if (r.shear_hold.assessed) {
+        const auto& h = r.shear_hold;
+        json sh = {{"mode", to_string(r.options.shear)},
+                   {"fitted_N_m", h.fitted_N_m},
+                   {"fitted_lower95_N_m", h.lower95_N_m},
+                   {"fitted_upper95_N_m", h.upper95_N_m},
+                   {"constrained", h.constrained},
+                   {"held_refit", h.tried},
+                   {"held", h.held},
+                   {"reason", h.reason}};
+        if (h.tried) {
+            sh["held_N_m"] = h.held_N_m;
+            sh["fitted_chi2"] = h.fitted_chi2;
+            sh["held_chi2"] = h.held_chi2;
+            sh["delta_chi2_scaled"] = h.delta_chi2;
+        }
+        fit["shear_hold"] = sh;
+    }
     json params = json::array();
     std::vector<std::string> not_identifiable;
     for (const auto& e : r.estimates) {

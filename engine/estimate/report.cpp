@@ -401,6 +401,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
         md << "**Grid refinement**: " << r.refinement.reason
            << ". The evaluation and time counts above include both fits.\n\n";
     if (r.anisotropy.assessed && !r.anisotropy.reason.empty()) md << "**Warp/weft bending**: " << r.anisotropy.reason << ".\n\n";
+    if (r.shear_hold.assessed && !r.shear_hold.reason.empty()) md << "**Shear**: " << r.shear_hold.reason << ".\n\n";
     if (r.flat_calibration.tried) md << "**The preset draped from flat**: " << r.flat_calibration.reason << ".\n\n";
     if (r.grid_bound)
         md << "**Grid-bound preset**: a fitted bending's bending length is below the mesh spacing of the fit's grid, so the "

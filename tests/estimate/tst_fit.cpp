@@ -324,6 +324,7 @@ private slots:
         p[Param::Shear] = 30;
         MeasuredDrape rec = synthetic(p, 0.30, 0.15, 25, 11);
         FitOptions o = calibration_options();
+        o.shear = ShearHold::Free; // the profile's follower is the shear (held, the profile would move the bendings alone)
         {
             // The count the fabric lays from flat (the calibration's first seed), and a
             // photo that "reads" two more.
@@ -425,6 +426,56 @@ private slots:
         QCOMPARE(r.trace.back().evaluation, r.evaluations);
         const auto j = fit_to_json(r);
         QCOMPARE(j["fit"]["bending_anisotropy"]["tied"].get<bool>(), true);
+    }
+
+    void unconstrainedShearIsHeldAtTheTypicalValue()
+    {
+        // D alone cannot tell the shear (one term for three coordinates: the Jacobian
+        // has a null direction), so ShearHold::Auto moves it to the typical woven value,
+        // refits the bendings with it held, and keeps it there unless chi2 rises by
+        // more than 9; the report says which and why. (The truth's shear, 300 N/m, is
+        // far from the typical 56.2 N/m on purpose.)
+        cloth::FabricParams p = truth();
+        p[Param::Shear] = 300;
+        const MeasuredDrape rec = synthetic(p, 0.30, 0.15, 17, 3);
+        FitOptions o;
+        o.grid = 17;
+        o.channels = {"dc"};
+        o.scan_evaluations = 3;
+        o.local_evaluations = 6;
+        o.effects = false;
+        o.spread_seeds = 0;
+        o.random_start_seeds = 0;
+        o.start = p; // starts at the truth's shear: only the hold moves it
+        const FitResult r = fit_fabric({rec}, o);
+        QVERIFY(!r.cancelled);
+        const auto& h = r.shear_hold;
+        qInfo("%s", h.reason.c_str());
+        QVERIFY(h.assessed);
+        QVERIFY(!h.constrained);
+        QVERIFY(h.tried);
+        QVERIFY(std::isfinite(h.delta_chi2));
+        QCOMPARE(h.held, h.delta_chi2 < 9.0);
+        if (h.held) {
+            QVERIFY(std::abs(r.params[Param::Shear] / kTypicalShearNm - 1) < 1e-9);
+            QVERIFY(est(r, Param::Shear).note.find("held at the typical") != std::string::npos);
+            QVERIFY(!est(r, Param::Shear).constrained);
+            QCOMPARE(r.chi2, h.held_chi2);
+        } else {
+            QCOMPARE(r.params[Param::Shear], h.fitted_N_m);
+            QCOMPARE(r.chi2, h.fitted_chi2);
+        }
+        const auto j = fit_to_json(r);
+        QCOMPARE(j["fit"]["shear_hold"]["held"].get<bool>(), h.held);
+        QCOMPARE(j["fit"]["shear_hold"]["mode"].get<std::string>(), std::string("auto"));
+        // Free: the fitted value stays, whatever the data say.
+        FitOptions f = o;
+        f.shear = ShearHold::Free;
+        const FitResult rf = fit_fabric({rec}, f);
+        QVERIFY(!rf.shear_hold.assessed);
+        QVERIFY(!fit_to_json(rf)["fit"].contains("shear_hold"));
+        QCOMPARE(parse_shear_hold("free"), ShearHold::Free);
+        QVERIFY_THROWS_EXCEPTION(ParameterError, parse_shear_hold("held"));
     }
 
     void tiedBendingIsOneCoordinate()

@@ -108,10 +108,14 @@ as not identifiable.
                       bending when their ratio is beyond 3 but the data do not separate them - the
                       tied preset is kept unless chi2 rises by more than 9, the 3-sigma level), free (apart,
                       no test) or tied (one bending for both: an isotropic fabric)
-  --shear S           in-plane shear: auto (default; fitted, and held at the typical woven
-                      56.2 N/m = 1 gf/(cm*deg) with the rest refitted when its 95 % interval spans
-                      more than a decade - the held preset is kept unless chi2 rises by more than 9)
+  --shear S           in-plane shear: auto (default; fitted, and held at the typical value with
+                      the rest refitted when the data leave it open-ended - its 95 % interval runs
+                      into a fit bound, or it sits at one; the held preset is kept unless chi2
+                      rises by more than 9)
                       or free (fitted, whatever the data say); --method nlopt fits it free
+  --typical-shear G   the value auto holds the shear at [N/m] (default 56.2: KES 1 gf/(cm*deg),
+                      the middle of woven apparel fabrics' range; a measured KES shear rigidity
+                      in gf/(cm*deg) times 56.2), 1..1000
   --cold-global       global stage from flat starts (default: from the best point's rest
                       states, faster, but each seed keeps its fold pattern)
   --cold-local        local stage from flat starts too (every simulation is a fresh drop,
@@ -161,7 +165,7 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--shear", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--shear", "--typical-shear", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
             "--bending-correction", "--plain-bending", "--arc-membrane"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
@@ -205,6 +209,7 @@ int run(const std::vector<std::string>& argv)
         if (const auto b = a.get("--branch")) fo.branch = estimate::parse_fold_branch(*b);
         if (const auto b = a.get("--bending")) fo.bending = estimate::parse_bending_tie(*b);
         if (const auto b = a.get("--shear")) fo.shear = estimate::parse_shear_hold(*b);
+        fo.typical_shear_N_m = a.get_double_in("--typical-shear", fo.typical_shear_N_m, 1.0, 1000.0);
     } catch (const Error& e) {
         throw UsageError(std::string("--") + e.what());
     }

@@ -96,7 +96,8 @@ inline constexpr double kTypicalBendingAnisotropy = 3.0;
 /// spanned more than a decade, its value anywhere from 4 to the bound 1000 N/m
 /// where the search happened to stop): a preset should not carry such a value
 /// into a garment, where shear is what lets the cloth follow a body. Auto: when
-/// the fitted shear's 95 % interval spans more than a decade, the fit moves it
+/// the fitted shear's 95 % interval is open-ended (it runs into a fit bound, or
+/// the shear is at one: the box, not the data, limits it), the fit moves it
 /// to FitOptions::typical_shear_N_m, refits the other coordinates with it held,
 /// and keeps the held fit unless chi2 rises by more than 9 (scaled by chi2 / dof
 /// when that exceeds 1; the tie's 3-sigma level).
@@ -143,7 +144,8 @@ struct FitOptions {
     /// BendingTie::Auto tests the tie when the free ratio (or its inverse) exceeds this.
     double typical_bending_anisotropy = kTypicalBendingAnisotropy;
     ShearHold shear = ShearHold::Auto;
-    /// ShearHold::Auto holds an unconstrained shear here [N/m].
+    /// ShearHold::Auto holds an unconstrained shear here [N/m] (a measured KES shear
+    /// rigidity G in gf/(cm*deg) is G * 56.2 N/m).
     double typical_shear_N_m = kTypicalShearNm;
     /// Per residual term (in the evaluator's order): sigmas that replace the noise
     /// model's and the spread calibration's. The tied refit of BendingTie::Auto
@@ -334,7 +336,8 @@ struct FitResult {
         bool assessed = false;      ///< the shear was fitted and had an interval before the hold
         double fitted_N_m = 0;      ///< the fitted value
         double lower95_N_m = 0, upper95_N_m = 0; ///< its 95 % interval (the Jacobian at that optimum, before the spread calibration)
-        bool constrained = false;   ///< the interval spans at most a decade: fitted, not held
+        bool at_bound = false;      ///< the fitted value was at a fit bound (then not constrained, whatever the interval)
+        bool constrained = false;   ///< the interval lies inside the fit bounds (however wide): fitted, not held
         bool tried = false;         ///< the held refit was made
         bool held = false;          ///< this result's shear is held at held_N_m
         double held_N_m = 0;

@@ -130,6 +130,7 @@ json fit_to_json(const FitResult& r)
                    {"fitted_N_m", h.fitted_N_m},
                    {"fitted_lower95_N_m", h.lower95_N_m},
                    {"fitted_upper95_N_m", h.upper95_N_m},
+                   {"at_bound", h.at_bound},
                    {"constrained", h.constrained},
                    {"held_refit", h.tried},
                    {"held", h.held},

@@ -181,6 +181,13 @@ bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Ei
         lo[static_cast<std::size_t>(i)] = box.empty() ? vars[static_cast<std::size_t>(i)].lower : box[static_cast<std::size_t>(i)].first;
         hi[static_cast<std::size_t>(i)] = box.empty() ? vars[static_cast<std::size_t>(i)].upper : box[static_cast<std::size_t>(i)].second;
     }
+    // A coordinate the box pins (lower = upper: a held shear) is out of the step:
+    // its row and column out of the normal equations and of the trust radius, so
+    // that the others' step is the least-squares step with it held (solved with it,
+    // the coordinate the data sees least would propose the longest move, shrink
+    // everyone's step to the radius and then be clamped back).
+    std::vector<char> pinned(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) pinned[static_cast<std::size_t>(i)] = hi[static_cast<std::size_t>(i)] <= lo[static_cast<std::size_t>(i)] ? 1 : 0;
     // Every evaluation counts, the Jacobian's fallback re-solves too.
     const int at_entry = ev.evaluations();
     auto used_now = [&] { return ev.evaluations() - at_entry; };
@@ -199,8 +206,14 @@ bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Ei
             Eigen::VectorXd r = Eigen::VectorXd::Zero(J.rows());
             for (Eigen::Index k = 0; k < J.rows(); ++k)
                 if (cur.terms[static_cast<std::size_t>(k)].fitted) r[k] = cur.terms[static_cast<std::size_t>(k)].whitened();
-            const Eigen::MatrixXd A = J.transpose() * J;
-            const Eigen::VectorXd g = J.transpose() * r;
+            Eigen::MatrixXd A = J.transpose() * J;
+            Eigen::VectorXd g = J.transpose() * r;
+            for (int i = 0; i < n; ++i)
+                if (pinned[static_cast<std::size_t>(i)]) {
+                    A.row(i).setZero();
+                    A.col(i).setZero();
+                    g[i] = 0;
+                }
             const double amax = std::max(A.diagonal().maxCoeff(), 1e-300);
             if (!(g.allFinite() && A.allFinite()) || amax <= 1e-300) return false; // the data does not see any coordinate
             bool accepted = false;
@@ -208,12 +221,13 @@ bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Ei
             Eigen::VectorXd step;
             while (used_now() < budget) {
                 Eigen::MatrixXd M = A;
-                for (int i = 0; i < n; ++i) M(i, i) += lambda * std::max(A(i, i), 1e-9 * amax) + 1e-12 * amax;
+                for (int i = 0; i < n; ++i) M(i, i) += pinned[static_cast<std::size_t>(i)] ? 1.0 : lambda * std::max(A(i, i), 1e-9 * amax) + 1e-12 * amax;
                 Eigen::VectorXd d = -M.ldlt().solve(g);
                 // Half a decade at most per step on log scales (the linearisation of
                 // a rest state does not reach further), a tenth of the range otherwise.
                 double scale = 1;
                 for (int i = 0; i < n; ++i) {
+                    if (pinned[static_cast<std::size_t>(i)]) continue;
                     const auto& v = vars[static_cast<std::size_t>(i)];
                     const double cap = radius * (v.log_scale ? 0.5 : 0.1 * (v.upper - v.lower));
                     if (std::abs(d[i]) > cap) scale = std::min(scale, cap / std::abs(d[i]));

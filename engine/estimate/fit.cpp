@@ -887,6 +887,23 @@ int measurement_parameters(const std::vector<MeasuredDrape>& records, const FitO
     return count;
 }
 
+/// A held shear's estimate (FitResult::shear_hold): role "held", not constrained,
+/// the interval it had when fitted in the note.
+void mark_held_shear(FitResult& out)
+{
+    if (!out.shear_hold.held) return;
+    for (auto& e : out.estimates)
+        if (e.id == Param::Shear) {
+            char buf[300];
+            std::snprintf(buf, sizeof buf, "held at the typical value %.4g N/m: the data do not constrain it (95 %% when fitted: %.4g..%.4g N/m%s)",
+                          out.shear_hold.held_N_m, out.shear_hold.lower95_N_m, out.shear_hold.upper95_N_m,
+                          out.shear_hold.at_bound ? ", at a fit bound" : "");
+            e.role = "held";
+            e.constrained = false;
+            e.note = buf;
+        }
+}
+
 /// ShearHold::Auto on the search's optimum (the evaluator's best point): the
 /// shear's 95 % interval from the exact Jacobian there (the search's sigmas,
 /// before the spread calibration, which only widens it); open-ended - running into
@@ -933,8 +950,8 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
         h.at_bound = x[is] - v.lower < edge || v.upper - x[is] < edge;
         h.constrained = std::isfinite(half) && x[is] - half > v.lower + edge && x[is] + half < v.upper - edge && !h.at_bound;
         if (h.constrained) {
-            std::snprintf(buf, sizeof buf, "shear %.3g N/m (95 %%: %.3g..%.3g) is bounded by the data on both sides: fitted", h.fitted_N_m,
-                          h.lower95_N_m, h.upper95_N_m);
+            std::snprintf(buf, sizeof buf, "shear %.4g N/m (95 %%: %.4g..%.4g with the search's sigmas) is bounded by the data on both sides: fitted",
+                          h.fitted_N_m, h.lower95_N_m, h.upper95_N_m);
             h.reason = buf;
             return false;
         }
@@ -947,7 +964,7 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
         ev.report("shear");
         if (!eh.at_rest()) {
             std::snprintf(buf, sizeof buf,
-                          "shear %.3g N/m (95 %%: %.3g..%.3g) is not constrained by the data, but the drapes at the typical %.3g N/m did not "
+                          "shear %.4g N/m (95 %%: %.4g..%.4g) is not constrained by the data, but the drapes at the typical %.4g N/m did not "
                           "come to rest: fitted value kept",
                           h.fitted_N_m, h.lower95_N_m, h.upper95_N_m, h.held_N_m);
             h.reason = buf;
@@ -968,7 +985,7 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
         h.held = h.delta_chi2 < kTieChi2;
         if (!h.held) ev.set_best(fitted, x);
         std::snprintf(buf, sizeof buf,
-                      "shear %.3g N/m (95 %%: %.3g..%.3g%s) is not constrained by the data; held at the typical value %.3g N/m "
+                      "shear %.4g N/m (95 %%: %.4g..%.4g%s) is not constrained by the data; held at the typical value %.4g N/m "
                       "and the rest refitted: chi2 %.1f against %.1f fitted (scaled delta %.2f %s %.0f): %s",
                       h.fitted_N_m, h.lower95_N_m, h.upper95_N_m, h.at_bound ? ", at a fit bound" : "", h.held_N_m, h.held_chi2, h.fitted_chi2,
                       h.delta_chi2, h.held ? "<" : ">=",
@@ -1027,9 +1044,12 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     out.options.progress = nullptr;
     out.options.cancel = nullptr;
     out.variables = fit_variables(options.model, options.bending == BendingTie::Tied);
+    if (options.shear_held_N_m > 0) // held from the start (the tied refit of a held fit): not a coordinate
+        if (const int is = sole_variable(out.variables, Param::Shear); is >= 0) out.variables.erase(out.variables.begin() + is);
     const auto& vars = out.variables;
     const int n = static_cast<int>(vars.size());
     cloth::FabricParams base = options.start.value_or(cloth::FabricParams{});
+    if (options.shear_held_N_m > 0) base[Param::Shear] = options.shear_held_N_m;
     if (options.model == ModelVariant::Baseline) base[Param::Friction] = 0.0; // the seed's frictionless disc
     base = params_for_record(base, records.front());
     state->ev.emplace(records, options, vars, base);
@@ -1158,17 +1178,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     const double spacing = first.sample_diameter / std::max(1, options.grid - 1);
     const double rim_spacing = spacing * (options.mesh == cloth::DrapeMesh::Rings ? cloth::drapemeter_rim_grading(first).factor : 1.0);
     parameter_estimates(out, vars, x, sigma, options.uncertainty, spacing, rim_lever, rim_spacing);
-    if (out.shear_hold.held)
-        for (auto& e : out.estimates)
-            if (e.id == Param::Shear) {
-                char buf[300];
-                std::snprintf(buf, sizeof buf, "held at the typical value %.3g N/m: the data do not constrain it (95 %% when fitted: %.3g..%.3g N/m%s)",
-                              out.shear_hold.held_N_m, out.shear_hold.lower95_N_m, out.shear_hold.upper95_N_m,
-                              out.shear_hold.at_bound ? ", at a fit bound" : "");
-                e.role = "held";
-                e.constrained = false;
-                e.note = buf;
-            }
+    mark_held_shear(out);
     if (options.uncertainty && !out.cancelled) assess_anisotropy(out);
 
     // ---- per-record comparison ---------------------------------------------
@@ -1384,6 +1394,11 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     cloth::FabricParams start = free.params;
     start[Param::BendWarp] = start[Param::BendWeft] = std::sqrt(free.params[Param::BendWarp] * free.params[Param::BendWeft]);
     tied.start = start;
+    // The free fit's shear decision stands: a held shear stays held (not a coordinate
+    // of the tied fit), a kept one is fitted without a second hold (decided again on
+    // the spread-calibrated sigmas, the hold's cost would enter the tie's chi2).
+    tied.shear = ShearHold::Free;
+    if (free.shear_hold.held) tied.shear_held_N_m = free.shear_hold.held_N_m;
     tied.progress = continued_progress(options, "tie ", free);
     // Its start draped from the free optimum's rest states (same grid, same seeds):
     // the two chi2 then compare parameters on the same rest states, not a warm
@@ -1397,6 +1412,8 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     }
     DeferredEffects tied_effects;
     FitResult t = fit_at_grid(records, tied, tied_effects, have_warm ? &warm : nullptr);
+    t.shear_hold = free.shear_hold;
+    mark_held_shear(t);
     FitResult::Anisotropy an = a;
     an.refit = true;
     an.free_chi2 = free.chi2;
@@ -1426,6 +1443,8 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     kept.options.refine_grid = options.refine_grid;
     kept.options.bending = options.bending;
     kept.options.term_sigmas.clear();
+    kept.options.shear = options.shear;
+    kept.options.shear_held_N_m = 0;
     kept.anisotropy = an;
     return an.tied ? finish(kept, tied_effects, "tie ") : finish(kept, free_effects, "");
 }

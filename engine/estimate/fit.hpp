@@ -147,6 +147,11 @@ struct FitOptions {
     /// ShearHold::Auto holds an unconstrained shear here [N/m] (a measured KES shear
     /// rigidity G in gf/(cm*deg) is G * 56.2 N/m).
     double typical_shear_N_m = kTypicalShearNm;
+    /// > 0: the shear is not fitted but held at this value from the start [N/m] - the
+    /// tied refit of BendingTie::Auto when the free fit held it (so that the tie's
+    /// likelihood ratio compares the bendings on one shear, not the hold decided
+    /// again on other sigmas); 0: as `shear` says.
+    double shear_held_N_m = 0;
     /// Per residual term (in the evaluator's order): sigmas that replace the noise
     /// model's and the spread calibration's. The tied refit of BendingTie::Auto
     /// runs on the free fit's final sigmas, so that the two chi2 compare (each
@@ -233,7 +238,7 @@ struct ParamEstimate {
     cloth::Param id{};
     std::string key;
     std::string unit;
-    std::string role;       ///< "fitted" | "declared" (by the lab) | "fixed" (default) | "not identifiable"
+    std::string role;       ///< "fitted" | "held" (ShearHold) | "declared" (by the lab) | "fixed" (default) | "not identifiable"
     double value = 0;       ///< [unit]
     double lower95 = 0, upper95 = 0; ///< 95 % interval (fitted only) [unit]
     double sigma_coord = 0; ///< 1-sigma in search coordinates (decades for log parameters)

@@ -417,7 +417,15 @@ private slots:
         QVERIFY(r.anisotropy.tied);
         QVERIFY(r.anisotropy.delta_chi2 < 9.0);
         QCOMPARE(r.params[Param::BendWarp], r.params[Param::BendWeft]);
-        QCOMPARE(r.variables.size(), std::size_t(2));
+        // The tied refit keeps the free fit's shear decision: a held shear stays held
+        // (not a coordinate: bend_Nm alone), a kept one is fitted again.
+        qInfo("shear: %s", r.shear_hold.reason.c_str());
+        QCOMPARE(r.variables.size(), std::size_t(r.shear_hold.held ? 1 : 2));
+        if (r.shear_hold.held) {
+            QCOMPARE(r.params[Param::Shear], r.shear_hold.held_N_m);
+            QCOMPARE(est(r, Param::Shear).role, std::string("held"));
+        }
+        QCOMPARE(r.options.shear, ShearHold::Auto);
         QCOMPARE(r.chi2, r.anisotropy.tied_chi2);
         // Counts and trace hold both fits, the tied one's stages prefixed.
         bool tie_stage = false;

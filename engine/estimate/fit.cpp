@@ -870,6 +870,14 @@ void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r)
     }
 }
 
+/// Degrees of freedom of a fit: its fitted terms less its fitted parameters, at least 1.
+int fit_dof(const std::vector<ResidualTerm>& terms, int parameters)
+{
+    int fitted = 0;
+    for (const auto& t : terms) fitted += t.fitted ? 1 : 0;
+    return std::max(1, fitted - parameters);
+}
+
 /// The measurement model's own parameters, fitted with the fabric's: a re-centred
 /// stack's axis (2 per record), an untilted one's offset and tilt (4; 2 with one
 /// cut). Counted over the record's closed cuts: none, no axis; one depth, an offset.
@@ -926,11 +934,9 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
     const Evaluation fitted = ev.best();
     char buf[500];
     try {
-        int fitted_terms = 0;
-        for (const auto& t : fitted.terms) fitted_terms += t.fitted ? 1 : 0;
         FitResult scratch; // sigmas_from_jacobian's chi2 / dof scaling and its outputs
         scratch.chi2 = fitted.chi2;
-        scratch.dof = std::max(1, fitted_terms - n - measurement_params);
+        scratch.dof = fit_dof(fitted.terms, n + measurement_params);
         scratch.correlation = Eigen::MatrixXd::Zero(n, n);
         const Eigen::MatrixXd J = ev.jacobian(x, fitted);
         ev.report("shear");
@@ -946,8 +952,8 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
         // typical value would throw away (tst_est_fit_slow's synthetic fabric, shear 20
         // N/m: fitted 37.9 N/m, 7.6..190; held at 56.2 its 240/180 mm prediction
         // moved 2.0 -> 3.2 points off).
-        const double edge = v.log_scale ? 0.05 : 0.01 * (v.upper - v.lower);
-        h.at_bound = x[is] - v.lower < edge || v.upper - x[is] < edge;
+        const double edge = bound_edge(v);
+        h.at_bound = at_fit_bound(v, x[is]);
         h.constrained = std::isfinite(half) && x[is] - half > v.lower + edge && x[is] + half < v.upper - edge && !h.at_bound;
         if (h.constrained) {
             std::snprintf(buf, sizeof buf, "shear %.4g N/m (95 %%: %.4g..%.4g with the search's sigmas) is bounded by the data on both sides: fitted",
@@ -1063,6 +1069,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         x[i] = std::clamp(c / static_cast<double>(vars[i].params.size()), vars[i].lower, vars[i].upper);
     }
     const bool lm = options.method == FitMethod::Sensitivity;
+    const int measurement_params = measurement_parameters(records, options);
     const int global = options.global_evaluations > 0 ? options.global_evaluations : (lm ? 0 : 4 * n);
     const int local = options.local_evaluations > 0 ? options.local_evaluations : (lm ? 4 * n + 6 : 8 * n + 8);
     // An upper bound: CRS2 may overrun its budget by a few evaluations, and the
@@ -1115,7 +1122,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     }
     if (!cancelled) cancelled = mirror_check(ev, vars, bend_vars, x, local / 2, local_start, options.seed + 2, lm);
     if (!cancelled && lm)
-        cancelled = hold_unseen_shear(ev, vars, options, measurement_parameters(records, options), kHoldEvaluations, local_start, out.shear_hold);
+        cancelled = hold_unseen_shear(ev, vars, options, measurement_params, kHoldEvaluations, local_start, out.shear_hold);
     if (!cancelled && options.spread_seeds > 0 && ev.best_x().size() == n) {
         try {
             // The drapes from flat of the report's cold_* columns wait for the
@@ -1139,10 +1146,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     out.params = ev.params_at(x);
     out.residuals = best.terms;
     out.chi2 = best.chi2;
-    int fitted_terms = 0;
-    for (const auto& t : best.terms) fitted_terms += t.fitted ? 1 : 0;
-    const int measurement_params = measurement_parameters(records, options);
-    out.dof = std::max(1, fitted_terms - n - measurement_params);
+    out.dof = fit_dof(best.terms, n + measurement_params);
 
     // ---- uncertainty and estimates -------------------------------------------
     out.covariance = Eigen::MatrixXd::Constant(n, n, std::numeric_limits<double>::quiet_NaN());

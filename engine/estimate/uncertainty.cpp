@@ -81,6 +81,10 @@ std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J, FitResult& ou
     return sigma;
 }
 
+double bound_edge(const FitVariable& v) { return v.log_scale ? 0.05 : 0.01 * (v.upper - v.lower); }
+
+bool at_fit_bound(const FitVariable& v, double c) { return c - v.lower < bound_edge(v) || v.upper - c < bound_edge(v); }
+
 void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
                          const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m,
                          double rim_lever_m, double rim_spacing_m)
@@ -108,8 +112,7 @@ void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, c
             e.upper95 = v.to_value(std::min(hi, v.upper));
             const double width_limit = v.log_scale ? 1.0 : 0.5 * (v.upper - v.lower);
             const bool wide = !std::isfinite(half) || 2 * half > width_limit;
-            const double edge = v.log_scale ? 0.05 : 0.01 * (v.upper - v.lower);
-            const bool at_bound = x[vi] - v.lower < edge || v.upper - x[vi] < edge;
+            const bool at_bound = at_fit_bound(v, x[vi]);
             e.constrained = uncertainty_computed && !wide && !at_bound && !out.cancelled;
             if (!uncertainty_computed) e.note = "uncertainty not computed";
             else if (!std::isfinite(half)) e.note = "not constrained: the drape does not change with it";

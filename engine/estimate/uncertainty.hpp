@@ -20,6 +20,12 @@ std::vector<double> coordinate_sigmas(Evaluator& ev, const std::vector<FitVariab
 /// rows for terms left out, e.g. Evaluator::jacobian, add nothing).
 std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J_terms, FitResult& out);
 
+/// How near a fit bound a coordinate counts as at it: 0.05 decade on a log scale,
+/// 1 % of the range on a linear one.
+double bound_edge(const FitVariable& v);
+/// Whether search coordinate c of v is at a fit bound (within bound_edge).
+bool at_fit_bound(const FitVariable& v, double c);
+
 /// Fills out.estimates (every parameter of the table) and out.grid_bound from
 /// the optimum x and the coordinate sigmas. `mesh_spacing_m` is the fit's grid
 /// spacing: a fitted bending whose bending length is below it is grid-bound.

@@ -36,6 +36,7 @@ Predicts the drape of a (fitted) preset on a set-up it was not fitted to, e.g.
                         drape simulate --help)
   --seed K              perturbation seed (default 1)
   --folds N             start on an N-fold branch (a 5 mm N-fold lift; default: the seeded mix)
+  --fold-angle DEG      with --folds: one crest of the lift this far from the warp (default: seeded)
   --laying F            how the specimen is laid: it first rests under the fraction F of gravity, then
                         under all of it (default: the preset's provenance.laying_load, what its fit
                         assumed of its records' lab - drape fit: 0.4 -, else 1 = the whole load at

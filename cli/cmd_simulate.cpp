@@ -51,6 +51,8 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --seed K              perturbation seed (default 1)
   --folds N             start on an N-fold branch (an N-fold lift of 5 mm, N in 2..16; default: the
                         seeded mix of modes 2..16, 1 mm)
+  --fold-angle DEG      with --folds: one crest of the lift this far from the warp (+x) towards the
+                        weft (default: a seeded angle); the folds rest near it
   --laying F            how the specimen is laid: it first rests under the fraction F of gravity, then
                         under all of it (default: the preset's provenance.laying_load, what its fit
                         assumed of its records' lab - drape fit: 0.4 -, else 1 = the whole load at

@@ -44,6 +44,7 @@ void DrapeSetup::validate() const
                              ") per specimen radius must be finite and shorter than 1 (the density would reach 0)");
     if (fold_mode != 0 && (fold_mode < 2 || fold_mode > 16))
         throw ParameterError("fold mode = " + std::to_string(fold_mode) + " must be 0 (seeded mix) or a fold count in [2, 16]");
+    if (std::isinf(fold_angle)) throw ParameterError("fold angle = " + format_double(fold_angle) + " rad must be finite (or NaN: the seeded phase)");
     if (!(laying_load > 0) || laying_load > 1)
         throw ParameterError("laying load = " + format_double(laying_load) + " must be a fraction of gravity in (0, 1]");
     for (double d : slice_depths)
@@ -109,7 +110,8 @@ void perturb(Positions& X, const DrapeSetup& setup)
         if (setup.fold_mode >= 2) {
             // One dominant mode: the mix is normalised to at most 1 (sum of a_k
             // below 15), then a tenth of it rides on the n-fold cosine.
-            s = std::cos(setup.fold_mode * th + ph[setup.fold_mode]) + 0.1 * s / 15.0;
+            const double phase = std::isfinite(setup.fold_angle) ? -setup.fold_mode * setup.fold_angle : ph[setup.fold_mode];
+            s = std::cos(setup.fold_mode * th + phase) + 0.1 * s / 15.0;
         }
         lift(i) = s * t * t;
         mx = std::max(mx, std::abs(lift(i)));

@@ -7,6 +7,7 @@
 #include "engine/cloth/solver.hpp"
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -58,6 +59,13 @@ struct DrapeSetup {
     /// sheet keeps n folds is then up to the fabric: an unstable branch buckles
     /// into another count on the way to rest.
     int fold_mode = 0;
+    /// n-fold start (fold_mode >= 2): the angle [rad] of one of its crests from
+    /// +x (warp) towards +y; NaN: the seeded phase. The folds rest near the angle
+    /// they start at, and on an anisotropic fabric that angle moves the rest
+    /// state's cos 2theta contour term by millimetres and D by about a point
+    /// (docs/model-discrepancy.md section 35). `drape fit` keeps the seeded
+    /// phase: its seeds' spread then carries that angle's effect into the noise.
+    double fold_angle = std::numeric_limits<double>::quiet_NaN();
     /// How the specimen is laid (the lab's hand, not the fabric): the static
     /// drape from flat first comes to rest under this fraction of gravity, then
     /// under full gravity from there. 1: the whole load at once (the engine's
@@ -93,11 +101,14 @@ struct DrapeSetup {
 /// (docs/estimate.md, "Fold branch").
 inline constexpr double kFoldBranchLift = 5e-3;
 
-/// `s` set to start on the n-fold branch: fold_mode = n, perturbation = `lift_m`.
-inline DrapeSetup on_fold_branch(DrapeSetup s, int n, double lift_m = kFoldBranchLift)
+/// `s` set to start on the n-fold branch: fold_mode = n, perturbation = `lift_m`,
+/// one crest at `angle` [rad] from the warp (NaN: the seeded phase).
+inline DrapeSetup on_fold_branch(DrapeSetup s, int n, double lift_m = kFoldBranchLift,
+                                 double angle = std::numeric_limits<double>::quiet_NaN())
 {
     s.fold_mode = n;
     s.perturbation = lift_m;
+    s.fold_angle = angle;
     return s;
 }
 

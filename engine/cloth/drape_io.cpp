@@ -73,6 +73,9 @@ json drape_summary_json(const DrapeResult& r, const DrapeSetup& setup, Integrato
     j["seed"] = setup.seed;
     j["perturbation_m"] = setup.perturbation;
     j["fold_mode"] = setup.fold_mode; // 0: the seeded mix of modes; n: started on the n-fold branch
+    // One crest of the n-fold start this far from the warp (null: the seeded phase).
+    j["fold_angle_deg"] = setup.fold_mode >= 2 && std::isfinite(setup.fold_angle) ? nlohmann::json(setup.fold_angle * 180 / std::numbers::pi)
+                                                                                  : nlohmann::json(nullptr);
     // Fraction of gravity of the first rest (1: the whole load at once); the
     // dynamic integrators fall under the whole load.
     j["laying_load"] = integ == Integrator::Static ? setup.laying_load : 1.0;

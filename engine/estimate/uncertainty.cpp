@@ -116,7 +116,14 @@ void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, c
             e.constrained = uncertainty_computed && !wide && !at_bound && !out.cancelled;
             if (!uncertainty_computed) e.note = "uncertainty not computed";
             else if (!std::isfinite(half)) e.note = "not constrained: the drape does not change with it";
-            else if (wide) e.note = "not constrained: the 95 % interval spans more than " + std::string(v.log_scale ? "a decade" : "half the range");
+            else if (wide) {
+                // Open-ended (it runs into a fit bound: the data say nothing on that
+                // side) or wide but bounded by the data on both sides - which the shear
+                // hold keeps as fitted, so the table must not read as if it were open.
+                const bool open = lo < v.lower + bound_edge(v) || hi > v.upper - bound_edge(v);
+                e.note = "not constrained: the 95 % interval spans more than " + std::string(v.log_scale ? "a decade" : "half the range") +
+                         (open ? " and runs into the fit bound" : " (bounded by the data on both sides, loosely)");
+            }
             else if (at_bound) e.note = "not constrained: at the fit bound";
             // A bending whose bending length (B / (rho_A g))^(1/3) is shorter than the
             // mesh spacing is not resolved by the fit's grid: the coarse mesh's membrane

@@ -186,6 +186,12 @@ private slots:
         const Run folds = drape({"simulate", "--fabric", "seed-table1", "--folds", "1", "--quiet"});
         QVERIFY(folds.code != 0);
         QVERIFY2(folds.err.contains("--folds") && folds.err.contains("1 is outside [2, 16]"), qPrintable(folds.err));
+        const Run angle = drape({"simulate", "--fabric", "seed-table1", "--fold-angle", "10", "--quiet"});
+        QCOMPARE(angle.code, 2);
+        QVERIFY2(angle.err.contains("--fold-angle needs --folds"), qPrintable(angle.err));
+        const Run angle2 = drape({"simulate", "--fabric", "seed-table1", "--folds", "6", "--fold-angle", "400", "--quiet"});
+        QCOMPARE(angle2.code, 2);
+        QVERIFY2(angle2.err.contains("--fold-angle: 400 deg is outside [-360, 360] deg"), qPrintable(angle2.err));
         const Run cmp = drape({"compare", record, "--fabric", DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json", "--branch", "x", "--quiet"});
         QCOMPARE(cmp.code, 2);
         QVERIFY2(cmp.err.contains("--branch: 'x'"), qPrintable(cmp.err));
@@ -577,6 +583,10 @@ private slots:
                 const Out branch = run({"simulate", "--fabric", preset, "--grid", "9", "--json", "--quiet", "--folds", "6"});
                 QVERIFY2(branch.code == 0, qPrintable(branch.err));
                 QCOMPARE(QJsonDocument::fromJson(branch.out.toUtf8()).object()["perturbation_m"].toDouble(), 0.005); // cloth::kFoldBranchLift
+                QVERIFY(QJsonDocument::fromJson(branch.out.toUtf8()).object()["fold_angle_deg"].isNull()); // the seeded phase
+                const Out turned = run({"simulate", "--fabric", preset, "--grid", "9", "--json", "--quiet", "--folds", "6", "--fold-angle", "15"});
+                QVERIFY2(turned.code == 0, qPrintable(turned.err));
+                QCOMPARE(QJsonDocument::fromJson(turned.out.toUtf8()).object()["fold_angle_deg"].toDouble(), 15.0);
             }
         }
     }

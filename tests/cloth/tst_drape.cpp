@@ -8,7 +8,10 @@
 
 #include <dlfcn.h>
 
+#include <cmath>
 #include <cstdlib>
+#include <limits>
+#include <numbers>
 #include <thread>
 
 using namespace drape::cloth;
@@ -274,6 +277,46 @@ private slots:
             s.fold_mode = bad;
             QVERIFY_THROWS_EXCEPTION(drape::ParameterError, s.validate());
         }
+    }
+
+    void fold_angle_places_the_crests()
+    {
+        // DrapeSetup::fold_angle: an n-fold start with one crest at a chosen angle
+        // from the warp rests with its crests there (the n-th harmonic of the
+        // shadow has its maximum at that angle), whatever the seed; on a fabric
+        // twice as stiff along the warp, crests on the axes and between them are
+        // two rest states, told apart by their contours' cos 2theta term.
+        FabricParams p;
+        p[Param::BendWarp] = 1.5e-5;
+        p[Param::BendWeft] = 6e-6;
+        p[Param::Shear] = 20;
+        p[Param::AreaDensity] = 0.18;
+        const double kPi = std::numbers::pi;
+        double cos2[2] = {0, 0};
+        for (int a = 0; a < 2; ++a) {
+            const double angle = a == 0 ? 0.0 : kPi / 6;
+            double first_dc = 0;
+            for (std::uint64_t seed : {1, 2}) {
+                const DrapeSetup s = on_fold_branch(small(25, seed), 6, kFoldBranchLift, angle);
+                const DrapeResult r = simulate_drape(p, s);
+                QVERIFY2(r.status.converged(), r.status.message.c_str());
+                QCOMPARE(r.metrics.node_count, 6);
+                const FourierSeries f = fourier_fit(r.metrics.profile, 8);
+                const double crest = std::atan2(f.b[5], f.a[5]) / 6; // the 6th harmonic's maximum
+                double off = std::remainder(crest - angle, kPi / 3);
+                QVERIFY2(std::abs(off) < 0.1, qPrintable(QString("crest %1 rad against %2").arg(crest).arg(angle)));
+                if (seed == 1) first_dc = r.metrics.drape_coefficient_percent;
+                else QVERIFY(std::abs(r.metrics.drape_coefficient_percent - first_dc) < 0.5); // the seed only moves the small mix
+                for (const Slice& sl : r.slices) // the contour 20 mm below the pedestal top
+                    if (std::abs(sl.depth_m - 0.02) < 1e-9 && sl.profile.complete()) cos2[a] += fourier_fit(sl.profile, 8).a[1] / 2;
+            }
+        }
+        qInfo("cos 2theta at 20 mm: crests on the axes %.2f mm, between them %.2f mm", cos2[0] * 1e3, cos2[1] * 1e3);
+        QVERIFY(std::abs(cos2[0] - cos2[1]) > 1e-3);
+        DrapeSetup bad = small();
+        bad.fold_mode = 6;
+        bad.fold_angle = std::numeric_limits<double>::infinity();
+        QVERIFY_THROWS_EXCEPTION(drape::ParameterError, bad.validate());
     }
 
     void laying_under_part_of_the_load_first()

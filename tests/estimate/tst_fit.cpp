@@ -452,7 +452,7 @@ private slots:
         o.channels = {"dc"};
         o.scan_evaluations = 3;
         o.local_evaluations = 6;
-        o.effects = false;
+        o.effects = true; // the effect library's shear test says it is held
         o.spread_seeds = 0;
         o.random_start_seeds = 0;
         o.start = p; // starts at the truth's shear: only the hold moves it
@@ -474,6 +474,13 @@ private slots:
         QCOMPARE(e.role, std::string("held"));
         QVERIFY(!e.constrained);
         QVERIFY(e.note.find("held at the typical") != std::string::npos);
+        bool named = false;
+        for (const auto& c : r.residual.candidates)
+            if (c.name == "shear_stiffness") {
+                qInfo("shear_stiffness: %s - %s", c.verdict.c_str(), c.note.c_str());
+                named = c.verdict == "not testable" && c.note.find("held at the typical value") != std::string::npos;
+            }
+        QVERIFY(named);
         const auto j = fit_to_json(r);
         QCOMPARE(j["fit"]["shear_hold"]["held"].get<bool>(), true);
         QCOMPARE(j["fit"]["shear_hold"]["mode"].get<std::string>(), std::string("auto"));

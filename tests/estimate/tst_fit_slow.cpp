@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 using namespace drape;
 using namespace drape::estimate;
@@ -66,23 +67,35 @@ class TestFitSlow : public QObject {
 private slots:
     void coverageAndPrediction()
     {
+        // Issue 15: a known fabric, measured as the lab would from five drapes
+        // (perturbation seeds 11-15, each from flat), fitted at 300/150 mm; on at
+        // least 4 of the 5 every fitted parameter's 95 % interval holds the truth
+        // (a shear held at the typical value is not an estimate: its interval is
+        // what the data left open, so it is not counted).
         const auto p = truth();
-        int inside = 0, cases = 0, good_fits = 0;
+        int seeds_inside = 0, intervals = 0, inside = 0, good_fits = 0;
+        const std::vector<std::uint64_t> seeds{11, 12, 13, 14, 15};
         FitResult first;
-        for (std::uint64_t seed : {11, 12, 13}) {
+        for (std::uint64_t seed : seeds) {
             const FitResult r = fit_fabric({synthetic(p, 0.30, 0.15, seed)}, options());
-            for (Param q : {Param::BendWarp, Param::BendWeft}) {
-                const auto& e = est(r, q);
-                qInfo("seed %d %s truth %.3g fitted %.3g [%.3g, %.3g]", int(seed), e.key.c_str(), p[q], e.value, e.lower95, e.upper95);
-                ++cases;
-                inside += (e.lower95 <= p[q] && p[q] <= e.upper95) ? 1 : 0;
+            bool all = true;
+            for (const auto& e : r.estimates) {
+                if (e.role != "fitted") continue;
+                const bool in = e.lower95 <= p[e.id] && p[e.id] <= e.upper95;
+                qInfo("seed %d %s truth %.3g fitted %.3g [%.3g, %.3g]%s", int(seed), e.key.c_str(), p[e.id], e.value, e.lower95, e.upper95,
+                      in ? "" : " - misses");
+                ++intervals;
+                inside += in ? 1 : 0;
+                all = all && in;
             }
+            seeds_inside += all ? 1 : 0;
             qInfo("  D error %+.2f, node error %+.2f, %ld simulations, %.2f s each; %s%s", r.records[0].dc_error_percent, r.records[0].node_error,
                   r.simulations, r.seconds_per_simulation, r.anisotropy.reason.c_str(), r.grid_bound ? "; grid-bound" : "");
             if (r.shear_hold.assessed) qInfo("  %s", r.shear_hold.reason.c_str());
             good_fits += (std::abs(r.records[0].dc_error_percent) < 2.0 && std::abs(r.records[0].node_error) <= 1.0) ? 1 : 0;
             if (seed == 11) first = r;
         }
+        qInfo("every interval holds the truth on %d of %d seeds (%d of %d intervals)", seeds_inside, int(seeds.size()), inside, intervals);
 
         // Prediction of set-ups the fit never saw, against the known truth
         // (D averaged over 3 perturbation seeds on both sides).
@@ -93,9 +106,8 @@ private slots:
             QVERIFY(std::abs(dt - df) < 3.0);
         }
         // issue 4: D within 2 points and nodes within 1 for every fit
-        QCOMPARE(good_fits, 3);
-        // 95 % intervals: with 6 cases, at most one miss is expected by chance
-        QVERIFY2(inside >= 5, qPrintable(QString("%1 of %2 intervals hold the truth").arg(inside).arg(cases)));
+        QCOMPARE(good_fits, static_cast<int>(seeds.size()));
+        QVERIFY2(seeds_inside >= 4, qPrintable(QString("every interval holds the truth on %1 of 5 seeds").arg(seeds_inside)));
     }
 
     void jointFitOfTwoSetups()

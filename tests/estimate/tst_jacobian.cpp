@@ -232,6 +232,36 @@ private slots:
             QVERIFY2(!std::isfinite(cut[i]), name.c_str());
         }
     }
+
+    void wideIntervalsSayWhetherTheDataBoundThem()
+    {
+        // A fitted coordinate's interval wider than a decade is "not constrained"
+        // either way; the note tells one the data bound on both sides (the shear
+        // hold keeps such a value) from one that runs into the fit bound.
+        FitResult out;
+        std::vector<FitVariable> vars = fit_variables(ModelVariant::Baseline);
+        Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
+        std::vector<double> sigma(vars.size(), 0.05);
+        int shear = -1;
+        for (std::size_t i = 0; i < vars.size(); ++i) {
+            x[static_cast<Eigen::Index>(i)] = 0.5 * (vars[i].lower + vars[i].upper);
+            if (vars[i].name == "shear_N_m") shear = static_cast<int>(i);
+            for (Param q : vars[i].params) out.params[q] = vars[i].to_value(x[static_cast<Eigen::Index>(i)]);
+        }
+        QVERIFY(shear >= 0);
+        auto note = [&](double sig) {
+            sigma[static_cast<std::size_t>(shear)] = sig;
+            out.estimates.clear();
+            parameter_estimates(out, vars, x, sigma, true, 0.0075);
+            for (const auto& e : out.estimates)
+                if (e.id == Param::Shear) return e.constrained ? std::string("constrained") : e.note;
+            return std::string();
+        };
+        const double span = vars[static_cast<std::size_t>(shear)].upper - vars[static_cast<std::size_t>(shear)].lower;
+        const std::string inside = note(0.67 * span / (2 * 1.96)), open = note(1.2 * span / (2 * 1.96)); // shear: 1..1000 N/m, 3 decades
+        QVERIFY2(inside.find("spans more than a decade (bounded by the data on both sides, loosely)") != std::string::npos, inside.c_str());
+        QVERIFY2(open.find("spans more than a decade and runs into the fit bound") != std::string::npos, open.c_str());
+    }
 };
 
 QTEST_APPLESS_MAIN(TestJacobian)

@@ -102,10 +102,12 @@ cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup s)
     s.mesh = parse_mesh(a, s.mesh);
     s.seed = static_cast<std::uint64_t>(a.get_int("--seed", static_cast<int>(s.seed), 0, 2000000000));
     if (a.has("--fold-angle") && !a.has("--folds")) throw UsageError("--fold-angle needs --folds (the angle of one of the N-fold start's crests)");
-    if (a.has("--folds"))
-        s = cloth::on_fold_branch(s, a.get_int("--folds", 0, 2, 16), cloth::kFoldBranchLift,
-                                  a.has("--fold-angle") ? a.get_double_in("--fold-angle", 0, -360, 360, "deg") * std::numbers::pi / 180
-                                                        : std::numeric_limits<double>::quiet_NaN());
+    if (a.has("--folds")) {
+        const int folds = a.get_int("--folds", 0, 2, 16); // parsed first: its error comes first
+        const double angle = a.has("--fold-angle") ? a.get_double_in("--fold-angle", 0, -360, 360, "deg") * std::numbers::pi / 180
+                                                   : std::numeric_limits<double>::quiet_NaN();
+        s = cloth::on_fold_branch(s, folds, cloth::kFoldBranchLift, angle);
+    }
     s.perturbation = a.get_length("--perturbation", s.perturbation);
     if (a.has("--disc-grip")) s.disc_grip = true;
     if (a.has("--folds")) s.laying_load = 1.0; // a prescribed branch starts under the whole load

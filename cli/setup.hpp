@@ -21,7 +21,7 @@ enum SetupFlag : unsigned {
     kEdgeRadius = 1u << 3,     ///< --edge-radius L
     kGrid = 1u << 4,           ///< --grid N
     kSeed = 1u << 5,           ///< --seed K
-    kFolds = 1u << 6,          ///< --folds N
+    kFolds = 1u << 6,          ///< --folds N, --fold-angle DEG
     kPerturbation = 1u << 7,   ///< --perturbation L
     kDiscGrip = 1u << 8,       ///< --disc-grip (a switch)
     kLaying = 1u << 9,         ///< --laying F (fraction of gravity of the first rest; DrapeSetup::laying_load)

@@ -91,7 +91,7 @@ struct DrapeSetup {
     /// sheet (the mean is unchanged). |g| < 1; 0 by default.
     Eigen::Vector2d density_gradient = Eigen::Vector2d::Zero();
     std::vector<double> slice_depths = {0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05}; ///< [m] below the pedestal top
-    void validate() const;          ///< ParameterError on negative sizes, sample <= disc, grid < 5, fold_mode 1 or > 16, an offset off the disc, |density gradient| >= 1
+    void validate() const;          ///< ParameterError on negative sizes, sample <= disc, grid < 5, fold_mode 1 or > 16, an infinite fold_angle, an offset off the disc, |density gradient| >= 1
 };
 
 /// Default lift of an n-fold start [m] (DrapeSetup::fold_mode): the static

@@ -267,18 +267,20 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
         if (v.at_rest()) // a drape not at rest verifies nothing
             cands[static_cast<std::size_t>(top)].verified_delta_chi2 = (best.chi2 - v.chi2) / s2; // on the scale of the test
     }
-    // A held shear is in the fit's columns (its intervals keep it), so the library's
-    // shear test reads "fitted already"; what freeing it would buy is the hold's
-    // own likelihood ratio, on the search's sigmas.
+    // A held shear: in the free fit it is still a column (its intervals keep it), so
+    // the library's shear test reads "fitted already" - what freeing it would buy is
+    // the hold's own likelihood ratio; in a tied refit it is no coordinate and the
+    // test ran, from the held value. Either way the candidate says it is held.
     if (out.shear_hold.held)
         for (auto& c : cands)
-            if (c.name == "shear_stiffness" && c.verdict == "not testable") {
+            if (c.name == "shear_stiffness") {
                 char buf[300];
                 std::snprintf(buf, sizeof buf,
                               "held at the typical value %.4g N/m (open-ended when fitted); holding it moved chi2 by %+.2f "
                               "(scaled, the search's sigmas; the report's Shear line)",
                               out.shear_hold.held_N_m, out.shear_hold.delta_chi2);
-                c.note = buf;
+                if (c.verdict == "not testable" && c.note.rfind("the model fits it already", 0) == 0) c.note = buf;
+                else c.note = std::string(buf) + (c.note.empty() ? "" : "; " + c.note);
             }
     out.residual.candidates = cands;
     // A candidate beyond noise is a structured residual even when the total

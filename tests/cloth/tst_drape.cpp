@@ -284,8 +284,9 @@ private slots:
         // DrapeSetup::fold_angle: an n-fold start with one crest at a chosen angle
         // from the warp rests with its crests there (the n-th harmonic of the
         // shadow has its maximum at that angle), whatever the seed; on a fabric
-        // twice as stiff along the warp, crests on the axes and between them are
-        // two rest states, told apart by their contours' cos 2theta term.
+        // 2.5 times stiffer along the warp, six crests with one on the warp (0) and
+        // with one on the weft (30 degrees) are two rest states, told apart by their
+        // contours' cos 2theta term.
         FabricParams p;
         p[Param::BendWarp] = 1.5e-5;
         p[Param::BendWeft] = 6e-6;
@@ -311,7 +312,7 @@ private slots:
                     if (std::abs(sl.depth_m - 0.02) < 1e-9 && sl.profile.complete()) cos2[a] += fourier_fit(sl.profile, 8).a[1] / 2;
             }
         }
-        qInfo("cos 2theta at 20 mm: crests on the axes %.2f mm, between them %.2f mm", cos2[0] * 1e3, cos2[1] * 1e3);
+        qInfo("cos 2theta at 20 mm: a crest on the warp %.2f mm, on the weft %.2f mm", cos2[0] * 1e3, cos2[1] * 1e3);
         QVERIFY(std::abs(cos2[0] - cos2[1]) > 1e-3);
         DrapeSetup bad = small();
         bad.fold_mode = 6;

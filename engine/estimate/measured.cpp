@@ -204,15 +204,6 @@ ContourFeatures contour_features(const cloth::RadialProfile& p, double depth_m, 
     return f;
 }
 
-double regular_fold_rms(const ContourFeatures& c, int n)
-{
-    if (n < 2) return c.fold_rms_m;
-    double e = 0;
-    for (int k = 2; k <= static_cast<int>(c.magnitudes_m.size()); ++k)
-        if (k == 2 || k == 4 || k % n == 0) e += 0.5 * c.magnitudes_m[static_cast<std::size_t>(k - 1)] * c.magnitudes_m[static_cast<std::size_t>(k - 1)];
-    return std::sqrt(e);
-}
-
 namespace {
 /// Area centroid of a closed cut (nullopt-like: false when it is degenerate).
 bool cut_centroid(const cloth::RadialProfile& p, Eigen::Vector2d& centroid)

@@ -110,15 +110,6 @@ inline constexpr int kFeatureHarmonics = 16;
 
 ContourFeatures contour_features(const cloth::RadialProfile& p, double depth_m, int harmonics = kFeatureHarmonics);
 
-/// The RMS fold amplitude of the harmonics a regular n-fold drape of a warp/weft
-/// orthotropic fabric has - the multiples of n and the anisotropy's 2 and 4 (up to
-/// kFeatureHarmonics) - from the harmonic magnitudes (Parseval: |c_k|^2 / 2 each).
-/// The rest of a contour's fold_rms_m is irregularity: folds of unequal size, the
-/// stack off the axis (k = 1), which the static model's rest state on a fold branch
-/// does not have (it relaxes an irregular start to the regular pattern:
-/// docs/model-discrepancy.md section 35). n < 2: the whole fold_rms_m.
-double regular_fold_rms(const ContourFeatures& c, int n);
-
 /// Features of a whole drape: D [%], nodes, hem, contours at the measured depths.
 struct DrapeFeatures {
     double drape_coefficient_percent = std::numeric_limits<double>::quiet_NaN();

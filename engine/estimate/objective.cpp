@@ -109,14 +109,7 @@ std::vector<ResidualTerm> residual_terms(int record, const DrapeFeatures& meas, 
         // sqrt(D), which keeps a deep stack from outvoting D and the node count.
         const double corr = std::sqrt(static_cast<double>(meas.contours.size()));
         add("mean_radius", s.mean_radius_m, m.mean_radius_m, noise.contour_sigma(corr * noise.radius_seed_m, N), m.depth_m);
-        // The fold amplitude the model can form: the record's regular part (its
-        // fold count's harmonics and the anisotropy's). The lab's folds are
-        // irregular, the model's rest state on the branch is not; the irregular
-        // energy in the RMS pulled fits towards folds deeper than any regular drape
-        // of the fabric (docs/model-discrepancy.md section 35). The irregular
-        // harmonics themselves stay in the harmonic terms below.
-        const int folds = measured_fold_branch(meas.node_count);
-        add("fold_rms", regular_fold_rms(s, folds), regular_fold_rms(m, folds), noise.contour_sigma(corr * noise.fold_seed_m, N / 2), m.depth_m);
+        add("fold_rms", s.fold_rms_m, m.fold_rms_m, noise.contour_sigma(corr * noise.fold_seed_m, N / 2), m.depth_m);
         add("cos2", s.cos2_m, m.cos2_m, noise.contour_sigma(corr * noise.axis_seed_m, N / 2), m.depth_m, 2);
         add("cos4", s.cos4_m, m.cos4_m, noise.contour_sigma(corr * noise.axis_seed_m, N / 2), m.depth_m, 4);
         // The signed first harmonic: the contour's shift off the pedestal axis (a

@@ -134,28 +134,6 @@ private slots:
         QVERIFY(std::abs(a.fold_rms_m - 0.006 / std::sqrt(2.0)) < 1e-4);
     }
 
-    void regularFoldAmplitudeLeavesTheIrregularHarmonicsOut()
-    {
-        // Six folds (6 mm), anisotropy (2 mm in cos 2theta), a 3-fold irregularity
-        // (3 mm) and the stack 1 mm off the axis: the regular part of a 6-fold drape
-        // is the 6th and 2nd harmonics, of a 3-fold one the 3rd and 6th too.
-        cloth::RadialProfile p;
-        p.r.resize(360);
-        for (int k = 0; k < 360; ++k) {
-            const double t = p.theta(k);
-            p.r[static_cast<std::size_t>(k)] =
-                0.09 + 0.006 * std::cos(6 * t) + 0.002 * std::cos(2 * t) + 0.003 * std::cos(3 * t + 0.4) + 0.001 * std::cos(t);
-        }
-        const auto c = contour_features(p, 0.01);
-        const double six = std::sqrt((0.006 * 0.006 + 0.002 * 0.002) / 2);
-        const double three = std::sqrt((0.006 * 0.006 + 0.003 * 0.003 + 0.002 * 0.002) / 2);
-        const double all = std::sqrt((0.006 * 0.006 + 0.003 * 0.003 + 0.002 * 0.002 + 0.001 * 0.001) / 2);
-        QVERIFY(std::abs(regular_fold_rms(c, 6) - six) < 1e-6);
-        QVERIFY(std::abs(regular_fold_rms(c, 3) - three) < 1e-6);
-        QVERIFY(std::abs(c.fold_rms_m - all) < 1e-6);
-        QCOMPARE(regular_fold_rms(c, 0), c.fold_rms_m); // no fold count: the whole RMS
-    }
-
     void residualOnNoiseDoesNotCryWolf()
     {
         // Residual terms drawn from the noise itself: no discrepancy reported.

@@ -967,9 +967,8 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
         // typical value would throw away (tst_est_fit_slow's synthetic fabric, shear 20
         // N/m: fitted 37.9 N/m, 7.6..190; held at 56.2 its 240/180 mm prediction
         // moved 2.0 -> 3.2 points off).
-        const double edge = bound_edge(v);
         h.at_bound = at_fit_bound(v, x[is]);
-        h.constrained = std::isfinite(half) && x[is] - half > v.lower + edge && x[is] + half < v.upper - edge && !h.at_bound;
+        h.constrained = !interval_reaches_bound(v, x[is], half) && !h.at_bound;
         if (h.constrained) {
             std::snprintf(buf, sizeof buf, "shear %.4g N/m (95 %%: %.4g..%.4g with the search's sigmas) is bounded by the data on both sides: fitted",
                           h.fitted_N_m, h.lower95_N_m, h.upper95_N_m);

@@ -85,6 +85,11 @@ double bound_edge(const FitVariable& v) { return v.log_scale ? 0.05 : 0.01 * (v.
 
 bool at_fit_bound(const FitVariable& v, double c) { return c - v.lower < bound_edge(v) || v.upper - c < bound_edge(v); }
 
+bool interval_reaches_bound(const FitVariable& v, double c, double half)
+{
+    return !(c - half > v.lower + bound_edge(v) && c + half < v.upper - bound_edge(v));
+}
+
 void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x,
                          const std::vector<double>& sigma, bool uncertainty_computed, double mesh_spacing_m,
                          double rim_lever_m, double rim_spacing_m)
@@ -120,7 +125,7 @@ void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, c
                 // Open-ended (it runs into a fit bound: the data say nothing on that
                 // side) or wide but bounded by the data on both sides - which the shear
                 // hold keeps as fitted, so the table must not read as if it were open.
-                const bool open = lo < v.lower + bound_edge(v) || hi > v.upper - bound_edge(v);
+                const bool open = interval_reaches_bound(v, x[vi], half);
                 e.note = "not constrained: the 95 % interval spans more than " + std::string(v.log_scale ? "a decade" : "half the range") +
                          (open ? " and runs into the fit bound" : " (bounded by the data on both sides, loosely)");
             }

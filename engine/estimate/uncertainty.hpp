@@ -25,6 +25,9 @@ std::vector<double> sigmas_from_jacobian(const Eigen::MatrixXd& J_terms, FitResu
 double bound_edge(const FitVariable& v);
 /// Whether search coordinate c of v is at a fit bound (within bound_edge).
 bool at_fit_bound(const FitVariable& v, double c);
+/// Whether the interval c +- half of v reaches a fit bound (within bound_edge) - the
+/// data leave that side open; a non-finite half always does.
+bool interval_reaches_bound(const FitVariable& v, double c, double half);
 
 /// Fills out.estimates (every parameter of the table) and out.grid_bound from
 /// the optimum x and the coordinate sigmas. `mesh_spacing_m` is the fit's grid

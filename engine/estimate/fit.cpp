@@ -366,8 +366,10 @@ bool flat_error(const Evaluator& ev, const RecordFit& rf, std::size_t r, double&
 ///   flat is within the D channel's sigma (at most two steps).
 /// The contour fit's optimum stays the search's result (residuals, chi2,
 /// intervals); the preset (`params`), its estimates and the records' drapes from
-/// flat become the calibrated ones. Cancelled part-way: the optimum and its
-/// drapes are kept, the reason says so, and the cancellation goes on to the caller.
+/// flat become the calibrated ones; where the preset moved, it is draped as the
+/// fit drapes (RecordFit::preset_*). Cancelled part-way: the optimum and its
+/// drapes are kept (cancelled at that last step: the moved preset, with its
+/// preset_* rows NaN), the reason says so, and the cancellation goes on to the caller.
 void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, const Eigen::VectorXd& x, const Eigen::MatrixXd& J_opt,
                          FitResult& kept)
 {
@@ -848,6 +850,47 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                       e0, over.c_str(), c.tolerance, c.scale, best_e, cost.c_str());
     }
     c.reason = buf;
+    // The preset as saved, draped as the fit drapes (warm from the optimum's rest
+    // states, the fit's seeds and starts): the "as fitted" rows are the contours'
+    // optimum's, and a user who drapes the saved preset as the fit did gets these.
+    // Its chi2 is the drapes' own, not the linearised one above. Cancelled here:
+    // the preset rows say nothing (NaN) and the reason says why.
+    c.chi2_preset = std::numeric_limits<double>::quiet_NaN();
+    Evaluation pe;
+    try {
+        pe = ev.evaluate_params(kept.params, Start::Best);
+    } catch (const CancelledFit&) {
+        for (auto& rf : kept.records) {
+            rf.preset_moved = true;
+            rf.preset_converged = false;
+            rf.preset_features = DrapeFeatures{};
+            rf.preset_dc_error_percent = rf.preset_node_error = std::numeric_limits<double>::quiet_NaN();
+        }
+        c.reason += "; its drapes as the fit drapes them were cancelled";
+        throw;
+    }
+    ev.report("preset as saved");
+    double dsum = 0, nsum = 0;
+    int nd_p = 0, nn_p = 0;
+    for (std::size_t r = 0; r < R && r < pe.features.size(); ++r) {
+        RecordFit& rf = kept.records[r];
+        rf.preset_moved = true;
+        rf.preset_features = pe.features[r];
+        rf.preset_converged = true;
+        for (const auto& sim : pe.sims[r]) rf.preset_converged = rf.preset_converged && sim.status.converged();
+        rf.preset_dc_error_percent = rf.preset_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+        rf.preset_node_error = rf.preset_features.node_count - rf.measured_features.node_count;
+        if (std::isfinite(rf.preset_dc_error_percent)) dsum += rf.preset_dc_error_percent, ++nd_p;
+        if (std::isfinite(rf.preset_node_error)) nsum += rf.preset_node_error, ++nn_p;
+    }
+    c.chi2_preset = pe.chi2;
+    const std::string over_p = nd_p > 1 ? " (mean over " + std::to_string(nd_p) + " records)" : std::string();
+    std::snprintf(buf, sizeof buf,
+                  "; draped as the fit drapes (warm from the optimum's rest states) the preset gives D %+.1f points, nodes %+.1f%s (the fitted "
+                  "terms' chi2 %.1f%s against the optimum's %.1f)",
+                  nd_p ? dsum / nd_p : std::numeric_limits<double>::quiet_NaN(), nn_p ? nsum / nn_p : std::numeric_limits<double>::quiet_NaN(),
+                  over_p.c_str(), pe.chi2, pe.at_rest() ? "" : ", a drape not at rest", kept.chi2);
+    c.reason += buf;
 }
 
 /// A run's candidate-effect tests, kept for later: they cost a re-solve per
@@ -1211,6 +1254,11 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         rf.branch_folds = ev.branch_of(static_cast<int>(r));
         rf.dc_error_percent = rf.simulated_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
         rf.node_error = rf.simulated_features.node_count - rf.measured_features.node_count;
+        rf.preset_features = rf.simulated_features; // the preset is the optimum until a calibration moves it
+        rf.preset_dc_error_percent = rf.dc_error_percent;
+        rf.preset_node_error = rf.node_error;
+        rf.preset_converged = true;
+        for (const auto& sim : rf.simulations) rf.preset_converged = rf.preset_converged && sim.status.converged();
         set_from_flat(rf, ev, r);
         if (!cancelled && !rf.simulations.empty() && rf.simulations.front().status.converged()) {
             // The sensitivity of D to each fitted parameter at the optimum: one

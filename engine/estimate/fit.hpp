@@ -276,6 +276,16 @@ struct RecordFit {
     /// H^-1 df/dp at its rest state, cloth/rest_sensitivity.hpp). Empty when the
     /// rest state was not converged or the fit was cancelled.
     std::vector<std::pair<cloth::Param, double>> d_drape_per_10_percent;
+    /// The preset as saved, draped as the fit drapes (on the fit's branch, warm
+    /// from the optimum's rest states, the fit's seeds): when the flat calibration
+    /// moved it off the contours' optimum, its own drapes (preset_moved); else the
+    /// optimum's (simulated_features). What a user who drapes the saved preset on
+    /// the record's fold branch gets, beside the optimum's "as fitted" row.
+    bool preset_moved = false;
+    bool preset_converged = true; ///< every one of those drapes came to rest
+    DrapeFeatures preset_features;
+    double preset_dc_error_percent = 0;
+    double preset_node_error = 0;
 };
 
 /// One evaluation of the fit (the convergence trace of the report).
@@ -365,6 +375,7 @@ struct FitResult {
         double tolerance = 0;       ///< the D channel's sigma: errors within it are left alone [points]
         double bend_warp_fitted = 0, bend_weft_fitted = 0; ///< the contour optimum's bendings [N*m]
         double chi2_increase = 0;   ///< linearised chi2 increase of the fitted terms for the scale (Jacobian at the optimum; NaN: not taken)
+        double chi2_preset = std::numeric_limits<double>::quiet_NaN();    ///< the fitted terms' chi2 at the calibrated preset, draped as the fit drapes (applied only; NaN: not drawn)
         int steps = 0;              ///< calibration steps drawn (each: the drapes from flat again, or only the fit grid's)
         double fold_error_before = 0, fold_error_after = 0; ///< worst fold-count error of a drape from flat, at the optimum / the preset
         bool fold_search = false;   ///< the fold count was off by more than 1: steps along the contours' profile were tried

@@ -304,6 +304,35 @@ DrapeFeatures drape_features(const MeasuredDrape& m)
     return f;
 }
 
+double hem_min_over_arc(const std::vector<double>& theta, const std::vector<double>& z, double a, double b)
+{
+    if (!(a <= b)) return std::numeric_limits<double>::quiet_NaN();
+    // The vertices with a finite angle and height (a diverged solve's are not),
+    // in order of angle; equal angles by height, so the order is the same on
+    // every run.
+    std::vector<std::pair<double, double>> v;
+    for (std::size_t i = 0; i < std::min(theta.size(), z.size()); ++i)
+        if (std::isfinite(theta[i]) && std::isfinite(z[i])) v.emplace_back(theta[i], z[i]);
+    const std::size_t n = v.size();
+    if (n == 0) return std::numeric_limits<double>::quiet_NaN();
+    std::sort(v.begin(), v.end());
+    double zmin = std::numeric_limits<double>::infinity();
+    for (const auto& [t, h] : v)
+        if (t >= a && t <= b) zmin = std::min(zmin, h);
+    // The curve's height at angle t: between the vertices on either side of t
+    // (periodic in 2 pi; one vertex is a constant), linearly in angle.
+    auto at = [&](double t) {
+        const std::size_t pos = static_cast<std::size_t>(
+            std::lower_bound(v.begin(), v.end(), t, [](const std::pair<double, double>& p, double x) { return p.first < x; }) - v.begin());
+        const std::size_t hi = pos == n ? 0 : pos, lo = pos == 0 ? n - 1 : pos - 1;
+        const double t_hi = v[hi].first + (pos == n ? 2 * std::numbers::pi : 0.0), t_lo = v[lo].first - (pos == 0 ? 2 * std::numbers::pi : 0.0);
+        if (!(t_hi > t_lo)) return v[hi].second;
+        const double w = std::clamp((t - t_lo) / (t_hi - t_lo), 0.0, 1.0);
+        return v[lo].second + w * (v[hi].second - v[lo].second);
+    };
+    return std::min({zmin, at(a), at(b)});
+}
+
 DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& like)
 {
     DrapeFeatures f;
@@ -312,10 +341,10 @@ DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& l
     if (like.hem_from_side_view) {
         // The side camera (at -y) sees the hem against the pedestal only in
         // front of it: y < 0 and |x| < R2 (x = r cos theta, r ~ the outline's mean radius).
-        double zmin = std::numeric_limits<double>::infinity();
+        // The arc |cos theta| <= c of the front half is theta in -pi/2 -+ asin(c).
         const double c = std::min(1.0, like.disc_diameter / 2 / std::max(r.metrics.mean_radius_m, 1e-6));
-        for (std::size_t i = 0; i < r.hem.theta.size(); ++i)
-            if (std::sin(r.hem.theta[i]) < 0 && std::abs(std::cos(r.hem.theta[i])) <= c) zmin = std::min(zmin, r.hem.z[i]);
+        const double half = std::asin(c);
+        const double zmin = hem_min_over_arc(r.hem.theta, r.hem.z, -0.5 * std::numbers::pi - half, -0.5 * std::numbers::pi + half);
         if (std::isfinite(zmin)) f.hem_min_z = zmin;
     }
     // Slices at the record's depths; a depth the simulation lacks gets an empty

@@ -110,6 +110,17 @@ inline constexpr int kFeatureHarmonics = 16;
 
 ContourFeatures contour_features(const cloth::RadialProfile& p, double depth_m, int harmonics = kFeatureHarmonics);
 
+/// The lowest point of a hem seen over the angles [a, b] [rad, within -pi..pi]:
+/// the hem as the curve through its vertices in order of angle (theta, z), read
+/// between two vertices at the window's edges, so it is continuous in the
+/// vertices' positions and in the window as long as no two vertices trade places
+/// in angle next to an edge (a hem folded over in the top view). (Taking a
+/// vertex's z whole the moment it enters the window made the side view's hem
+/// jump by millimetres for a nanometre's move: the fit's Jacobian read that as a
+/// slope of metres per decade of the bendings.) Vertices with a non-finite angle
+/// or height are left out; NaN without vertices or with a > b.
+double hem_min_over_arc(const std::vector<double>& theta, const std::vector<double>& z, double a, double b);
+
 /// Features of a whole drape: D [%], nodes, hem, contours at the measured depths.
 struct DrapeFeatures {
     double drape_coefficient_percent = std::numeric_limits<double>::quiet_NaN();

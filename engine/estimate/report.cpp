@@ -444,6 +444,23 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
            << " mm, n = the measured node count; `--branch measured`), so D and the contours are compared between drapes with the "
               "record's number of folds; the node error says whether that branch holds at the fitted parameters.";
     md << "\n\n";
+    bool moved = false;
+    for (const auto& rf : r.records) moved = moved || rf.preset_moved;
+    if (moved) {
+        // The rows above are the contours' optimum's; the saved preset was moved by
+        // the calibration from flat: its own drapes, started as the fit's.
+        md << "The preset as saved (calibrated from flat, above: "
+           << (r.flat_calibration.fold_search ? "moved along the contours' profile and its bendings " : "its bendings ")
+           << num(r.flat_calibration.scale, "%.3f") << " x the optimum's) draped as the fit drapes (warm from the optimum's rest states, the fit's seeds"
+           << (on_branch ? ", which started on the record's fold branch" : "") << "), the fitted terms' chi2 "
+           << num(r.flat_calibration.chi2_preset, "%.1f") << " against the optimum's " << num(r.chi2, "%.1f") << ":\n\n"
+           << "| record | D preset [%] | D error | nodes preset | node error |\n|---|---|---|---|---|\n";
+        for (const auto& rf : r.records)
+            md << "| " << rf.measured.id << " | " << num(rf.preset_features.drape_coefficient_percent, "%.1f")
+               << (rf.preset_converged ? "" : " (not at rest)") << " | " << num(rf.preset_dc_error_percent, "%+.1f") << " | "
+               << num(rf.preset_features.node_count, "%.1f") << " | " << num(rf.preset_node_error, "%+.1f") << " |\n";
+        md << "\n";
+    }
     if (!r.records.empty() && r.records.front().cold_seeds > 0) {
         md << "The fit's simulations start from the rest state of the best point so far (warm)"
            << (on_branch ? " or on the measured fold branch" : "")

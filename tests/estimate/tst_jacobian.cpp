@@ -19,7 +19,8 @@ using cloth::Param;
 namespace {
 
 /// Relative error of J's column i against re-solves at x +- h (smooth fitted rows).
-double column_error(Evaluator& ev, const Eigen::VectorXd& x, const Eigen::MatrixXd& J, int i, double h, double* norm)
+double column_error(Evaluator& ev, const Eigen::VectorXd& x, const Eigen::MatrixXd& J, int i, double h, double* norm, double* hem_fd = nullptr,
+                    double* hem_j = nullptr)
 {
     const auto terms = ev.best().terms;
     Eigen::VectorXd xp = x, xm = x;
@@ -32,6 +33,7 @@ double column_error(Evaluator& ev, const Eigen::VectorXd& x, const Eigen::Matrix
         if (!terms[k].smooth || terms[k].kind == "closure") continue;
         const double fd = (ep.terms[k].simulated - em.terms[k].simulated) / (2 * h) / terms[k].sigma;
         const double jk = J(static_cast<Eigen::Index>(k), i);
+        if (terms[k].kind == "hem" && hem_fd && hem_j) *hem_fd = fd, *hem_j = jk;
         num += (fd - jk) * (fd - jk);
         den += fd * fd;
     }
@@ -69,17 +71,23 @@ private slots:
     {
         QTest::addColumn<int>("model");
         QTest::addColumn<double>("buckling");
-        QTest::newRow("baseline") << static_cast<int>(ModelVariant::Baseline) << 0.0;
-        QTest::newRow("buckling active") << static_cast<int>(ModelVariant::Buckling) << 0.02;
+        QTest::addColumn<bool>("side_view_hem");
+        QTest::newRow("baseline") << static_cast<int>(ModelVariant::Baseline) << 0.0 << false;
+        QTest::newRow("buckling active") << static_cast<int>(ModelVariant::Buckling) << 0.02 << false;
+        // The lab's hem (every set-a record's): the lowest point the side camera sees
+        // in front of the pedestal, a window of angles (estimate::hem_min_over_arc).
+        QTest::newRow("side-view hem") << static_cast<int>(ModelVariant::Baseline) << 0.0 << true;
     }
     void jacobianMatchesResolvedDrapes()
     {
         QFETCH(int, model);
         QFETCH(double, buckling);
+        QFETCH(bool, side_view_hem);
         const int grid = 25;
         cloth::FabricParams truth = fabric(2e-5, 8e-6);
         truth[Param::BucklingLength] = buckling;
-        const std::vector<MeasuredDrape> recs{test::synthetic_record(truth, test::drape_setup(0.30, 0.15, grid, 7))};
+        std::vector<MeasuredDrape> recs{test::synthetic_record(truth, test::drape_setup(0.30, 0.15, grid, 7))};
+        recs.front().hem_from_side_view = side_view_hem;
         FitOptions o = one_seed(grid);
         o.model = static_cast<ModelVariant>(model);
         const auto vars = fit_variables(o.model);
@@ -98,10 +106,14 @@ private slots:
         for (int i = 0; i < static_cast<int>(vars.size()); ++i) {
             double norm = 0;
             const double h = vars[static_cast<std::size_t>(i)].log_scale ? 0.01 : 0.00003;
-            const double err = column_error(ev, x, J, i, h, &norm);
-            qInfo("%s: |dr/dc| %.3f from re-solves, relative error of the Jacobian %.4f", vars[static_cast<std::size_t>(i)].name.c_str(), norm, err);
+            double hem_fd = NAN, hem_j = NAN;
+            const double err = column_error(ev, x, J, i, h, &norm, &hem_fd, &hem_j);
+            qInfo("%s: |dr/dc| %.3f from re-solves, relative error of the Jacobian %.4f; hem row %.3f against %.3f", vars[static_cast<std::size_t>(i)].name.c_str(),
+                  norm, err, hem_j, hem_fd);
             QVERIFY2(norm > 0.05, "the coordinate moves the residual");
             QVERIFY2(err < 0.05, vars[static_cast<std::size_t>(i)].name.c_str());
+            // The hem's own row (whitened by its 4 mm): within 0.1 of the re-solves'.
+            QVERIFY2(std::isfinite(hem_fd) && std::abs(hem_j - hem_fd) < 0.1 + 0.05 * std::abs(hem_fd), vars[static_cast<std::size_t>(i)].name.c_str());
         }
     }
 

@@ -1,12 +1,15 @@
-// Record loading, features and the residual analysis: no simulations, fast.
+// Record loading, features and the residual analysis: fast (one small drape, for the side view's hem).
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
 #include "engine/estimate/measured.hpp"
 #include "engine/estimate/objective.hpp"
 #include "engine/estimate/residual.hpp"
 
+#include "synthetic.hpp"
+
 #include <QTest>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -250,6 +253,113 @@ private slots:
         QCOMPARE(found_tilt, Eigen::Vector2d(0, 0));
     }
 
+    void sideViewHemIsContinuousAtTheWindowEdges()
+    {
+        // A hem of 72 vertices whose lowest vertex sits just outside the side view's
+        // window: 12 mm below every vertex inside it.
+        const double pi = std::numbers::pi, step = 2 * pi / 72;
+        std::vector<double> theta, z;
+        for (int k = 0; k < 72; ++k) {
+            theta.push_back(-pi + k * step);
+            z.push_back(-0.060 + 0.004 * std::cos(5 * theta.back()));
+        }
+        const int deep = 30; // theta = -pi / 6
+        z[deep] = -0.080;
+        const double a = -pi + 5 * step, tv = theta[deep];
+        double inside = 1;
+        for (int k = 5; k < deep; ++k) inside = std::min(inside, z[static_cast<std::size_t>(k)]);
+        QVERIFY(inside - z[deep] > 0.01);
+        // Edges on vertices: the lowest vertex inside.
+        QCOMPARE(hem_min_over_arc(theta, z, a, theta[deep - 1]), std::min(inside, z[deep - 1]));
+        // The edge across the deep vertex: no jump (the rule that took a vertex whole
+        // when it entered jumped by 12 mm here).
+        const double before = hem_min_over_arc(theta, z, a, tv - 1e-9), after = hem_min_over_arc(theta, z, a, tv + 1e-9);
+        QVERIFY2(std::abs(after - before) < 1e-6, qPrintable(QString::number(after - before)));
+        // Lipschitz in the edge: never steeper than the hem's steepest segment.
+        double steepest = 0;
+        for (int k = 0; k < 72; ++k) steepest = std::max(steepest, std::abs(z[static_cast<std::size_t>((k + 1) % 72)] - z[static_cast<std::size_t>(k)]) / step);
+        double prev = hem_min_over_arc(theta, z, a, tv - 2 * step);
+        for (double b = tv - 2 * step + 1e-4; b < tv + 2 * step; b += 1e-4) {
+            const double v = hem_min_over_arc(theta, z, a, b);
+            QVERIFY(std::abs(v - prev) <= steepest * 1e-4 * 1.0001 + 1e-12);
+            QVERIFY(v <= prev + 1e-15); // a wider window sees no higher minimum
+            prev = v;
+        }
+        // Continuous in a vertex's position too: the deep vertex moved across the edge.
+        auto moved = theta;
+        const double b = tv - 0.5 * step;
+        moved[deep] = b + 1e-9;
+        const double out = hem_min_over_arc(moved, z, a, b);
+        moved[deep] = b - 1e-9;
+        QVERIFY(std::abs(hem_min_over_arc(moved, z, a, b) - out) < 1e-6);
+        // A window at the seam of the angles (-pi) between two vertices: read between
+        // the last vertex (pi - step / 2) and the first (-pi + step / 2), periodically.
+        std::vector<double> half(theta);
+        for (double& t : half) t += 0.5 * step;
+        std::vector<double> zs(z);
+        zs[0] = -0.070;
+        zs[71] = -0.050;
+        const double seam = hem_min_over_arc(half, zs, -pi, -pi + 0.25 * step);
+        QVERIFY2(std::abs(seam - (-0.050 + 0.75 * (-0.070 + 0.050))) < 1e-12, qPrintable(QString::number(seam)));
+        QVERIFY(std::isnan(hem_min_over_arc({}, {}, a, b)));
+        QVERIFY(std::isnan(hem_min_over_arc(theta, z, b, a))); // an empty window
+        QCOMPARE(hem_min_over_arc({0.1}, {-0.05}, -1.0, 0.0), -0.05); // one vertex: a constant curve
+        // A vertex whose solve diverged is left out, not sorted (NaN has no order).
+        std::vector<double> bad_theta(theta), bad_z(z);
+        bad_theta[3] = NAN;
+        bad_z[40] = NAN;
+        QVERIFY(std::isfinite(hem_min_over_arc(bad_theta, bad_z, a, theta[deep - 1])));
+    }
+    void sideViewHemOfADrapeTurnsSmoothly()
+    {
+        // A drape turned about the pedestal axis by a fraction of its hem's vertex
+        // spacing: hem vertices cross the side view's window edges, and the hem the
+        // fit compares moves no faster than the hem's steepest slope allows (the rule
+        // that took a vertex whole when it entered jumped by the height between a
+        // trough and its neighbour: the Jacobian's 1e-3-decade differences read that
+        // as metres per decade on DL-A09).
+        cloth::FabricParams p;
+        p[cloth::Param::BendWarp] = 2e-5;
+        p[cloth::Param::BendWeft] = 8e-6;
+        p[cloth::Param::Shear] = 20;
+        p[cloth::Param::AreaDensity] = 0.2;
+        const cloth::DrapeSetup setup = test::drape_setup(0.30, 0.15, 17, 3);
+        const cloth::DrapeResult d = cloth::simulate_drape(p, setup);
+        MeasuredDrape like = synthesize_record(d, setup, p, 0.3e-3, setup.seed + 100, "turned");
+        like.hem_from_side_view = true;
+        like.contours.clear(); // the hem alone
+        const double pi = std::numbers::pi;
+        const std::size_t n = d.hem.theta.size();
+        QVERIFY(n > 20);
+        double steepest = 0; // |dz/dtheta| between neighbours in angle
+        std::vector<std::size_t> idx(n);
+        for (std::size_t i = 0; i < n; ++i) idx[i] = i;
+        std::sort(idx.begin(), idx.end(), [&](std::size_t i, std::size_t j) { return d.hem.theta[i] < d.hem.theta[j]; });
+        for (std::size_t k = 0; k < n; ++k) { // and the segment across the seam at -pi
+            const std::size_t k1 = (k + 1) % n;
+            const double dt = d.hem.theta[idx[k1]] - d.hem.theta[idx[k]] + (k1 == 0 ? 2 * pi : 0.0);
+            if (dt > 1e-9) steepest = std::max(steepest, std::abs(d.hem.z[idx[k1]] - d.hem.z[idx[k]]) / dt);
+        }
+        // A third of a turn in steps of a twentieth of the vertex spacing: troughs
+        // pass both edges of the window.
+        const double dalpha = 2 * pi / static_cast<double>(n) / 20;
+        const int steps = static_cast<int>(2 * pi / 3 / dalpha);
+        double prev = NAN, worst = 0, lo = HUGE_VAL, hi = -HUGE_VAL;
+        for (int k = 0; k <= steps; ++k) {
+            cloth::DrapeResult t = d;
+            for (double& a : t.hem.theta) a = std::remainder(a + k * dalpha, 2 * pi);
+            const double h = drape_features(t, like).hem_min_z;
+            QVERIFY(std::isfinite(h));
+            if (k > 0) worst = std::max(worst, std::abs(h - prev));
+            prev = h;
+            lo = std::min(lo, h);
+            hi = std::max(hi, h);
+        }
+        qInfo("side-view hem %.4f..%.4f m over the turn; largest step %.3g m for a turn of %.3g rad (steepest hem slope %.3g m/rad)", lo, hi, worst,
+              dalpha, steepest);
+        QVERIFY2(hi - lo > 1e-3, "the turn moves the side view's hem (troughs pass the window's edges)");
+        QVERIFY(worst <= steepest * dalpha * 1.01 + 1e-12);
+    }
     void modelVariants()
     {
         QCOMPARE(fit_variables(ModelVariant::Baseline).size(), std::size_t(3));

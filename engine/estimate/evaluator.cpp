@@ -344,6 +344,11 @@ bool same_closure(const std::vector<double>& a, const std::vector<double>& b, co
 }
 } // namespace
 
+bool slopes_agree(double full, double half)
+{
+    return std::abs(full - half) <= 0.1 * std::max(std::abs(full), std::abs(half)) + 0.05;
+}
+
 Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& e, bool resolves)
 {
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
@@ -382,9 +387,11 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
         const auto& v = m_vars[static_cast<std::size_t>(i)];
         return v.log_scale ? 1e-3 : 1e-3 * (v.upper - v.lower);
     };
-    // features[r][s][2 i + (0 up, 1 down)]
+    // features[r][s][4 i + (0 up, 1 down, 2 half up, 3 half down)]: the difference
+    // is taken at the step and at half of it, and a row whose two slopes disagree
+    // has no derivative for that column (below).
     std::vector<std::vector<std::vector<DrapeFeatures>>> feats(static_cast<std::size_t>(R),
-        std::vector<std::vector<DrapeFeatures>>(static_cast<std::size_t>(S), std::vector<DrapeFeatures>(static_cast<std::size_t>(2 * n))));
+        std::vector<std::vector<DrapeFeatures>>(static_cast<std::size_t>(S), std::vector<DrapeFeatures>(static_cast<std::size_t>(4 * n))));
     std::vector<Param> qs;
     for (int i = 0; i < n; ++i)
         if (exact[static_cast<std::size_t>(i)])
@@ -414,10 +421,11 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
                     }
                     const double d = delta(i);
                     auto& f = feats[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)];
-                    sys->x = sim.x + d * dxdc;
-                    f[static_cast<std::size_t>(2 * i)] = drape_features(cloth::measure_drape(*sys, setup), rec);
-                    sys->x = sim.x - d * dxdc;
-                    f[static_cast<std::size_t>(2 * i + 1)] = drape_features(cloth::measure_drape(*sys, setup), rec);
+                    const double steps[4] = {d, -d, 0.5 * d, -0.5 * d};
+                    for (int m = 0; m < 4; ++m) {
+                        sys->x = sim.x + steps[m] * dxdc;
+                        f[static_cast<std::size_t>(4 * i + m)] = drape_features(cloth::measure_drape(*sys, setup), rec);
+                    }
                 }
             });
         } catch (const drape::Error&) {
@@ -439,24 +447,38 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
         if (sens_ok && exact[static_cast<std::size_t>(i)]) {
             const double d = delta(i);
             for (int r = 0; r < R; ++r) {
-                std::vector<DrapeFeatures> up, dn;
-                for (int s = 0; s < S; ++s) {
-                    up.push_back(feats[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)][static_cast<std::size_t>(2 * i)]);
-                    dn.push_back(feats[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)][static_cast<std::size_t>(2 * i + 1)]);
-                }
-                std::vector<double> cu, cd;
-                const DrapeFeatures au = average_features(up, &cu), ad = average_features(dn, &cd);
+                // The seed-averaged terms at the four points of the column.
+                std::vector<ResidualTerm> t[4];
+                std::vector<double> closed[4];
                 const auto& mr = m_meas[static_cast<std::size_t>(r)];
-                const auto tu = residual_terms(r, mr, au, cu, m_noise), td = residual_terms(r, mr, ad, cd, m_noise);
+                for (int k = 0; k < 4; ++k) {
+                    std::vector<DrapeFeatures> at;
+                    for (int s = 0; s < S; ++s) at.push_back(feats[static_cast<std::size_t>(r)][static_cast<std::size_t>(s)][static_cast<std::size_t>(4 * i + k)]);
+                    t[k] = residual_terms(r, mr, average_features(at, &closed[k]), closed[k], m_noise);
+                }
                 const std::size_t count = first[static_cast<std::size_t>(r) + 1] - first[static_cast<std::size_t>(r)];
-                if (tu.size() != count || td.size() != count) continue; // rows would not line up: leave the column's rows at 0
-                for (std::size_t k = 0; k < tu.size() && k < td.size(); ++k) {
+                if (t[0].size() != count || t[1].size() != count || t[2].size() != count || t[3].size() != count)
+                    continue; // rows would not line up: leave the column's rows at 0
+                for (std::size_t k = 0; k < count; ++k) {
                     const std::size_t row = first[static_cast<std::size_t>(r)] + k;
                     // A depth whose slice closed for another set of seeds on the two
                     // sides averages other drapes: no derivative there.
-                    if (!same_closure(cu, cd, mr, e.terms[row])) continue;
-                    if (keep_row(row) && std::isfinite(tu[k].simulated) && std::isfinite(td[k].simulated))
-                        J(static_cast<Eigen::Index>(row), i) = (tu[k].simulated - td[k].simulated) / (2 * d) / e.terms[row].sigma;
+                    if (!same_closure(closed[0], closed[1], mr, e.terms[row]) || !same_closure(closed[2], closed[3], mr, e.terms[row])) continue;
+                    if (!keep_row(row)) continue;
+                    bool finite = true;
+                    for (int q = 0; q < 4; ++q) finite = finite && std::isfinite(t[q][k].simulated);
+                    if (!finite) continue;
+                    const double full = (t[0][k].simulated - t[1][k].simulated) / (2 * d) / e.terms[row].sigma;
+                    const double half = (t[2][k].simulated - t[3][k].simulated) / d / e.terms[row].sigma;
+                    // A feature that jumps between the points (a selection that
+                    // switches: a ray's outermost crossing, a vertex entering a
+                    // window) has no derivative for this column: 0, as for a closure
+                    // flip, and counted.
+                    if (!slopes_agree(full, half)) {
+                        ++m_jacobian_jumps;
+                        continue;
+                    }
+                    J(static_cast<Eigen::Index>(row), i) = full;
                 }
             }
             continue;

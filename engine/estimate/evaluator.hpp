@@ -33,6 +33,15 @@ struct Evaluation {
     }
 };
 
+/// Whether a Jacobian entry's two central differences - over the step d (`full`)
+/// and over d / 2 (`half`), whitened per search coordinate - describe one slope.
+/// A smooth feature's differ by O(d^2) (and by float noise: at the set-a optima
+/// at most 0.008); a feature that jumps by J between the points reads J / (2 d)
+/// at one step and J / d or nothing at the other (a 1 mm jump of a 2 mm sigma at
+/// d = 1e-3: hundreds). Agree: within 10 % of the larger and 0.05 (an entry of
+/// 0.05 moves an interval by nothing one could see).
+bool slopes_agree(double full, double half);
+
 /// Thrown out of an evaluation when FitOptions::cancel is set.
 struct CancelledFit {};
 
@@ -113,6 +122,9 @@ public:
     long factorisations() const { return m_factorisations; }
     int jacobians() const { return m_jacobians; }
     long back_substitutions() const { return m_back_substitutions; }
+    /// Jacobian entries left at 0 because the feature jumped between the
+    /// difference's points (its slopes at the step and at half of it disagree).
+    long jacobian_jumps() const { return m_jacobian_jumps; }
 
     const Evaluation& last() const { return m_last; }
     const Eigen::VectorXd& last_x() const { return m_last_x; }
@@ -176,6 +188,7 @@ private:
     bool m_have_states = false;
     long m_simulations = 0, m_unconverged = 0;
     long m_factorisations = 0, m_back_substitutions = 0;
+    long m_jacobian_jumps = 0;
     int m_jacobians = 0;
     std::vector<FitTraceEntry> m_trace;
     int m_traced = 0; ///< evaluations already in m_trace

@@ -167,6 +167,7 @@ void add_work(FitResult& kept, const FitResult& other)
     kept.simulations += other.simulations;
     kept.factorisations += other.factorisations;
     kept.back_substitutions += other.back_substitutions;
+    kept.jacobian_jumps += other.jacobian_jumps;
     kept.jacobians += other.jacobians;
     kept.seconds_per_simulation = kept.simulations ? sim_seconds / kept.simulations : 0.0;
 }
@@ -1296,7 +1297,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
                                                                                                         const std::string& prefix) {
             Evaluator& e = *state->ev;
             const int evals0 = e.evaluations();
-            const long sims0 = e.simulations(), fact0 = e.factorisations(), back0 = e.back_substitutions();
+            const long sims0 = e.simulations(), fact0 = e.factorisations(), back0 = e.back_substitutions(), jumps0 = e.jacobian_jumps();
             const int jac0 = e.jacobians();
             const double sim_s0 = e.sim_seconds(), elapsed0 = e.elapsed_s();
             const std::size_t trace0 = e.trace().size();
@@ -1331,6 +1332,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             tests.simulations = e.simulations() - sims0;
             tests.factorisations = e.factorisations() - fact0;
             tests.back_substitutions = e.back_substitutions() - back0;
+            tests.jacobian_jumps = e.jacobian_jumps() - jumps0;
             tests.jacobians = e.jacobians() - jac0;
             tests.wall_seconds = e.elapsed_s() - elapsed0;
             tests.seconds_per_simulation = tests.simulations ? (e.sim_seconds() - sim_s0) / tests.simulations : 0.0;
@@ -1340,6 +1342,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     out.simulations = ev.simulations();
     out.factorisations = ev.factorisations();
     out.back_substitutions = ev.back_substitutions();
+    out.jacobian_jumps = ev.jacobian_jumps();
     out.jacobians = ev.jacobians();
     out.trace = ev.trace();
     out.seconds_per_simulation = ev.simulations() ? ev.sim_seconds() / ev.simulations() : 0.0;

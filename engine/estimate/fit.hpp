@@ -315,6 +315,10 @@ struct FitResult {
     long simulations = 0;
     long factorisations = 0;      ///< Hessians factorised for sensitivities (one per drape linearised)
     long back_substitutions = 0;  ///< sensitivity solves (one per parameter per factorisation)
+    /// Jacobian entries left at 0 because their feature jumped between the
+    /// difference's points (slopes at the step and at half of it disagree:
+    /// a selection that switched - an outermost crossing, a closing cut).
+    long jacobian_jumps = 0;
     int jacobians = 0;            ///< Jacobians taken (scan slopes, Levenberg-Marquardt steps, intervals, effect tests)
     std::vector<FitTraceEntry> trace; ///< every evaluation, in order (a refit's follow the coarse fit's)
     double seconds_per_simulation = 0;

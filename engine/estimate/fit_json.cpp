@@ -61,6 +61,7 @@ json fit_to_json(const FitResult& r)
     fit["method"] = to_string(r.options.method);
     fit["factorisations"] = r.factorisations;
     fit["back_substitutions"] = r.back_substitutions;
+    fit["jacobian_jumps"] = r.jacobian_jumps;
     fit["jacobians"] = r.jacobians;
     json trace = json::array();
     for (const auto& t : r.trace)

@@ -570,7 +570,12 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
     if (!r.trace.empty()) {
         md << "## Convergence\n\nMethod `" << to_string(r.options.method) << "`: " << r.evaluations << " evaluations ("
            << r.simulations << " drapes), " << r.factorisations << " Hessian factorisations and " << r.back_substitutions
-           << " back-substitutions for exact sensitivities, " << r.jacobians << " Jacobians.\n\n";
+           << " back-substitutions for exact sensitivities, " << r.jacobians << " Jacobians"
+           << (r.jacobian_jumps > 0 ? " (" + std::to_string(r.jacobian_jumps) +
+                                          " of their entries left at 0: the feature jumped between the difference's points, its slopes at the step and at half "
+                                          "of it disagreeing)"
+                                    : std::string())
+           << ".\n\n";
         convergence_plot(r, (root / "convergence.png").string());
         files.push_back("convergence.png");
         md << "![convergence](convergence.png)\n\n| evaluation | stage | chi2 | best so far | coordinates (";

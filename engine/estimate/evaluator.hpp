@@ -35,12 +35,14 @@ struct Evaluation {
 
 /// Whether a Jacobian entry's two central differences - over the step d (`full`)
 /// and over d / 2 (`half`), whitened per search coordinate - describe one slope.
-/// A smooth feature's differ by O(d^2) (and by float noise: at the set-a optima
-/// at most 0.008); a feature that jumps by J between the points reads J / (2 d)
-/// at one step and J / d or nothing at the other (a 1 mm jump of a 2 mm sigma at
-/// d = 1e-3: hundreds). Agree: within 10 % of the larger and 0.05 (an entry of
-/// 0.05 moves an interval by nothing one could see).
-bool slopes_agree(double full, double half);
+/// A smooth feature's differ by O(d^2) and by the metrics' own discretisation (at
+/// the set-a optima at most 0.008 per decade); a feature that jumps by J between
+/// the points reads J / (2 d) at one step and J / d or nothing at the other (a
+/// 1 mm jump of a 2 mm sigma at d = 1e-3 decades: hundreds). Agree: within 10 %
+/// of the larger and `floor` (Evaluator::jacobian: 0.05 sigma per thousand steps -
+/// a decade of a log coordinate, the range of a linear one). A kink between the
+/// points reads as two slopes too.
+bool slopes_agree(double full, double half, double floor);
 
 /// Thrown out of an evaluation when FitOptions::cancel is set.
 struct CancelledFit {};

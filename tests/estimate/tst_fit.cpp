@@ -202,6 +202,7 @@ private slots:
         QCOMPARE(j["fit"]["method"].get<std::string>(), std::string("lm"));
         QCOMPARE(j["fit"]["trace"].size(), r.trace.size());
         QCOMPARE(j["fit"]["factorisations"].get<long>(), r.factorisations);
+        QCOMPARE(j["fit"]["jacobian_jumps"].get<long>(), r.jacobian_jumps);
         // The warp/weft assessment agrees with the interval above: not separated,
         // the ratio's 95 % interval holds 1; a tied refit only beyond the typical factor.
         QVERIFY(r.anisotropy.assessed);

@@ -123,29 +123,35 @@ private slots:
     {
         // The Jacobian's entries come from central differences over the step d and
         // d / 2 (whitened per coordinate); slopes_agree keeps an entry whose two
-        // agree. f(t): a whitened feature along the coordinate, d = 1e-3.
-        const double d = 1e-3;
-        auto entry = [&](const std::function<double(double)>& f) {
-            return std::make_pair((f(d) - f(-d)) / (2 * d), (f(0.5 * d) - f(-0.5 * d)) / d);
-        };
+        // agree. f(t): a whitened feature along a log coordinate, d = 1e-3 decades,
+        // the floor Evaluator::jacobian gives it (0.05).
+        const double d = 1e-3, floor = 0.05 * 1e-3 / d;
         auto agree = [&](const std::function<double(double)>& f) {
-            const auto [full, half] = entry(f);
-            return slopes_agree(full, half);
+            const double full = (f(d) - f(-d)) / (2 * d), half = (f(0.5 * d) - f(-0.5 * d)) / d;
+            return slopes_agree(full, half, floor);
         };
-        // Smooth: one slope (a curvature of 2e3 per coordinate^2 changes nothing).
-        QVERIFY(agree([](double t) { return 0.3 * t + 2e3 * t * t; }));
+        // Smooth: the two slopes differ by the third derivative's d^2 / 8 (0.075
+        // here, against a tolerance of 0.09).
+        QVERIFY(agree([](double t) { return 0.3 * t + 1e5 * t * t * t; }));
         QVERIFY(agree([](double t) { return -40 * t + 1e4 * t * t * t; }));
-        // The float noise the set-a optima showed (0.027 against 0.031): kept.
-        QVERIFY(slopes_agree(0.0266, 0.0310));
-        QVERIFY(slopes_agree(2.037, 1.921));
+        // What the set-a optima showed (the metrics' discretisation): kept.
+        QVERIFY(slopes_agree(0.0266, 0.0310, floor));
+        QVERIFY(slopes_agree(2.037, 1.921, floor));
+        // The edge: 10 % of the larger and the floor.
+        QVERIFY(slopes_agree(1.0, 0.86, floor));
+        QVERIFY(!slopes_agree(1.0, 0.84, floor));
         // A jump of half a sigma between the points, outside and inside the half step.
         for (double at : {0.7 * d, -0.7 * d, 0.2 * d, -0.3 * d})
             QVERIFY2(!agree([at](double t) { return 0.3 * t + (t > at ? 0.5 : 0.0); }), qPrintable(QString::number(at / d)));
-        // ... and one of a thousandth of a sigma, still thirty times the slope's scale.
+        // ... and one of a thousandth of a sigma (0.8 against 0.3, ten times the floor).
         QVERIFY(!agree([](double t) { return 0.3 * t + (t > 0.6e-3 ? 1e-3 : 0.0); }));
-        // A kink inside the step reads as two slopes too: the entry is dropped rather
-        // than averaged (it is rare: the argmin of a hem switching within 1e-3 decades).
+        // A kink inside the step reads as two slopes too (-0.3 and -0.9): dropped
+        // rather than averaged (rare: the argmin of a hem switching within 1e-3 decades).
         QVERIFY(!agree([](double t) { return 0.3 * t + 2 * std::abs(t - 0.3e-3); }));
+        // A linear coordinate (a radius over 0..0.03 m: d = 3e-5 m) has its floor per
+        // metre: 0.05 sigma over the range, 1.67 per metre - an entry of 0.5 per metre
+        // that wobbles by 1 is no jump.
+        QVERIFY(slopes_agree(0.5, 1.5, 0.05 * 1e-3 / 3e-5));
     }
 
     void aRadiusAtZeroGetsTheSecantOfSwitchingItOn()

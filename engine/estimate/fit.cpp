@@ -309,6 +309,18 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
 
 void set_from_flat(RecordFit& rf, const Evaluator& ev, std::size_t r);
 
+/// Record rf's preset_* rows: the seed-averaged features `f` of `sims`, draped as
+/// the fit drapes; `moved`: at a preset the calibration moved off the optimum.
+void set_preset(RecordFit& rf, const DrapeFeatures& f, const std::vector<cloth::DrapeResult>& sims, bool moved)
+{
+    rf.preset_moved = moved;
+    rf.preset_features = f;
+    rf.preset_converged = true;
+    for (const auto& sim : sims) rf.preset_converged = rf.preset_converged && sim.status.converged();
+    rf.preset_dc_error_percent = f.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
+    rf.preset_node_error = f.node_count - rf.measured_features.node_count;
+}
+
 std::string fmt_chi2(double d)
 {
     char b[64];
@@ -875,12 +887,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
     int nd_p = 0, nn_p = 0;
     for (std::size_t r = 0; r < R && r < pe.features.size(); ++r) {
         RecordFit& rf = kept.records[r];
-        rf.preset_moved = true;
-        rf.preset_features = pe.features[r];
-        rf.preset_converged = true;
-        for (const auto& sim : pe.sims[r]) rf.preset_converged = rf.preset_converged && sim.status.converged();
-        rf.preset_dc_error_percent = rf.preset_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
-        rf.preset_node_error = rf.preset_features.node_count - rf.measured_features.node_count;
+        set_preset(rf, pe.features[r], pe.sims[r], true);
         if (std::isfinite(rf.preset_dc_error_percent)) dsum += rf.preset_dc_error_percent, ++nd_p;
         if (std::isfinite(rf.preset_node_error)) nsum += rf.preset_node_error, ++nn_p;
     }
@@ -1255,11 +1262,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         rf.branch_folds = ev.branch_of(static_cast<int>(r));
         rf.dc_error_percent = rf.simulated_features.drape_coefficient_percent - rf.measured_features.drape_coefficient_percent;
         rf.node_error = rf.simulated_features.node_count - rf.measured_features.node_count;
-        rf.preset_features = rf.simulated_features; // the preset is the optimum until a calibration moves it
-        rf.preset_dc_error_percent = rf.dc_error_percent;
-        rf.preset_node_error = rf.node_error;
-        rf.preset_converged = true;
-        for (const auto& sim : rf.simulations) rf.preset_converged = rf.preset_converged && sim.status.converged();
+        set_preset(rf, rf.simulated_features, rf.simulations, false); // the preset is the optimum until a calibration moves it
         set_from_flat(rf, ev, r);
         if (!cancelled && !rf.simulations.empty() && rf.simulations.front().status.converged()) {
             // The sensitivity of D to each fitted parameter at the optimum: one

@@ -222,13 +222,13 @@ std::string Progress::line(double fraction, const std::string& detail) const
     return s;
 }
 
-void Progress::update(double fraction, const std::string& detail)
+void Progress::update(double fraction, const std::string& detail, bool at_once)
 {
     if (m_quiet) return;
     if (fraction >= 0) m_fraction = fraction;
     const auto now = std::chrono::steady_clock::now();
     const double since = std::chrono::duration<double>(now - m_last).count();
-    if (since < (m_tty ? kTerminalInterval : kPlainInterval)) return;
+    if (!at_once && since < (m_tty ? kTerminalInterval : kPlainInterval)) return;
     m_last = now;
     const std::string s = line(m_fraction, detail);
     if (m_tty) {

@@ -19,7 +19,9 @@ public:
 
     /// fraction in [0, 1], or negative when unknown; `detail` is the rest of the
     /// line ("Newton iteration 12, residual 3e-04"). Cheap when nothing is printed.
-    void update(double fraction, const std::string& detail);
+    /// `now`: print it even within the interval since the last line (a new stage
+    /// starting: a log would otherwise lose it to the throttle).
+    void update(double fraction, const std::string& detail, bool now = false);
     /// The last line, with the total time: at 100 % when `complete`, else at the
     /// last fraction reached (a solve that stopped short).
     void finish(const std::string& detail = {}, bool complete = true);

@@ -422,12 +422,8 @@ void MainWindow::fitFromRecord()
         estimate::FitOptions o = estimate::drape_fit_defaults();
         o.cancel = ctx.cancelFlag();
         o.progress = [&ctx](const estimate::FitProgress& p) {
-            ctx.report(p.planned > 0 ? std::min(1.0, double(p.evaluation) / p.planned) : -1.0,
-                       QStringLiteral("fit: %1, evaluation %2 of at most %3, chi2 %4")
-                           .arg(QString::fromStdString(p.stage))
-                           .arg(p.evaluation)
-                           .arg(p.planned)
-                           .arg(p.best_chi2, 0, 'g', 4));
+            // A busy bar: the fit's length is not known ahead (estimate::fit_progress_line).
+            ctx.report(-1.0, QStringLiteral("fit: ") + QString::fromStdString(estimate::fit_progress_line(p)));
         };
         const estimate::FitResult r = estimate::fit_fabric(records, o);
         if (r.cancelled) throw std::runtime_error("cancelled");

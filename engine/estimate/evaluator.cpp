@@ -784,9 +784,17 @@ void Evaluator::report(const std::string& stage)
         t.elapsed_s = std::chrono::duration<double>(Clock::now() - m_t0).count();
         m_trace.push_back(std::move(t));
     }
+    progress(stage, false);
+}
+
+void Evaluator::announce(const std::string& stage) { progress(stage, true); }
+
+void Evaluator::progress(const std::string& stage, bool starting)
+{
     if (!m_opt.progress) return;
     FitProgress p;
     p.stage = stage;
+    p.starting = starting;
     p.evaluation = m_evaluations;
     p.planned = m_planned;
     p.best_chi2 = m_best.chi2;

@@ -100,6 +100,9 @@ public:
     /// Calls FitOptions::progress with the state so far.
     /// Also appends the evaluation to the trace (once per evaluation).
     void report(const std::string& stage);
+    /// Calls FitProgress::progress for a stage that starts now (FitProgress::starting),
+    /// without touching the trace: the drapes after the search take seconds each.
+    void announce(const std::string& stage);
 
     /// Jacobian of the whitened residual terms of `e` (the evaluation at x, whose
     /// rest states it linearises) with respect to the search coordinates: rows in
@@ -165,6 +168,7 @@ public:
     void set_planned(int n) { m_planned = n; }
 
 private:
+    void progress(const std::string& stage, bool starting);
     /// One cold drape of record r at p (seed, on the branch or not), measured.
     /// Touches no member (the spread's drapes run on several threads).
     /// grid > 0: on that grid instead of the fit's. at_rest: whether it came to rest.

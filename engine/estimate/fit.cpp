@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <limits>
 
@@ -80,6 +81,35 @@ BendingTie parse_bending_tie(const std::string& name)
 
 std::string to_string(ShearHold h) { return h == ShearHold::Auto ? "auto" : "free"; }
 
+std::string fit_progress_line(const FitProgress& p)
+{
+    char buf[320];
+    if (p.search) {
+        std::snprintf(buf, sizeof buf, "%-11s evaluation %d (at most %d), best chi2 %.1f, %ld simulations", p.stage.c_str(), p.evaluation,
+                      p.planned, p.best_chi2, p.simulations);
+        return buf;
+    }
+    // The stages after the search, by name without a run's prefix ("tie ", "refine ").
+    static const std::pair<const char*, const char*> what[] = {
+        {"from flat, fold count", "a calibration step along the contours' profile, from flat"},
+        {"from flat, calibrated", "the calibrated preset from flat"},
+        {"from flat", "the preset from flat on the fit's grid and the finer one"},
+        {"effects", "the candidate effects"},
+        {"preset as saved", "the preset as saved, on the fit's branch"},
+    };
+    const char* text = "after the search";
+    for (const auto& [stage, t] : what) {
+        const std::size_t at = p.stage.rfind(stage);
+        if (at != std::string::npos && at + std::strlen(stage) == p.stage.size()) {
+            text = t;
+            break;
+        }
+    }
+    std::snprintf(buf, sizeof buf, "%s%s: %s; best chi2 %.1f, %ld simulations", p.stage.c_str(), p.starting ? "" : " (done)", text, p.best_chi2,
+                  p.simulations);
+    return buf;
+}
+
 ShearHold parse_shear_hold(const std::string& name)
 {
     if (name == "auto") return ShearHold::Auto;
@@ -140,14 +170,15 @@ void assess_anisotropy(FitResult& out)
 /// whole fit's elapsed time behind it (the second run's first line said "about
 /// 49 min left" for a fit that ended a minute later). A run reports no "done" of
 /// its own: fit_fabric reports the fit's one. Empty when there is no callback.
-std::function<void(const FitProgress&)> continued_progress(const FitOptions& options, std::string prefix, const FitResult& before)
+std::function<void(const FitProgress&)> continued_progress(const FitOptions& options, std::string prefix, const FitResult& before, bool search = true)
 {
     if (!options.progress) return nullptr;
     const int evals = before.evaluations;
     const long sims = before.simulations;
     const double secs = before.wall_seconds;
-    return [&options, prefix = std::move(prefix), evals, sims, secs](const FitProgress& p) {
+    return [&options, prefix = std::move(prefix), evals, sims, secs, search](const FitProgress& p) {
         FitProgress q = p;
+        q.search = search && p.search;
         q.stage = prefix + p.stage;
         q.evaluation += evals;
         q.planned += evals;
@@ -210,6 +241,7 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
     const int n = static_cast<int>(vars.size());
     if (J.rows() != static_cast<Eigen::Index>(best.terms.size())) J = ev.jacobian(x, best);
     std::vector<EffectSignature> sigs;
+    ev.announce("effects");
     try {
         sigs = ev.effect_signatures(x, best);
     } catch (const drape::Error& e) {
@@ -652,6 +684,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 const double sigmas = std::abs(t) / sigma_t; // k, or less where the box shortened it
                 reached = sigmas;
                 reach_limit = limit_var >= 0 && limit_by_cap ? limit_var : -1;
+                ev.announce("from flat, fold count");
                 ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
                 ev.report("from flat, fold count");
                 ++c.steps;
@@ -697,6 +730,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             if (std::abs(cand_e) > c.tolerance && slope_ok) {
                 Eigen::VectorXd xs;
                 if (scaled(cand, std::clamp(-cand_e / slope, -max_step, max_step), xs)) {
+                    ev.announce("from flat, calibrated");
                     ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
                     ev.report("from flat, calibrated");
                     ++c.steps;
@@ -710,6 +744,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             }
             // The finer grid's drape for the preset that is kept (with the fit grid's
             // drapes again when a later step drew other ones).
+            ev.announce("from flat, calibrated");
             ev.draw_from_flat(cand, last_is_cand ? Evaluator::FlatDraw::FinerGrid : Evaluator::FlatDraw::All);
             ev.report("from flat, calibrated");
             double e = 0, folds = 0;
@@ -761,6 +796,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 Eigen::VectorXd xs;
                 if (!scaled(x, ln_s, xs)) break;
                 const double scale = bend_scale(xs);
+                ev.announce("from flat, calibrated");
                 ev.draw_from_flat(xs);
                 ev.report("from flat, calibrated");
                 ++c.steps;
@@ -870,6 +906,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
     // the preset rows say nothing (NaN) and the reason says why.
     c.chi2_preset = std::numeric_limits<double>::quiet_NaN();
     Evaluation pe;
+    ev.announce("preset as saved");
     try {
         pe = ev.evaluate_params(kept.params, Start::Best);
     } catch (const CancelledFit&) {
@@ -1310,9 +1347,10 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             before.evaluations = kept.evaluations - evals0;
             before.simulations = kept.simulations - sims0;
             before.wall_seconds = kept.wall_seconds - elapsed0;
-            state->options.progress = continued_progress(caller, prefix, before);
+            state->options.progress = continued_progress(caller, prefix, before, false);
             try {
                 if (from_flat) {
+                    e.announce("from flat");
                     e.draw_from_flat(x);
                     e.report("from flat");
                     for (std::size_t r = 0; r < kept.records.size(); ++r) set_from_flat(kept.records[r], e, r);

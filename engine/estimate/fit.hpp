@@ -36,7 +36,21 @@ struct FitProgress {
     /// Search coordinates of the last evaluation (log10 of the value for log-scaled
     /// parameters, see FitVariable), in the order of fit_variables().
     std::vector<double> last_coords;
+    /// False in the stages after the search (the drapes from flat, the effect
+    /// tests, the calibration from flat): they draw drapes, not evaluations, so
+    /// `evaluation` / `planned` says nothing of them - a caller that shows a
+    /// fraction of the fit done has none to show there.
+    bool search = true;
+    /// True when the stage is about to start (its drapes are running), false when
+    /// it has just drawn one: the long drapes after the search are announced first.
+    bool starting = false;
 };
+
+/// One line for a progress display (`drape fit`, the demo): the stage and the work
+/// done - "local evaluation 7 (at most 44), best chi2 33.0, 21 simulations" in
+/// the search, "from flat: the preset from flat on the fit's grid and the finer
+/// one; best chi2 33.0, 18 simulations" after it (" (done)" once drawn).
+std::string fit_progress_line(const FitProgress& p);
 
 /// Where a fit's cold simulations start (the node-count bifurcation).
 enum class FoldBranch {

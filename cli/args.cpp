@@ -175,6 +175,7 @@ double Args::get_length(const std::string& flag, double fallback) const
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <sys/ioctl.h>
 
 namespace drape::cli {
 
@@ -183,6 +184,18 @@ namespace {
 constexpr double kPlainInterval = 5.0;
 /// A terminal line is redrawn at most this often.
 constexpr double kTerminalInterval = 0.1;
+
+/// A progress line cut to the terminal's width less one column (100 when the
+/// width is not known), at a UTF-8 character boundary.
+std::string fit_terminal(const std::string& s)
+{
+    winsize w{};
+    const std::size_t cols = ::ioctl(STDERR_FILENO, TIOCGWINSZ, &w) == 0 && w.ws_col > 10 ? w.ws_col : 101;
+    if (s.size() < cols) return s;
+    std::size_t n = cols - 1;
+    while (n > 0 && (static_cast<unsigned char>(s[n]) & 0xC0) == 0x80) --n; // not inside a character
+    return s.substr(0, n);
+}
 } // namespace
 
 std::string format_duration(double s)
@@ -232,7 +245,9 @@ void Progress::update(double fraction, const std::string& detail, bool at_once)
     m_last = now;
     const std::string s = line(m_fraction, detail);
     if (m_tty) {
-        std::fprintf(stderr, "\r%-100s", s.c_str());
+        // Rewritten in place: cut to the terminal's width (a wrapped line cannot be
+        // returned to with \r) and the rest of the old line cleared.
+        std::fprintf(stderr, "\r%s\033[K", fit_terminal(s).c_str());
         m_open = true;
     } else {
         std::fprintf(stderr, "%s\n", s.c_str());
@@ -244,7 +259,7 @@ void Progress::finish(const std::string& detail, bool complete)
 {
     if (m_quiet) return;
     const std::string s = line(complete ? 1.0 : m_fraction, detail.empty() ? "done" : detail);
-    if (m_tty) std::fprintf(stderr, "\r%-100s\n", s.c_str());
+    if (m_tty) std::fprintf(stderr, "\r%s\033[K\n", fit_terminal(s).c_str());
     else std::fprintf(stderr, "%s\n", s.c_str());
     m_open = false;
     std::fflush(stderr);

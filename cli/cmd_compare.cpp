@@ -91,7 +91,18 @@ int run(const std::vector<std::string>& argv)
         const estimate::MeasuredDrape m = estimate::load_record(dir);
         int grid = static_cast<int>(std::lround(grid300 * m.sample_diameter / 0.30));
         if (grid % 2 == 0) ++grid;
-        const cloth::FabricParams p = estimate::params_for_record(*base, m);
+        // The record's areal density and thickness, unless --set names them: a
+        // probe of "what if the specimen were thicker" (they were silently the
+        // record's before, whatever --set said).
+        cloth::FabricParams p = estimate::params_for_record(*base, m);
+        if (!a.get_all("--set").empty()) {
+            const cloth::FabricParams asked = apply_set_flags(a, p);
+            for (const cloth::Param q : {cloth::Param::AreaDensity, cloth::Param::Thickness})
+                if (asked[q] != p[q] && !quiet)
+                    std::fprintf(stderr, "%s: --set %s = %s instead of the record's %s\n", m.id.c_str(), std::string(cloth::spec(q).key).c_str(),
+                                 format_value(asked[q]).c_str(), format_value(p[q]).c_str());
+            p = asked;
+        }
         const estimate::DrapeFeatures meas = estimate::drape_features(m);
         std::vector<estimate::DrapeFeatures> fs;
         const int folds = branch == estimate::FoldBranch::Measured ? estimate::measured_fold_branch(meas.node_count) : 0;

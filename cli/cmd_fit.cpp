@@ -267,7 +267,7 @@ int run(const std::vector<std::string>& argv)
     auto old = std::signal(SIGINT, on_sigint);
     estimate::FitResult r = estimate::fit_fabric(recs, fo);
     std::signal(SIGINT, old);
-    progress.finish(r.cancelled ? "cancelled" : "done", !r.cancelled);
+    progress.finish(r.cancelled ? "cancelled" : "done", false); // no percentage: the fit's bar has none
     // A result that cannot be right is not written as if it were fitted.
     if (r.evaluations == 0 || r.records.empty()) {
         if (r.cancelled) {

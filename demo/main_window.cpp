@@ -436,6 +436,9 @@ void MainWindow::fitFromRecord()
     }
     connect(&m_fitJob, &widget::LongJob::finished, this, [this, result, records](bool ok, const QString& msg) {
         setBusy(false);
+        // The fit's bar was a busy bar (no fraction of a fit is known ahead): stop it.
+        m_progress->setRange(0, 1000);
+        m_progress->setValue(ok ? 1000 : 0);
         if (!ok) {
             showMessage(tr("Fit: %1").arg(msg));
             return;

@@ -100,7 +100,7 @@ public:
     /// Calls FitOptions::progress with the state so far.
     /// Also appends the evaluation to the trace (once per evaluation).
     void report(const std::string& stage);
-    /// Calls FitProgress::progress for a stage that starts now (FitProgress::starting),
+    /// Calls FitOptions::progress for a stage that starts now (FitProgress::starting),
     /// without touching the trace: the drapes after the search take seconds each.
     void announce(const std::string& stage);
 

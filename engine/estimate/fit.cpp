@@ -84,6 +84,10 @@ std::string to_string(ShearHold h) { return h == ShearHold::Auto ? "auto" : "fre
 std::string fit_progress_line(const FitProgress& p)
 {
     char buf[320];
+    if (p.stage == "done") {
+        std::snprintf(buf, sizeof buf, "done: %d evaluations, chi2 %.1f, %ld simulations", p.evaluation, p.best_chi2, p.simulations);
+        return buf;
+    }
     if (p.search) {
         std::snprintf(buf, sizeof buf, "%-11s evaluation %d (at most %d), best chi2 %.1f, %ld simulations", p.stage.c_str(), p.evaluation,
                       p.planned, p.best_chi2, p.simulations);
@@ -105,8 +109,8 @@ std::string fit_progress_line(const FitProgress& p)
             break;
         }
     }
-    std::snprintf(buf, sizeof buf, "%s%s: %s; best chi2 %.1f, %ld simulations", p.stage.c_str(), p.starting ? "" : " (done)", text, p.best_chi2,
-                  p.simulations);
+    std::snprintf(buf, sizeof buf, "%s%s: %ld simulations, best chi2 %.1f; %s", p.stage.c_str(), p.starting ? "" : " (done)", p.simulations,
+                  p.best_chi2, text);
     return buf;
 }
 
@@ -239,9 +243,9 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
                   Eigen::MatrixXd J, FitResult& out)
 {
     const int n = static_cast<int>(vars.size());
+    ev.announce("effects"); // (the Jacobian below, when the fit took none, is theirs)
     if (J.rows() != static_cast<Eigen::Index>(best.terms.size())) J = ev.jacobian(x, best);
     std::vector<EffectSignature> sigs;
-    ev.announce("effects");
     try {
         sigs = ev.effect_signatures(x, best);
     } catch (const drape::Error& e) {
@@ -1565,6 +1569,7 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     if (options.progress) {
         FitProgress p;
         p.stage = "done";
+        p.search = false;
         p.evaluation = p.planned = out.evaluations;
         p.best_chi2 = out.chi2;
         p.simulations = out.simulations;

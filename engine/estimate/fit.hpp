@@ -37,7 +37,7 @@ struct FitProgress {
     /// parameters, see FitVariable), in the order of fit_variables().
     std::vector<double> last_coords;
     /// False in the stages after the search (the drapes from flat, the effect
-    /// tests, the calibration from flat): they draw drapes, not evaluations, so
+    /// tests, the calibration from flat) and in the last report ("done"): they draw drapes, not evaluations, so
     /// `evaluation` / `planned` says nothing of them - a caller that shows a
     /// fraction of the fit done has none to show there.
     bool search = true;
@@ -48,8 +48,8 @@ struct FitProgress {
 
 /// One line for a progress display (`drape fit`, the demo): the stage and the work
 /// done - "local evaluation 7 (at most 44), best chi2 33.0, 21 simulations" in
-/// the search, "from flat: the preset from flat on the fit's grid and the finer
-/// one; best chi2 33.0, 18 simulations" after it (" (done)" once drawn).
+/// the search, "from flat: 18 simulations, best chi2 33.0; the preset from flat on
+/// the fit's grid and the finer one" after it (" (done)" once drawn).
 std::string fit_progress_line(const FitProgress& p);
 
 /// Where a fit's cold simulations start (the node-count bifurcation).

@@ -500,6 +500,28 @@ private slots:
         QVERIFY(std::isfinite(rec["chi2"].toDouble()));
     }
 
+    /// compare --set of a value the record declares (its thickness, its areal
+    /// density) drapes with the asked value and says so; it was silently the
+    /// record's (a probe of a thicker specimen came out identical to the digit).
+    void compareSetOverridesTheRecordsDeclaredValues()
+    {
+        const QStringList base{"compare", DRAPE_SOURCE_DIR "/examples/DL-A04", "--fabric", DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json",
+                               "--grid", "9", "--seeds", "1", "--json"};
+        const Out plain = run(base);
+        const Out thick = run(base + QStringList{"--set", "thickness_m=0.004"});
+        QVERIFY2(plain.code == 0 || plain.code == 4, qPrintable(plain.err));
+        QVERIFY2(thick.code == 0 || thick.code == 4, qPrintable(thick.err));
+        const QJsonObject a = QJsonDocument::fromJson(plain.out.toUtf8()).array().at(0).toObject();
+        const QJsonObject b = QJsonDocument::fromJson(thick.out.toUtf8()).array().at(0).toObject();
+        const double da = a["drape_coefficient_percent"].toObject()["simulated"].toDouble(),
+                     db = b["drape_coefficient_percent"].toObject()["simulated"].toDouble();
+        QVERIFY2(da > 0 && db > 0 && std::abs(da - db) > 1e-6, qPrintable(QString("%1 %2").arg(da).arg(db)));
+        // --json is quiet: the note is for the terminal; without it the note names both values.
+        const Out said = run(QStringList{"compare", DRAPE_SOURCE_DIR "/examples/DL-A04", "--fabric", DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json",
+                                         "--grid", "9", "--seeds", "1", "--set", "thickness_m=0.004"});
+        QVERIFY2(said.err.contains("--set thickness_m = 0.004 instead of the record's"), qPrintable(said.err));
+    }
+
     /// compare drapes a fitted preset on the fit's mesh (provenance.mesh) and at
     /// the fit's grid (provenance.grid) unless --mesh / --grid say otherwise; a bad
     /// provenance.mesh is refused naming the file and field.

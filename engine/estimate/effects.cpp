@@ -60,6 +60,10 @@ const std::vector<EffectSpec>& effect_library()
         meas("camera_scale", "the photos' scale off (calibration): the drape coefficient and the hem height scaled", EffectKind::CameraScale,
              "fraction");
         meas("profiler_scale", "the laser contours' scale off: every contour radius scaled", EffectKind::ProfilerScale, "fraction");
+        meas("profiler_depth",
+             "the laser profiler's height datum off: every cut taken deeper (positive) than its declared depth below the pedestal top - "
+             "slices wider than the model's at every depth while the photos' D and hem are not (the rim signature's contour half)",
+             EffectKind::ProfilerDepth, "m (deeper)");
         {
             EffectSpec e;
             e.name = "specimen_weight_gradient";

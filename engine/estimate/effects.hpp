@@ -27,6 +27,7 @@ enum class EffectKind {
     ProfilerScale, ///< the laser profiler's scale off: contour channels re-measured at scaled positions
     ProfilerAxis,  ///< the profiler (or the specimen) off the pedestal axis: contour channels re-measured at shifted positions (x and y: 2 columns)
     ProfilerTilt,  ///< the profiler's axis tilted against the pedestal's (or the rig off level): contours shifted in proportion to depth (x and y: 2 columns)
+    ProfilerDepth, ///< the profiler's height datum off: every cut taken at another depth than declared (contour channels re-measured on the drape moved up)
     Specimen,      ///< the specimen itself uneven (DrapeSetup::density_gradient along x and y): the rest state's responses (cloth::rest_responses)
 };
 

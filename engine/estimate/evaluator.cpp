@@ -590,6 +590,7 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
     constexpr double kScale = 1e-3; // scale error
     constexpr double kShift = 1e-4; // [m] axis shift
     constexpr double kTilt = 1e-3;  // [rad] axis tilt
+    constexpr double kDepth = 1e-4; // [m] the cuts' depth datum
     constexpr double kLin = 1e-3;   // fraction of a specimen effect's switched-on size along its response
     long resolves = 0;
     std::atomic<bool> parameter_failed{false};
@@ -691,6 +692,12 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                     mine[k] = {measure(X), measure(Y)};
                     break;
                 }
+                case EffectKind::ProfilerDepth: { // a cut declared at depth d taken at d + delta: the plane z = -d meets the drape moved up by delta
+                    cloth::Positions X = sim.x;
+                    X.col(2).array() += kDepth;
+                    mine[k] = {measure(X)};
+                    break;
+                }
                 case EffectKind::ProfilerTilt: { // a cut at depth d (z = -d) lands d tan(t) sideways
                     cloth::Positions X = sim.x, Y = sim.x;
                     X.col(0) -= kTilt * sim.x.col(2);
@@ -736,6 +743,7 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                             : sp.kind == EffectKind::Specimen ? kLin * sp.density_gradient
                             : sp.kind == EffectKind::ProfilerAxis                                 ? kShift
                             : sp.kind == EffectKind::ProfilerTilt                                 ? kTilt
+                            : sp.kind == EffectKind::ProfilerDepth                                ? kDepth
                                                                                                   : kScale;
         for (Eigen::Index c = 0; c < sig.columns.cols(); ++c)
             for (int r = 0; r < R; ++r) {
@@ -757,7 +765,8 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
                     if (!same_closure(cu, cb, mr, t)) continue;
                     // The instruments act on their own channels only.
                     if (sp.kind == EffectKind::CameraScale && !photo_row(t.kind)) continue;
-                    if ((sp.kind == EffectKind::ProfilerScale || sp.kind == EffectKind::ProfilerAxis || sp.kind == EffectKind::ProfilerTilt) &&
+                    if ((sp.kind == EffectKind::ProfilerScale || sp.kind == EffectKind::ProfilerAxis || sp.kind == EffectKind::ProfilerTilt ||
+                         sp.kind == EffectKind::ProfilerDepth) &&
                         photo_row(t.kind))
                         continue;
                     if (removed_by_measurement_model(sp, m_recs[static_cast<std::size_t>(r)])) continue;

@@ -96,7 +96,7 @@ private slots:
         // The candidates issue 20 lists, each once in the library.
         std::set<std::string> names;
         for (const auto& e : effect_library()) QVERIFY2(names.insert(e.name).second, e.name.c_str());
-        for (const char* n : {"profiler_off_axis", "profiler_tilt", "camera_scale", "profiler_scale", "specimen_weight_gradient", "buckling",
+        for (const char* n : {"profiler_off_axis", "profiler_tilt", "camera_scale", "profiler_scale", "profiler_depth", "specimen_weight_gradient", "buckling",
                               "tensile_stiffness", "tensile_anisotropy", "shear_stiffness", "bending_stiffening", "bending_softening",
                               "bending_anisotropy", "declared_weight", "declared_thickness", "disc_grip", "self_contact", "contact_resolution"})
             QVERIFY2(names.count(n), n);

@@ -211,11 +211,15 @@ std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eig
         // A first-order amplitude far outside the linear range (a parameter by more
         // than a factor 10, a switched effect - the specimen's too - more than 3
         // times over) is not a refit the engine would make: the effect would have
-        // to be another one. The instruments' signatures are exact geometry.
+        // to be another one. The instruments' signatures are exact geometry - but
+        // a depth datum's is the first order of r(z), curved near the rim: beyond
+        // 10 mm (two of the lab's 5 mm steps between cuts; a shallow cut would be
+        // above the pedestal top) it is not this effect either.
         const auto& sp = *sig.spec;
         const double limit = sp.kind == EffectKind::Parameter ? std::log(10.0)
                              : sp.kind == EffectKind::Switch  ? 3.0
                              : sp.kind == EffectKind::Specimen ? 3.0 * std::abs(sp.density_gradient)
+                             : sp.kind == EffectKind::ProfilerDepth ? 0.010
                                                                : HUGE_VAL;
         if (a.norm() > limit) {
             if (c.verdict == "beyond noise") c.verdict = "within noise";

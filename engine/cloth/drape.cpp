@@ -315,6 +315,7 @@ SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const Res
     sys.model().gravity = setup.laying_load * g;
     RestOptions lo = ropt;
     lo.residual = std::max(ropt.residual, 1e-4); // the full load's solve polishes
+    lo.checkpoint = nullptr; // the whole load's solve reports its checkpoint
     SolverStatus pre;
     try {
         pre = run_to_rest(sys, lo);
@@ -324,16 +325,35 @@ SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const Res
     }
     sys.model().gravity = g;
     if (pre.outcome == SolverStatus::Outcome::Cancelled) return pre;
-    SolverStatus st = run_to_rest(sys, ropt);
+    RestOptions full = ropt;
+    if (ropt.checkpoint)
+        full.checkpoint = [&ropt, &pre](const Positions& x, const SolverStatus& at) {
+            SolverStatus with = at;
+            with.add_work(pre);
+            ropt.checkpoint(x, with);
+        };
+    SolverStatus st = run_to_rest(sys, full);
     st.add_work(pre);
     return st;
 }
 
-DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt_in, const ModelOptions& mopt)
+int continuation_level(int grid)
 {
-    const RestOptions ropt = from_flat_options(ropt_in, setup);
+    if (grid <= kCoarsestLevel) return 0;
+    int coarse = kCoarsestLevel;
+    for (int level = 2 * kCoarsestLevel - 1; level < grid; level = 2 * level - 1) coarse = level;
+    return coarse;
+}
+
+DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt_in, const ModelOptions& mopt,
+                           const LevelRest* start, std::vector<LevelRest>* levels)
+{
+    RestOptions ropt = from_flat_options(ropt_in, setup);
+    ropt.checkpoint = nullptr; // its own below (`levels`)
     auto sys = make_drape_system(fabric, setup, mopt);
-    const bool continuation = ropt.integrator == Integrator::Static && !fabric.grid_springs && setup.grid > kCoarsestLevel;
+    const bool static_levels = ropt.integrator == Integrator::Static && !fabric.grid_springs;
+    const bool continuation = static_levels && setup.grid > kCoarsestLevel;
+    const double level_residual = std::max(ropt.residual, kLevelResidual);
     SolverStatus pre;
     bool polish = false; // the finer level starts on the coarse level's rest
     if (continuation) {
@@ -365,17 +385,33 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         // were slower per drape (3.4 s against 1.8-2.3 s) and as good or worse
         // on every count (section 19).
         DrapeSetup coarse = setup;
-        coarse.grid = kCoarsestLevel;
-        for (int level = 2 * kCoarsestLevel - 1; level < setup.grid; level = 2 * level - 1) coarse.grid = level;
-        RestOptions co = ropt;
-        co.residual = std::max(ropt.residual, 1e-4); // the fine solve polishes
-        const DrapeResult rc = simulate_drape(fabric, coarse, co, mopt);
+        coarse.grid = continuation_level(setup.grid);
+        const ClothMesh cm = make_drape_mesh(coarse);
+        LevelRest rc;
+        if (start && start->grid == coarse.grid && start->residual == level_residual && start->x.rows() == cm.vertex_count()) {
+            rc = *start; // solved before (the same solve)
+        } else {
+            RestOptions co = ropt;
+            co.residual = level_residual; // the fine solve polishes
+            DrapeResult d = simulate_drape(fabric, coarse, co, mopt, nullptr, levels);
+            rc = {coarse.grid, level_residual, std::move(d.x), d.status};
+            // (Its own checkpoint is its end: already in `levels`.)
+        }
         if (rc.status.outcome != SolverStatus::Outcome::Diverged && rc.status.outcome != SolverStatus::Outcome::Cancelled) {
-            const ClothMesh cm = make_drape_mesh(coarse);
             sys->x = interpolate_positions(cm, rc.x, sys->mesh());
             polish = true;
         }
         pre = rc.status;
+    }
+    // This grid's own level rest, when it is one of the levels.
+    RestOptions last = ropt;
+    if (levels && static_levels && setup.grid >= kCoarsestLevel && continuation_level(2 * setup.grid - 1) == setup.grid) {
+        last.checkpoint_residual = level_residual;
+        last.checkpoint = [&](const Positions& x, const SolverStatus& at) {
+            SolverStatus with = at;
+            with.add_work(pre);
+            levels->push_back({setup.grid, level_residual, x, with});
+        };
     }
     DrapeResult r;
     if (continuation) {
@@ -386,13 +422,13 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         // (docs/performance.md, twentieth session).
         // (A coarse level that diverged or was cancelled leaves the flat start:
         // then the usual order, as from flat.)
-        RestOptions fine = ropt;
+        RestOptions fine = last;
         // (A negative value, off, reaches the solver, which shifts only when it is positive.)
         if (fine.shift_before_projection == 0 && polish) fine.shift_before_projection = kFineShiftPseudoTime;
         r.status = run_to_rest(*sys, fine);
         r.status.add_work(pre);
     } else {
-        r.status = rest_from_flat(*sys, setup, ropt); // laid as the set-up says
+        r.status = rest_from_flat(*sys, setup, last); // laid as the set-up says
     }
     DrapeResult m = measure_drape(*sys, setup);
     m.potential_energy = sys->potential_energy(sys->x);

@@ -213,13 +213,42 @@ RestOptions from_flat_options(RestOptions ropt, const DrapeSetup& setup);
 /// continuation's coarsest level, and the widget on its own system (live frames).
 SolverStatus rest_from_flat(ClothSystem& sys, const DrapeSetup& setup, const RestOptions& ropt);
 
+/// The relative force residual a continuation's coarser level is solved to
+/// before the finer level polishes (or RestOptions::residual, when larger).
+inline constexpr double kLevelResidual = 1e-4;
+
+/// The continuation's level simulate_drape solves first for `grid` (the largest
+/// of kCoarsestLevel, 81, 161, 321, ... below it); 0 when `grid` is drawn
+/// directly (kCoarsestLevel or coarser).
+int continuation_level(int grid);
+
+/// A rest of one of the continuation's levels (kCoarsestLevel, 81, 161, ...),
+/// as simulate_drape solves it on the way to a finer grid: what a finer drape
+/// of the same fabric and set-up can start from instead of solving it again.
+struct LevelRest {
+    int grid = 0;        ///< the level's grid
+    double residual = 0; ///< the residual it was solved to: max(RestOptions::residual, kLevelResidual)
+    Positions x;         ///< [m]
+    SolverStatus status; ///< of the drape up to it (its laying and coarser levels included)
+};
+
 /// Simulates a drape to rest and measures it. For the static solver with a
 /// grid finer than kCoarsestLevel (41) this solves the largest of the levels 41,
 /// 81, 161, 321 below it first and interpolates (continuation): the cold start
 /// stays fast, and every finer grid shows the fold branch grid 41 takes from flat.
 /// Options as from_flat_options makes them (the late shift from the random mix).
+///
+/// `levels`, when given, collects the level rests the drape passed: its coarser
+/// level's, and its own grid's when that is a level (the iterate where its
+/// residual first fell below the level's residual - the iterate the level's solve
+/// would stop at; the path is unchanged). `start`, when given, is the rest of
+/// this drape's coarser level from an earlier drape of the same fabric, set-up
+/// (grid aside), rest and model options: the drape polishes from it instead of
+/// solving that level again - the same result, since the level's solve is
+/// deterministic (tst_drape continuationFromAKeptLevelIsTheSameDrape). A `start`
+/// of another level or residual is not used.
 DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, const RestOptions& ropt = {},
-                           const ModelOptions& mopt = {});
+                           const ModelOptions& mopt = {}, const LevelRest* start = nullptr, std::vector<LevelRest>* levels = nullptr);
 
 /// Warm start: re-solve from a previous rest state (same mesh), e.g. after a
 /// small parameter change during a fit.

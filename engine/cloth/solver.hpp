@@ -75,6 +75,14 @@ struct RestOptions {
     /// kLateShiftResidual for a drape from the random mix (DrapeSetup::fold_mode 0).
     /// Negative: off there too; so is a negative shift_before_projection.
     double late_shift_residual = 0;
+    /// Static solver: called once with the iterate where the relative force
+    /// residual first falls below `checkpoint_residual` (> 0) and the status a
+    /// solve to that residual would end with (converged), before the solver goes
+    /// on; the path is the same as without it. rest_from_flat calls it from the
+    /// whole load's solve (its laying's work added); simulate_drape does not call
+    /// a caller's, it keeps a continuation level's rest this way (LevelRest, drape.hpp).
+    double checkpoint_residual = 0;
+    std::function<void(const Positions&, const SolverStatus&)> checkpoint;
     /// Called now and then with the status so far; return false to cancel.
     std::function<bool(const SolverStatus&)> progress;
     const std::atomic<bool>* cancel = nullptr;

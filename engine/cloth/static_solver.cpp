@@ -52,6 +52,7 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
     int exact_ok = 1;
     double e_x = std::numeric_limits<double>::quiet_NaN(); // potential energy at s.x, when known
     auto last_report = t0;
+    bool checkpointed = false; // RestOptions::checkpoint called
     // Energy scale for rounding: the whole cloth lowered by 1 m [J].
     const double e_scale = s.model().total_mass() * 9.81;
     // Friction against the colliders, lagged: every iteration takes the
@@ -94,6 +95,16 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
             st.outcome = SolverStatus::Outcome::Diverged;
             st.message = "non-finite force at iteration " + std::to_string(st.steps);
             break;
+        }
+        if (opt.checkpoint && !checkpointed && st.residual < opt.checkpoint_residual) {
+            // As the loop would end here with opt.residual = checkpoint_residual.
+            checkpointed = true;
+            SolverStatus at = st;
+            at.outcome = SolverStatus::Outcome::Converged;
+            at.max_speed = 0;
+            at.force_evaluations = s.force_evaluations - f0;
+            at.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+            opt.checkpoint(s.x, at);
         }
         if (st.residual < opt.residual) {
             st.outcome = SolverStatus::Outcome::Converged;

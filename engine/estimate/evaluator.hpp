@@ -4,6 +4,7 @@
 // rest states), turns them into whitened residuals, keeps the best point, and
 // measures the drape-to-drape spread of every residual term. Internal to the
 // estimate layer (fit.cpp, stages.cpp, uncertainty.cpp).
+#include "engine/cloth/drape.hpp"
 #include "engine/estimate/effects.hpp"
 #include "engine/estimate/fit.hpp"
 
@@ -79,13 +80,18 @@ public:
     /// replace the calibrated ones) only the cold_* drapes are drawn.
     void calibrate_spread(const Eigen::VectorXd& x, int extra);
     /// The cold_* drapes calibrate_spread leaves out: per record on another
-    /// branch than the random mix, random_start_seeds drapes from it.
-    /// `which`: FitGrid draws only the fit grid's drapes (and drops the finer
-    /// grid's, which were another point's), FinerGrid only the flat_check_grid one,
-    /// added to the fit grid's drapes a FitGrid call drew at the same x: a caller
-    /// screens a candidate on the cheap drapes before it pays for the finer one.
-    enum class FlatDraw { All, FitGrid, FinerGrid };
+    /// branch than the random mix, random_start_seeds drapes from it, and the
+    /// flat_check_grid one. `which`: FitGrid draws only the fit grid's drapes (and
+    /// drops the finer grid's, which were another point's): a caller screens a
+    /// candidate on the cheap drapes before it pays for the finer one. Drapes
+    /// drawn at the same parameters before (the last kFlatMemoPoints points) are
+    /// not drawn again, and the finer grid's drape starts from the coarse level
+    /// its seed's fit-grid drape passed (cloth::LevelRest): the same drapes,
+    /// fewer simulations.
+    enum class FlatDraw { All, FitGrid };
     void draw_from_flat(const Eigen::VectorXd& x, FlatDraw which = FlatDraw::All);
+    /// Parameter points whose drapes from flat draw_from_flat keeps.
+    static constexpr std::size_t kFlatMemoPoints = 6;
     /// Objective for the optimizers: evaluates, keeps the best point and its rest
     /// states. An evaluation with a drape not at rest never replaces a best point
     /// at rest, and returns no less than the best chi2 then (the optimizers do not
@@ -172,7 +178,9 @@ private:
     /// One cold drape of record r at p (seed, on the branch or not), measured.
     /// Touches no member (the spread's drapes run on several threads).
     /// grid > 0: on that grid instead of the fit's. at_rest: whether it came to rest.
-    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch, int grid = 0, bool* at_rest = nullptr) const;
+    /// start, levels: cloth::simulate_drape's (a kept coarse level; the levels passed).
+    DrapeFeatures drape_cold(int r, const cloth::FabricParams& p, std::uint64_t seed, bool on_branch, int grid = 0, bool* at_rest = nullptr,
+                             const cloth::LevelRest* start = nullptr, std::vector<cloth::LevelRest>* levels = nullptr) const;
 
     const std::vector<MeasuredDrape>& m_recs;
     const FitOptions& m_opt;
@@ -188,6 +196,16 @@ private:
     std::vector<int> m_cold_seeds;     ///< per record: drapes behind m_cold (0 = none)
     std::vector<std::vector<double>> m_cold_nodes; ///< per record: each of those drapes' fold count
     std::vector<std::optional<FineDrape>> m_cold_fine; ///< per record: from flat on flat_check_grid
+    /// A drape from flat draw_from_flat drew (at params `p`), kept for the same point.
+    struct FlatMemo {
+        cloth::FabricParams p;
+        int r = 0;
+        std::uint64_t seed = 0;
+        int grid = 0; ///< 0: the fit's; or flat_check_grid
+        FineDrape drape;
+        std::vector<cloth::LevelRest> levels; ///< the continuation's levels it passed
+    };
+    std::vector<FlatMemo> m_flat_memo; ///< oldest point first
     Eigen::VectorXd m_last_x;
     Eigen::VectorXd m_best_x;
     std::vector<std::vector<cloth::Positions>> m_states;

@@ -663,14 +663,12 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             c.fold_direction = why_not.empty() ? sign : 0;
             Eigen::VectorXd cand;
             double cand_e = 0, cand_score = best_score, cand_sigmas = 0;
-            bool last_is_cand = false;
             double t_prev = 0;
-            // The step whose drapes are the candidate (the evaluator's drapes are its).
+            // The step whose drapes are the candidate.
             auto take = [&](const Eigen::VectorXd& xs, double e, double folds) {
                 cand = xs;
                 cand_e = e;
                 cand_score = score(e, folds);
-                last_is_cand = true;
             };
             double reached = 0;          // the farthest step drawn [sigmas of the profile]
             int reach_limit = -1;        // ... and the coordinate whose cap shortened it (-1: none)
@@ -692,7 +690,6 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
                 ev.report("from flat, fold count");
                 ++c.steps;
-                last_is_cand = false;
                 double e = 0, folds = 0;
                 if (measure(e, folds, nullptr) != n_used) break;
                 c.history.push_back({bend_scale(xs), e, folds, "fold count", sigmas, lin_cost(xs - x), false});
@@ -738,7 +735,6 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                     ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
                     ev.report("from flat, calibrated");
                     ++c.steps;
-                    last_is_cand = false; // the evaluator's drapes are this step's now
                     double e = 0, folds = 0;
                     if (measure(e, folds, nullptr) == n_used) {
                         c.history.push_back({bend_scale(xs), e, folds, "D", 0, lin_cost(xs - x), false});
@@ -746,10 +742,10 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                     }
                 }
             }
-            // The finer grid's drape for the preset that is kept (with the fit grid's
-            // drapes again when a later step drew other ones).
+            // The finer grid's drape for the preset that is kept (the fit grid's drapes
+            // of the candidate are the evaluator's kept ones, its coarse level theirs).
             ev.announce("from flat, calibrated");
-            ev.draw_from_flat(cand, last_is_cand ? Evaluator::FlatDraw::FinerGrid : Evaluator::FlatDraw::All);
+            ev.draw_from_flat(cand);
             ev.report("from flat, calibrated");
             double e = 0, folds = 0;
             bool fine_rested = true;

@@ -320,6 +320,48 @@ private slots:
         QVERIFY_THROWS_EXCEPTION(drape::ParameterError, bad.validate());
     }
 
+    void continuation_from_a_kept_level_is_the_same_drape()
+    {
+        // simulate_drape's `levels` keeps the continuation's level rests a drape
+        // passed, and a finer drape of the same fabric and set-up that starts from
+        // its coarse level's (`start`) skips that solve and ends where the full
+        // continuation ends, bit for bit: a fit's drape from flat at the finer
+        // check grid reuses its seed's fit-grid drape (Evaluator::draw_from_flat).
+        FabricParams p;
+        p[Param::Shear] = 100;
+        DrapeSetup coarse = small(kCoarsestLevel, 2);
+        coarse.laying_load = 0.4; // the checkpoint is the whole load's, the laying's work counted
+        coarse.perturbation = 6e-3;
+        std::vector<LevelRest> levels;
+        const DrapeResult c = simulate_drape(p, coarse, {}, {}, nullptr, &levels);
+        QVERIFY2(c.status.converged(), c.status.message.c_str());
+        QVERIFY(c.x == simulate_drape(p, coarse).x); // keeping the level changes nothing
+        QCOMPARE(levels.size(), std::size_t{1});
+        const LevelRest& kept = levels.front();
+        QCOMPARE(kept.grid, kCoarsestLevel);
+        QCOMPARE(kept.residual, kLevelResidual);
+        QVERIFY(kept.status.converged());
+        QVERIFY(kept.status.residual < kLevelResidual && kept.status.residual > c.status.residual);
+        QVERIFY(kept.status.newton_iterations > 0 && kept.status.newton_iterations < c.status.newton_iterations);
+        QCOMPARE(continuation_level(45), kCoarsestLevel);
+        QCOMPARE(continuation_level(kCoarsestLevel), 0);
+        QCOMPARE(continuation_level(81), kCoarsestLevel);
+        QCOMPARE(continuation_level(82), 81);
+        QCOMPARE(continuation_level(161), 81);
+
+        DrapeSetup fine = coarse;
+        fine.grid = 45;
+        std::vector<LevelRest> none;
+        const DrapeResult reused = simulate_drape(p, fine, {}, {}, &kept, &none);
+        QVERIFY(none.empty()); // the grid-41 level was not solved again (45 is not a level)
+        const DrapeResult full = simulate_drape(p, fine);
+        QVERIFY2(full.status.converged(), full.status.message.c_str());
+        QVERIFY(reused.x == full.x);
+        QCOMPARE(reused.metrics.drape_coefficient_percent, full.metrics.drape_coefficient_percent);
+        QCOMPARE(reused.status.newton_iterations, full.status.newton_iterations); // the path's work, the kept level's included
+        QCOMPARE(reused.potential_energy, full.potential_energy);
+    }
+
     void laying_under_part_of_the_load_first()
     {
         // DrapeSetup::laying_load: the sheet first rests under a fraction of

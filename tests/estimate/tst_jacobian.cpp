@@ -119,6 +119,51 @@ private slots:
         }
     }
 
+    void drapesFromFlatAreNotDrawnTwice()
+    {
+        // Evaluator::draw_from_flat keeps the drapes of its last points: the fit
+        // grid's drapes of a candidate screened before (FlatDraw::FitGrid) are not
+        // drawn again when its finer drape is asked for, nor after another point,
+        // and they are the drapes a fresh evaluator draws. (The finer drape's start
+        // on a kept continuation level: tst_drape.)
+        const cloth::FabricParams p = fabric(2e-5, 8e-6);
+        std::vector<MeasuredDrape> recs{test::synthetic_record(p, test::drape_setup(0.30, 0.15, 25, 7))};
+        FitOptions o = one_seed(25);
+        o.flat_check_grid = 33;
+        o.random_start_seeds = 2;
+        const auto vars = fit_variables(o.model);
+        Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
+        for (std::size_t i = 0; i < vars.size(); ++i) x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(p[vars[i].params.front()]);
+        Evaluator ev(recs, o, vars, p);
+        QVERIFY(ev.branch_of(0) != 0); // the fit grid's drapes from flat are drawn here, not by the spread
+        ev.draw_from_flat(x, Evaluator::FlatDraw::FitGrid);
+        QCOMPARE(ev.simulations(), 2L);
+        QVERIFY(!ev.cold_fine(0));
+        ev.draw_from_flat(x);
+        QCOMPARE(ev.simulations(), 3L); // the finer one only
+        Evaluator fresh(recs, o, vars, p);
+        fresh.draw_from_flat(x);
+        QCOMPARE(fresh.simulations(), 3L);
+        auto same = [&](const Evaluator& a) {
+            QVERIFY(a.cold_fine(0) && fresh.cold_fine(0));
+            QCOMPARE(a.cold_seeds(0), 2);
+            QCOMPARE(a.cold_features()[0].drape_coefficient_percent, fresh.cold_features()[0].drape_coefficient_percent);
+            QVERIFY(a.cold_node_counts(0) == fresh.cold_node_counts(0));
+            QCOMPARE(a.cold_fine(0)->features.drape_coefficient_percent, fresh.cold_fine(0)->features.drape_coefficient_percent);
+            QCOMPARE(a.cold_fine(0)->at_rest, fresh.cold_fine(0)->at_rest);
+        };
+        same(ev);
+        Eigen::VectorXd y = x;
+        y[0] += 0.1;
+        ev.draw_from_flat(y, Evaluator::FlatDraw::FitGrid);
+        QCOMPARE(ev.simulations(), 5L);
+        QVERIFY(!ev.cold_fine(0)); // another point's
+        QVERIFY(ev.cold_features()[0].drape_coefficient_percent != fresh.cold_features()[0].drape_coefficient_percent);
+        ev.draw_from_flat(x); // back: every drape kept
+        QCOMPARE(ev.simulations(), 5L);
+        same(ev);
+    }
+
     void aFeatureThatJumpsGetsNoSlope()
     {
         // The Jacobian's entries come from central differences over the step d and

@@ -1,5 +1,7 @@
 #pragma once
-// The sparse solver's BLAS (OpenBLAS when it is the one in use) and threads.
+// The sparse solver's BLAS (OpenBLAS when it is the one in use): its threads and
+// the kernels it rounds with.
+#include <string>
 
 namespace drape::cloth {
 
@@ -12,6 +14,35 @@ namespace drape::cloth {
 /// factorisation of a process calls it too, so the factorisation rounds the same
 /// way in each: a buckling drape (a skirt's settling fall) can take another fold
 /// branch when the rounding differs.
+///
+/// The first call also pins OpenBLAS's kernels to kPortableBlasKernel
+/// (portable_blas_kernel), so that every machine rounds alike.
 void single_threaded_blas();
+
+/// The OpenBLAS kernels every machine with AVX2 and FMA can run (x86-64 since
+/// 2013-2015), and the ones Debian's OpenBLAS picks itself on AVX2 machines
+/// (Haswell, and Zen, whose kernels are Haswell's).
+inline constexpr const char* kPortableBlasKernel = "Haswell";
+
+/// Makes Debian's OpenBLAS (built for every x86-64 core, choosing at load)
+/// use kPortableBlasKernel instead of the machine's own, once per process:
+/// the supernodal factorisation's blocks are summed in the kernels' order, and
+/// a drape from flat chooses its fold branch on that rounding. Measured: the
+/// same fits of the lab's DL-A02 and DL-A05 with the AVX-512 kernels
+/// (Cooperlake, SkylakeX) and the AVX2 ones (Haswell, Zen) on one machine - chi2
+/// 42.56 / 43.06 and 104.6 / 120.0, DL-A05's warp/weft bending 0.14 separated /
+/// 0.19 tied and its preset from flat 5 / 7 folds - while each pair agreed to
+/// the digit, and the AVX2 kernels' numbers were another machine's to the digit
+/// (docs/performance.md, twenty-seventh session). The speed is the same (a
+/// grid-101 drape 32.1 s against 31.0 s with the AVX-512 kernels).
+/// Left alone: a user's OPENBLAS_CORETYPE (OpenBLAS read it at load),
+/// DRAPE_NATIVE_BLAS=1, a machine without AVX2 and FMA (the kernels would not
+/// run), and a BLAS that is not a dynamic-architecture OpenBLAS. Called by
+/// single_threaded_blas. Returns blas_kernel().
+std::string portable_blas_kernel();
+
+/// The kernels in use: OpenBLAS's core name ("Haswell", "Cooperlake", ...),
+/// "not OpenBLAS" for another BLAS. Written into a fit's provenance.
+std::string blas_kernel();
 
 } // namespace drape::cloth

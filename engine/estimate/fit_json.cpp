@@ -1,4 +1,5 @@
 #include "engine/estimate/fit.hpp"
+#include "engine/cloth/blas_threads.hpp"
 #include "engine/core/clock.hpp"
 
 #include "engine/fabric/preset.hpp"
@@ -37,6 +38,7 @@ json fit_to_json(const FitResult& r)
     prov["mesh"] = cloth::to_string(r.options.mesh);
     prov["model"] = to_string(r.options.model);
     prov["seed"] = r.options.seed;
+    prov["blas_kernel"] = cloth::blas_kernel(); // the rounding of its drapes (cloth::portable_blas_kernel)
     prov["seeds_per_evaluation"] = r.options.seeds_per_evaluation;
     prov["global_stage_starts"] = r.options.warm_global ? "warm" : "cold";
     prov["local_stage_starts"] = r.options.warm_local ? "warm" : "cold";

@@ -7,6 +7,7 @@
 #include <QTest>
 
 #include <dlfcn.h>
+#include <strings.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -46,6 +47,21 @@ private slots:
         const DrapeResult later = simulate_drape(FabricParams(), small(41));
         QCOMPARE(first.status.newton_iterations, later.status.newton_iterations);
         QVERIFY(first.x == later.x);
+    }
+
+    void blas_kernels_are_the_portable_ones()
+    {
+        // After the first factorisation (above) OpenBLAS sums with the kernels every
+        // AVX2 machine has (portable_blas_kernel): a fit's fold branches, hence its
+        // numbers, are then the same on every such machine.
+        const std::string kernel = portable_blas_kernel();
+        qInfo("BLAS kernels: %s", kernel.c_str());
+        QCOMPARE(blas_kernel(), kernel);
+        if (kernel == "not OpenBLAS") QSKIP("another BLAS than OpenBLAS in this process");
+        if (std::getenv("OPENBLAS_CORETYPE") || std::getenv("DRAPE_NATIVE_BLAS")) QSKIP("the user chose the kernels");
+        if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma")) QSKIP("a machine without AVX2 and FMA keeps its own kernels");
+        QVERIFY2(strcasecmp(kernel.c_str(), kPortableBlasKernel) == 0, kernel.c_str());
+        QVERIFY(simulate_drape(FabricParams(), small(9)).status.converged()); // and they factorise
     }
 
     void a_worker_thread_factorises_without_openmp_regions()

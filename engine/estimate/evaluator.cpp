@@ -150,7 +150,14 @@ DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::ui
     return drape_features(sim, rec);
 }
 
-void Evaluator::draw_from_flat(const Eigen::VectorXd& x, FlatDraw which)
+void Evaluator::draw_from_flat(const Eigen::VectorXd& x, const std::string& stage, FlatDraw which)
+{
+    announce(stage);
+    draw_flat(x, which);
+    report(stage);
+}
+
+void Evaluator::draw_flat(const Eigen::VectorXd& x, FlatDraw which)
 {
     const bool fine_too = which != FlatDraw::FitGrid;
     const cloth::FabricParams p = params_at(x);

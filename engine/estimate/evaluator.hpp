@@ -88,8 +88,9 @@ public:
     /// not drawn again, and the finer grid's drape starts from the coarse level
     /// its seed's fit-grid drape passed (cloth::LevelRest): the same drapes,
     /// fewer simulations.
+    /// The drapes are announced and reported as `stage` (FitOptions::progress, the trace).
     enum class FlatDraw { All, FitGrid };
-    void draw_from_flat(const Eigen::VectorXd& x, FlatDraw which = FlatDraw::All);
+    void draw_from_flat(const Eigen::VectorXd& x, const std::string& stage, FlatDraw which = FlatDraw::All);
     /// Parameter points whose drapes from flat draw_from_flat keeps.
     static constexpr std::size_t kFlatMemoPoints = 6;
     /// Objective for the optimizers: evaluates, keeps the best point and its rest
@@ -175,6 +176,7 @@ public:
 
 private:
     void progress(const std::string& stage, bool starting);
+    void draw_flat(const Eigen::VectorXd& x, FlatDraw which); ///< draw_from_flat's drapes
     /// One cold drape of record r at p (seed, on the branch or not), measured.
     /// Touches no member (the spread's drapes run on several threads).
     /// grid > 0: on that grid instead of the fit's. at_rest: whether it came to rest.

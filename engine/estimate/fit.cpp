@@ -686,9 +686,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 const double sigmas = std::abs(t) / sigma_t; // k, or less where the box shortened it
                 reached = sigmas;
                 reach_limit = limit_var >= 0 && limit_by_cap ? limit_var : -1;
-                ev.announce("from flat, fold count");
-                ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
-                ev.report("from flat, fold count");
+                ev.draw_from_flat(xs, "from flat, fold count", Evaluator::FlatDraw::FitGrid);
                 ++c.steps;
                 double e = 0, folds = 0;
                 if (measure(e, folds, nullptr) != n_used) break;
@@ -731,9 +729,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             if (std::abs(cand_e) > c.tolerance && slope_ok) {
                 Eigen::VectorXd xs;
                 if (scaled(cand, std::clamp(-cand_e / slope, -max_step, max_step), xs)) {
-                    ev.announce("from flat, calibrated");
-                    ev.draw_from_flat(xs, Evaluator::FlatDraw::FitGrid);
-                    ev.report("from flat, calibrated");
+                    ev.draw_from_flat(xs, "from flat, calibrated", Evaluator::FlatDraw::FitGrid);
                     ++c.steps;
                     double e = 0, folds = 0;
                     if (measure(e, folds, nullptr) == n_used) {
@@ -744,9 +740,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
             }
             // The finer grid's drape for the preset that is kept (the fit grid's drapes
             // of the candidate are the evaluator's kept ones, its coarse level theirs).
-            ev.announce("from flat, calibrated");
-            ev.draw_from_flat(cand);
-            ev.report("from flat, calibrated");
+            ev.draw_from_flat(cand, "from flat, calibrated");
             double e = 0, folds = 0;
             bool fine_rested = true;
             for (std::size_t r = 0; r < R && finer; ++r)
@@ -796,9 +790,7 @@ void calibrate_from_flat(Evaluator& ev, const std::vector<FitVariable>& vars, co
                 Eigen::VectorXd xs;
                 if (!scaled(x, ln_s, xs)) break;
                 const double scale = bend_scale(xs);
-                ev.announce("from flat, calibrated");
-                ev.draw_from_flat(xs);
-                ev.report("from flat, calibrated");
+                ev.draw_from_flat(xs, "from flat, calibrated");
                 ++c.steps;
                 double e = 0, folds = 0;
                 if (measure(e, folds, nullptr) != n_used) break;
@@ -1350,9 +1342,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             state->options.progress = continued_progress(caller, prefix, before, false);
             try {
                 if (from_flat) {
-                    e.announce("from flat");
-                    e.draw_from_flat(x);
-                    e.report("from flat");
+                    e.draw_from_flat(x, "from flat");
                     for (std::size_t r = 0; r < kept.records.size(); ++r) set_from_flat(kept.records[r], e, r);
                 }
                 if (effects) test_effects(e, vars, x, best, J_opt, kept);

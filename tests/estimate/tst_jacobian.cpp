@@ -136,13 +136,13 @@ private slots:
         for (std::size_t i = 0; i < vars.size(); ++i) x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(p[vars[i].params.front()]);
         Evaluator ev(recs, o, vars, p);
         QVERIFY(ev.branch_of(0) != 0); // the fit grid's drapes from flat are drawn here, not by the spread
-        ev.draw_from_flat(x, Evaluator::FlatDraw::FitGrid);
+        ev.draw_from_flat(x, "test", Evaluator::FlatDraw::FitGrid);
         QCOMPARE(ev.simulations(), 2L);
         QVERIFY(!ev.cold_fine(0));
-        ev.draw_from_flat(x);
+        ev.draw_from_flat(x, "test");
         QCOMPARE(ev.simulations(), 3L); // the finer one only
         Evaluator fresh(recs, o, vars, p);
-        fresh.draw_from_flat(x);
+        fresh.draw_from_flat(x, "test");
         QCOMPARE(fresh.simulations(), 3L);
         auto same = [&](const Evaluator& a) {
             QVERIFY(a.cold_fine(0) && fresh.cold_fine(0));
@@ -155,11 +155,11 @@ private slots:
         same(ev);
         Eigen::VectorXd y = x;
         y[0] += 0.1;
-        ev.draw_from_flat(y, Evaluator::FlatDraw::FitGrid);
+        ev.draw_from_flat(y, "test", Evaluator::FlatDraw::FitGrid);
         QCOMPARE(ev.simulations(), 5L);
         QVERIFY(!ev.cold_fine(0)); // another point's
         QVERIFY(ev.cold_features()[0].drape_coefficient_percent != fresh.cold_features()[0].drape_coefficient_percent);
-        ev.draw_from_flat(x); // back: every drape kept
+        ev.draw_from_flat(x, "test"); // back: every drape kept
         QCOMPARE(ev.simulations(), 5L);
         same(ev);
     }

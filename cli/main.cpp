@@ -1,6 +1,7 @@
 // The headless `drape` command: dispatches to the registered sub-commands.
 #include "cli/command.hpp"
 
+#include "engine/cloth/blas_threads.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/text.hpp"
 
@@ -86,6 +87,7 @@ int main(int argc, char** argv)
     // raising of the threshold.)
     if (mallopt(M_MMAP_THRESHOLD, 256 << 20) == 1) mallopt(M_TRIM_THRESHOLD, 512 << 20);
 #endif
+    drape::cloth::portable_blas_kernel(); // before any thread (it sets the environment)
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || args[0] == "--help" || args[0] == "-h") {
         print_overview();

@@ -2,6 +2,7 @@
 // --script it runs one fitting without a user (e.g. under Xvfb), writes the
 // screenshot and a JSON summary, and exits (0 ok, 1 failed, 2 usage).
 #include "demo/main_window.hpp"
+#include "engine/cloth/blas_threads.hpp"
 
 #include <QApplication>
 #include <QCommandLineParser>
@@ -10,6 +11,7 @@
 
 int main(int argc, char** argv)
 {
+    drape::cloth::portable_blas_kernel(); // before Qt's threads (it sets the environment)
     QApplication app(argc, argv);
     QApplication::setApplicationName(QStringLiteral("drape-demo"));
     QApplication::setApplicationVersion(QStringLiteral("0.1"));

@@ -6,6 +6,7 @@
 #include "widget/drape_worker.hpp"
 #include "widget/picking.hpp"
 
+#include "engine/cloth/blas_threads.hpp"
 #include "engine/cloth/params.hpp"
 
 #include <QTimer>
@@ -22,6 +23,8 @@ constexpr double kOutlineHeight = 1e-3; // [m] outlines drawn just above the ped
 
 DrapeController::DrapeController(QObject* parent) : QObject(parent)
 {
+    cloth::portable_blas_kernel(); // on the GUI thread, before this controller's worker thread
+
     qRegisterMetaType<DrapeMeshPtr>();
     qRegisterMetaType<DrapeFramePtr>();
     qRegisterMetaType<DrapeResultsPtr>();

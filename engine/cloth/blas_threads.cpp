@@ -40,6 +40,11 @@ std::string portable_blas_kernel()
         quit();
         init();
         unsetenv("OPENBLAS_CORETYPE");
+        if (const char* now = corename(); !now || strcasecmp(now, kPortableBlasKernel) != 0) {
+            // A build without those kernels (another list of cores): the machine's own again.
+            quit();
+            init();
+        }
 #endif
     });
     return blas_kernel();

@@ -25,7 +25,9 @@ void single_threaded_blas();
 inline constexpr const char* kPortableBlasKernel = "Haswell";
 
 /// Makes Debian's OpenBLAS (built for every x86-64 core, choosing at load)
-/// use kPortableBlasKernel instead of the machine's own, once per process:
+/// use kPortableBlasKernel instead of the machine's own, once per process, so
+/// that the same build of the project and of Debian's OpenBLAS, CHOLMOD and
+/// METIS rounds alike on every AVX2 + FMA machine:
 /// the supernodal factorisation's blocks are summed in the kernels' order, and
 /// a drape from flat chooses its fold branch on that rounding. Measured: the
 /// same fits of the lab's DL-A02 and DL-A05 with the AVX-512 kernels
@@ -37,8 +39,13 @@ inline constexpr const char* kPortableBlasKernel = "Haswell";
 /// grid-101 drape 32.1 s against 31.0 s with the AVX-512 kernels).
 /// Left alone: a user's OPENBLAS_CORETYPE (OpenBLAS read it at load),
 /// DRAPE_NATIVE_BLAS=1, a machine without AVX2 and FMA (the kernels would not
-/// run), and a BLAS that is not a dynamic-architecture OpenBLAS. Called by
-/// single_threaded_blas. Returns blas_kernel().
+/// run), and a BLAS that is not a dynamic-architecture OpenBLAS or lacks those
+/// kernels. It sets and clears OPENBLAS_CORETYPE in the environment, which is
+/// not safe while other threads read it: the first call belongs at start-up,
+/// before threads - the commands' and the demo's main() make it, the widget's
+/// controller on the GUI thread; a host process that embeds the engine should
+/// call it first too (single_threaded_blas and the first factorisation call it
+/// as a fallback). Returns blas_kernel().
 std::string portable_blas_kernel();
 
 /// The kernels in use: OpenBLAS's core name ("Haswell", "Cooperlake", ...),

@@ -238,8 +238,8 @@ struct LevelRest {
 /// stays fast, and every finer grid shows the fold branch grid 41 takes from flat.
 /// Options as from_flat_options makes them (the late shift from the random mix).
 ///
-/// `levels`, when given, collects the level rests the drape passed: its coarser
-/// level's, and its own grid's when that is a level (the iterate where its
+/// `levels`, when given, collects the level rests the drape solved: its coarser
+/// level's (not when it started from `start`), and its own grid's when that is a level (the iterate where its
 /// residual first fell below the level's residual - the iterate the level's solve
 /// would stop at; the path is unchanged). `start`, when given, is the rest of
 /// this drape's coarser level from an earlier drape of the same fabric, set-up

@@ -61,6 +61,18 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
     // so the line search sees one energy.
     StaticFriction friction;
     StaticFriction* const outer_friction = s.static_friction;
+    // The system's pointers to this solve's locals are put back however it ends
+    // (a callback - progress, checkpoint - may throw).
+    struct Restore {
+        ClothSystem& s;
+        SolveProfile* profile;
+        StaticFriction* friction;
+        ~Restore()
+        {
+            s.profile = profile;
+            s.static_friction = friction;
+        }
+    } restore{s, outer_profile, outer_friction};
     const bool frictional = s.model().friction > 0 && !s.colliders().empty();
     if (frictional) s.static_friction = &friction;
     // A start where two parts of the cloth touch (or one passes through the

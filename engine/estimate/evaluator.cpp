@@ -244,8 +244,18 @@ void Evaluator::draw_flat(const Eigen::VectorXd& x, FlatDraw which)
         for (const auto& c : cold) m_cold_nodes[static_cast<std::size_t>(r)].push_back(c.node_count);
     }
     // Keep this point's new drapes (the kept ones stay), dropping the oldest
-    // points' beyond kFlatMemoPoints.
-    for (std::size_t j : todo) m_flat_memo.push_back(std::move(drawn[j]));
+    // points' beyond kFlatMemoPoints; of their level rests only the one a finer
+    // drape starts from (its seed's, on the finer grid's coarse level).
+    const bool finer_drapes = m_opt.flat_check_grid > m_opt.grid && m_opt.random_start_seeds > 0; // in this fit (not only this call)
+    const int fine_level = cloth::continuation_level(m_opt.flat_check_grid);
+    for (std::size_t j : todo) {
+        FlatMemo& m = drawn[j];
+        std::erase_if(m.levels, [&](const cloth::LevelRest& l) { return !finer_drapes || m.seed != m_opt.seed + 1000 || l.grid != fine_level; });
+        if (m.levels.size() > 1) m.levels.resize(1);
+        m_flat_memo.push_back(std::move(m));
+    }
+    for (const Job& job : jobs)
+        if (job.start && !job.kept) ++m_flat_levels_reused;
     std::vector<cloth::FabricParams> points;
     for (auto it = m_flat_memo.rbegin(); it != m_flat_memo.rend(); ++it)
         if (std::none_of(points.begin(), points.end(), [&](const cloth::FabricParams& q) { return q.values == it->p.values; })) points.push_back(it->p);

@@ -93,6 +93,8 @@ public:
     void draw_from_flat(const Eigen::VectorXd& x, const std::string& stage, FlatDraw which = FlatDraw::All);
     /// Parameter points whose drapes from flat draw_from_flat keeps.
     static constexpr std::size_t kFlatMemoPoints = 6;
+    /// Finer drapes from flat that started from a kept continuation level.
+    long flat_levels_reused() const { return m_flat_levels_reused; }
     /// Objective for the optimizers: evaluates, keeps the best point and its rest
     /// states. An evaluation with a drape not at rest never replaces a best point
     /// at rest, and returns no less than the best chi2 then (the optimizers do not
@@ -208,6 +210,7 @@ private:
         std::vector<cloth::LevelRest> levels; ///< the continuation's levels it passed
     };
     std::vector<FlatMemo> m_flat_memo; ///< oldest point first
+    long m_flat_levels_reused = 0;
     Eigen::VectorXd m_last_x;
     Eigen::VectorXd m_best_x;
     std::vector<std::vector<cloth::Positions>> m_states;

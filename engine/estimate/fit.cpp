@@ -1140,6 +1140,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     cloth::single_threaded_blas();
     const auto t0 = Clock::now();
     FitResult out;
+    out.blas_kernel = cloth::blas_kernel();
     out.options = options;
     out.options.progress = nullptr;
     out.options.cancel = nullptr;

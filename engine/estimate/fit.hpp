@@ -314,6 +314,7 @@ struct FitTraceEntry {
 
 struct FitResult {
     std::string name;                           ///< the preset's name (empty: the first record's id)
+    std::string blas_kernel;                    ///< the BLAS kernels its drapes rounded with (cloth::blas_kernel)
     cloth::FabricParams params;                 ///< best fit (areal density/thickness of the first record)
     std::vector<FitVariable> variables;
     Eigen::VectorXd best_coords;                ///< search coordinates of the optimum

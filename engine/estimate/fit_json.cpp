@@ -38,7 +38,7 @@ json fit_to_json(const FitResult& r)
     prov["mesh"] = cloth::to_string(r.options.mesh);
     prov["model"] = to_string(r.options.model);
     prov["seed"] = r.options.seed;
-    prov["blas_kernel"] = cloth::blas_kernel(); // the rounding of its drapes (cloth::portable_blas_kernel)
+    if (!r.blas_kernel.empty()) prov["blas_kernel"] = r.blas_kernel; // the rounding of its drapes (cloth::portable_blas_kernel)
     prov["seeds_per_evaluation"] = r.options.seeds_per_evaluation;
     prov["global_stage_starts"] = r.options.warm_global ? "warm" : "cold";
     prov["local_stage_starts"] = r.options.warm_local ? "warm" : "cold";

@@ -164,6 +164,30 @@ private slots:
         same(ev);
     }
 
+    void aFinerDrapeFromFlatStartsOnItsSeedsLevel()
+    {
+        // At a fit grid that is a level of the continuation (41) the finer grid's
+        // drape from flat (45: its coarse level is 41) starts from the level its
+        // seed's fit-grid drape passed, kept from the screening draw. (That such a
+        // start gives the full continuation's drape to the bit: tst_drape
+        // continuation_from_a_kept_level_is_the_same_drape.)
+        const cloth::FabricParams p = fabric(2e-5, 8e-6);
+        std::vector<MeasuredDrape> recs{test::synthetic_record(p, test::drape_setup(0.30, 0.15, 25, 7))};
+        FitOptions o = one_seed(cloth::kCoarsestLevel);
+        o.flat_check_grid = 45;
+        o.random_start_seeds = 1;
+        const auto vars = fit_variables(o.model);
+        Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
+        for (std::size_t i = 0; i < vars.size(); ++i) x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(p[vars[i].params.front()]);
+        Evaluator ev(recs, o, vars, p);
+        ev.draw_from_flat(x, "test", Evaluator::FlatDraw::FitGrid);
+        ev.draw_from_flat(x, "test");
+        QCOMPARE(ev.simulations(), 2L);
+        QCOMPARE(ev.flat_levels_reused(), 1L);
+        QVERIFY(ev.cold_fine(0) && ev.cold_fine(0)->at_rest);
+        QCOMPARE(ev.cold_seeds(0), 1);
+    }
+
     void aFeatureThatJumpsGetsNoSlope()
     {
         // The Jacobian's entries come from central differences over the step d and

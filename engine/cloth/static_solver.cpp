@@ -62,7 +62,7 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
     StaticFriction friction;
     StaticFriction* const outer_friction = s.static_friction;
     // The system's pointers to this solve's locals are put back however it ends
-    // (a callback - progress, checkpoint - may throw).
+    // (a return, or a callback - progress, checkpoint - that throws).
     struct Restore {
         ClothSystem& s;
         SolveProfile* profile;
@@ -88,8 +88,6 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
                 st.message = "the cloth touches or passes through itself at the start (vertices " + std::to_string(p.v[0]) + ", " +
                              std::to_string(p.v[1]) + ", " + std::to_string(p.v[2]) + ", " + std::to_string(p.v[3]) +
                              "); give it a start without self-intersections, or turn self-collision off";
-                s.profile = outer_profile;
-                s.static_friction = outer_friction;
                 return st;
             }
         }
@@ -260,7 +258,6 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
         else if (alpha < 0.25 * alpha_full) h = std::max(h * 0.5, h_min);
     }
     st.max_speed = 0;
-    s.static_friction = outer_friction;
     keep_analysed(std::move(llt_p), H.matrix());
     st.force_evaluations = s.force_evaluations - f0;
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -268,7 +265,6 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
         prof.total = st.wall_seconds;
         prof.print(stderr, "static solver profile (" + std::to_string(n) + " vertices, " + to_string(st.outcome) + ")", st.steps);
     }
-    s.profile = outer_profile;
     return st;
 }
 

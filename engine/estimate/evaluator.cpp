@@ -190,13 +190,14 @@ void Evaluator::draw_flat(const Eigen::VectorXd& x, FlatDraw which)
     // The finer grid's drapes first: each is the longest job (it lays the sheet
     // on the continuation's coarsest level, then refines), so the two threads
     // finish together.
-    const bool fine = fine_too && m_opt.flat_check_grid > m_opt.grid && m_opt.random_start_seeds > 0;
+    const bool finer_drapes = m_opt.flat_check_grid > m_opt.grid && m_opt.random_start_seeds > 0; // in this fit (not only this call)
+    const bool fine = fine_too && finer_drapes;
+    const int fine_level = cloth::continuation_level(m_opt.flat_check_grid); // 0: the finer drape has none
     // Every record's (a record fitted from the random mix has its cold_* from
     // the spread's draws, but no drape on the finer grid).
     for (int r = 0; r < R && fine; ++r) {
         const std::uint64_t seed = m_opt.seed + 1000;
-        const int level = cloth::continuation_level(m_opt.flat_check_grid);
-        jobs.push_back({r, seed, m_opt.flat_check_grid, kept_drape(r, seed, m_opt.flat_check_grid), level > 0 ? kept_level(r, seed, level) : nullptr});
+        jobs.push_back({r, seed, m_opt.flat_check_grid, kept_drape(r, seed, m_opt.flat_check_grid), fine_level > 0 ? kept_level(r, seed, fine_level) : nullptr});
     }
     for (int r = 0; r < R; ++r)
         if (branch_of(r) != 0)
@@ -246,12 +247,9 @@ void Evaluator::draw_flat(const Eigen::VectorXd& x, FlatDraw which)
     // Keep this point's new drapes (the kept ones stay), dropping the oldest
     // points' beyond kFlatMemoPoints; of their level rests only the one a finer
     // drape starts from (its seed's, on the finer grid's coarse level).
-    const bool finer_drapes = m_opt.flat_check_grid > m_opt.grid && m_opt.random_start_seeds > 0; // in this fit (not only this call)
-    const int fine_level = cloth::continuation_level(m_opt.flat_check_grid);
     for (std::size_t j : todo) {
         FlatMemo& m = drawn[j];
         std::erase_if(m.levels, [&](const cloth::LevelRest& l) { return !finer_drapes || m.seed != m_opt.seed + 1000 || l.grid != fine_level; });
-        if (m.levels.size() > 1) m.levels.resize(1);
         m_flat_memo.push_back(std::move(m));
     }
     for (const Job& job : jobs)

@@ -53,6 +53,14 @@ cloth::FabricParams fabric(double warp, double weft)
     return p;
 }
 
+/// The search coordinates of `p` (each variable at its first parameter's value).
+Eigen::VectorXd coords_of(const std::vector<FitVariable>& vars, const cloth::FabricParams& p)
+{
+    Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
+    for (std::size_t i = 0; i < vars.size(); ++i) x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(p[vars[i].params.front()]);
+    return x;
+}
+
 /// Fit options of one seed on one thread at `grid` (reproducible, one drape per evaluation).
 FitOptions one_seed(int grid)
 {
@@ -97,8 +105,7 @@ private slots:
         base[Param::BendWeft] = 1.0e-5;
         base[Param::Shear] = 30;
         Evaluator ev(recs, o, vars, base); // holds references to recs and o
-        Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
-        for (std::size_t i = 0; i < vars.size(); ++i) x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(base[vars[i].params.front()]);
+        const Eigen::VectorXd x = coords_of(vars, base);
         ev.objective(x, Start::Cold, "test");
         QVERIFY(ev.best().sims.front().front().status.converged());
         const Eigen::MatrixXd J = ev.jacobian(x, ev.best());
@@ -132,8 +139,7 @@ private slots:
         o.flat_check_grid = 33;
         o.random_start_seeds = 2;
         const auto vars = fit_variables(o.model);
-        Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
-        for (std::size_t i = 0; i < vars.size(); ++i) x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(p[vars[i].params.front()]);
+        const Eigen::VectorXd x = coords_of(vars, p);
         Evaluator ev(recs, o, vars, p);
         QVERIFY(ev.branch_of(0) != 0); // the fit grid's drapes from flat are drawn here, not by the spread
         ev.draw_from_flat(x, "test", Evaluator::FlatDraw::FitGrid);
@@ -177,8 +183,7 @@ private slots:
         o.flat_check_grid = 45;
         o.random_start_seeds = 1;
         const auto vars = fit_variables(o.model);
-        Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
-        for (std::size_t i = 0; i < vars.size(); ++i) x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(p[vars[i].params.front()]);
+        const Eigen::VectorXd x = coords_of(vars, p);
         Evaluator ev(recs, o, vars, p);
         ev.draw_from_flat(x, "test", Evaluator::FlatDraw::FitGrid);
         ev.draw_from_flat(x, "test");
@@ -328,8 +333,7 @@ private slots:
         const std::vector<MeasuredDrape> recs{test::synthetic_record(truth, test::drape_setup(0.30, 0.15, grid, 3))};
         FitOptions o = one_seed(grid);
         const auto vars = fit_variables(o.model);
-        Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
-        for (std::size_t i = 0; i < vars.size(); ++i) x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(truth[vars[i].params.front()]);
+        const Eigen::VectorXd x = coords_of(vars, truth);
         auto sigmas = [&](int warm_max_newton) {
             FitOptions oi = o;
             oi.warm_max_newton = warm_max_newton;

@@ -1,5 +1,5 @@
 // drape fit-summary: tables and plots across fit reports (several records,
-// several models), e.g. the before/after of docs/model-discrepancy.md.
+// several models), e.g. the before/after of a model change (docs/model-discrepancy.md).
 #include "cli/command.hpp"
 
 #include "engine/core/error.hpp"
@@ -46,7 +46,7 @@ this version's rules, so reports written by older versions compare like with lik
 struct Entry {
     std::string label, dir, id;
     double d_meas = NAN, d_fit = NAN, n_meas = NAN, n_fit = NAN;
-    double d_cold = NAN, n_cold = NAN; ///< the preset draped from flat (reports since the third session of 2026-11-22)
+    double d_cold = NAN, n_cold = NAN; ///< the preset draped from flat (reports since 2026-11-22)
     double d_fine = NAN, n_fine = NAN; ///< the same on the finer grid (`--flat-grid`, reports since 2026-12-01)
     int fine_grid = 0;
     bool fine_at_rest = true;          ///< cold_fine_converged: a drape the budget stopped is shown, not counted
@@ -111,7 +111,7 @@ Entry read_report(const std::string& label, const std::string& dir)
     for (const auto& p : j["fit"].value("parameters", nlohmann::json::array()))
         if (p.value("role", "") == "fitted") ++fitted;
     // The measurement model's axis parameters (re-centred or untilted stacks)
-    // count too: the fit's own dof says how many (reports since the seventh session).
+    // count too: the fit's own dof says how many (reports since 2026-11-30).
     if (const auto& fj = j["fit"]; fj.contains("dof") && fj["dof"].is_number_integer() && fj.contains("chi2")) {
         int terms_fitted = 0;
         for (const auto& t : j["residual_terms"]) terms_fitted += t.value("fitted", true) ? 1 : 0;

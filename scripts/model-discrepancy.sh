@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Reproduces every number of docs/model-discrepancy.md (issue 7).
+# Reproduces the edge-contact before/after of docs/decisions/0001-edge-contact.md
+# (issue 7; the fits of 2026-11-22 at grid 25).
 #
 #   bash scripts/model-discrepancy.sh [OUT_DIR] [PART ...]
 #
@@ -22,7 +23,7 @@ ids=(DL-A01 DL-A02 DL-A03 DL-A04 DL-A05 DL-A06 DL-A07 DL-A08 DL-A09 DL-A10)
 want() { local p; for p in "${parts[@]}"; do [ "$p" = "$1" ] && return 0; done; return 1; }
 
 # The fits of this script were made with the plain bending stencils (the
-# default before 2026-11-30, docs/model-discrepancy.md section 19): --plain-bending.
+# default before 2026-11-30, docs/decisions/0011-bending-correction.md): --plain-bending.
 if want fits; then
   # Before: the seed's vertex-only contact. After: contact on mesh edges too.
   for id in "${ids[@]}"; do

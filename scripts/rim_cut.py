@@ -6,7 +6,7 @@
 REST.obj is written by `drape simulate --out DIR` (metres, pedestal top at z = 0,
 axis at x = y = 0). Each mesh edge is sampled at 101 points; a point inside the
 pedestal (radius < R2 and z < 0) cuts it by min(R2 - r, -z). Prints the number
-of cutting edges and the deepest cut in mm (docs/model-discrepancy.md).
+of cutting edges and the deepest cut in mm (docs/decisions/0001-edge-contact.md).
 """
 import math
 import sys

@@ -35,7 +35,7 @@ inline constexpr const char* kPortableBlasKernel = "Haswell";
 /// 42.56 / 43.06 and 104.6 / 120.0, DL-A05's warp/weft bending 0.14 separated /
 /// 0.19 tied and its preset from flat 5 / 7 folds - while each pair agreed to
 /// the digit, and the AVX2 kernels' numbers were another machine's to the digit
-/// (docs/performance.md, twenty-seventh session). The speed is the same (a
+/// (docs/decisions/0027-portable-blas-kernels.md). The speed is the same (a
 /// grid-101 drape 32.1 s against 31.0 s with the AVX-512 kernels).
 /// Left alone: a user's OPENBLAS_CORETYPE (OpenBLAS read it at load),
 /// DRAPE_NATIVE_BLAS=1, a machine without AVX2 and FMA (the kernels would not

@@ -300,7 +300,7 @@ RestOptions from_flat_options(RestOptions ropt, const DrapeSetup& setup)
     // instead of creeping off it. A prescribed fold branch (the fits' drapes on the
     // record's branch) keeps the solver's path: shifting there too moved six of the
     // ten set-a fits' optima (chi2 -2.3 .. +14) for no clear gain
-    // (docs/performance.md, twenty-second session).
+    // (docs/decisions/0023-late-shift-from-flat.md).
     if (ropt.late_shift_residual == 0 && setup.fold_mode == 0) ropt.late_shift_residual = kLateShiftResidual;
     return ropt;
 }
@@ -376,14 +376,14 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         // rest at grid 25 and 41 in an uneven 6-fold state (D 72.7 % at 41) that
         // relaxed to an even one at 61 (74.1 %), while the drape from flat at 41
         // made 5 folds (70.1 %) of lower energy at 41 and at 61
-        // (docs/model-discrepancy.md section 19).
+        // (docs/decisions/0012-coarsest-level-41.md).
         //
         // The same levels on a prescribed fold branch (fold_mode n, what the fits
         // drape on). Grid 25 kept a 5-fold lift of the DL-A09 fit's preset that
         // grid 41 from flat loses (7 folds), but the set-a fits with grid 25 as
         // the coarsest level on the branch starts (and 41 from random starts)
         // were slower per drape (3.4 s against 1.8-2.3 s) and as good or worse
-        // on every count (section 19).
+        // on every count (the same record).
         DrapeSetup coarse = setup;
         coarse.grid = continuation_level(setup.grid);
         const ClothMesh cm = make_drape_mesh(coarse);
@@ -419,7 +419,7 @@ DrapeResult simulate_drape(const Material& fabric, const DrapeSetup& setup, cons
         // polishes it: where the exact Hessian is indefinite there (the rim,
         // compressed fold flanks), a shifted exact Hessian goes on at Newton's
         // pace, where the projected one crept for 1,000-2,000 iterations at grid 81
-        // (docs/performance.md, twentieth session).
+        // (docs/decisions/0022-fine-level-shift.md).
         // (A coarse level that diverged or was cancelled leaves the flat start:
         // then the usual order, as from flat.)
         RestOptions fine = last;

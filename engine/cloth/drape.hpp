@@ -25,7 +25,7 @@ enum class DrapeMesh {
     /// The bend over the rim is about sqrt(B / T) wide (T the tension the
     /// overhang hangs on the rim with): 3.5-14 mm for the starters, below the
     /// nominal spacing of grid 41 (7.5 mm) for limp fabrics, where the grid's D
-    /// moves with the grid (docs/model-discrepancy.md sections 24-25).
+    /// moves with the grid (docs/decisions/0019-drapemeter-mesh.md).
     Rings,
 };
 const char* to_string(DrapeMesh m);
@@ -63,7 +63,7 @@ struct DrapeSetup {
     /// +x (warp) towards +y; NaN: the seeded phase. The folds rest near the angle
     /// they start at, and on an anisotropic fabric that angle moves the rest
     /// state's cos 2theta contour term by millimetres and D by about a point
-    /// (docs/model-discrepancy.md section 35). `drape fit` keeps the seeded
+    /// (docs/model-discrepancy.md, "What the residual still shows"). `drape fit` keeps the seeded
     /// phase: its seeds' spread then carries that angle's effect into the noise.
     double fold_angle = std::numeric_limits<double>::quiet_NaN();
     /// How the specimen is laid (the lab's hand, not the fabric): the static
@@ -72,7 +72,7 @@ struct DrapeSetup {
     /// default, and what every drape before 2026-11-30 did). A lighter first
     /// load lets the overhang buckle into fewer, wider folds, as a specimen laid
     /// with its rim partly held does; kLabLaying (0.4) is the drape lab's, which
-    /// `drape fit` writes into its presets (docs/estimate.md, tenth session). Only the static path,
+    /// `drape fit` writes into its presets (docs/decisions/0013-laying-0-4.md). Only the static path,
     /// and with the continuation only its coarsest level (the finer ones start
     /// from that rest state). In (0, 1].
     double laying_load = 1.0;
@@ -80,11 +80,12 @@ struct DrapeSetup {
     /// Full grip on the disc (the limit of large static friction): every vertex
     /// laid on the disc top is tethered horizontally where it was laid. Off by
     /// default: only the centre is held (the seed's disc is frictionless; see
-    /// HorizontalAnchor). A hypothesis tested in docs/model-discrepancy.md.
+    /// HorizontalAnchor); docs/decisions/0008-disc-friction-not-fitted.md.
     bool disc_grip = false;
     /// The specimen laid off centre [m] (x, y): its centre (and the grip of the
-    /// disc, when on) this far from the pedestal axis. A lab error tested in
-    /// docs/model-discrepancy.md; 0 by default.
+    /// disc, when on) this far from the pedestal axis: a lab error, 0 by default. Not
+    /// an effect the fit tests: on the frictionless disc it turns the fold pattern by a
+    /// step-dependent angle, so it has no usable first-order signature.
     Eigen::Vector2d specimen_offset = Eigen::Vector2d::Zero();
     /// A specimen whose areal density varies across it (x, y): the relative
     /// change per specimen radius, rho(X) = rho (1 + g . X / R1) on the flat
@@ -98,7 +99,7 @@ struct DrapeSetup {
 /// solver's path from flat loses a 1-3 mm lift on some seeds (the count then
 /// comes out as from the random mix); 8 mm and more leave the linear range
 /// (folds split or merge); 5 mm kept the branch on set-a presets
-/// (docs/estimate.md, "Fold branch").
+/// (docs/decisions/0002-fold-branch-measured.md).
 inline constexpr double kFoldBranchLift = 5e-3;
 
 /// `s` set to start on the n-fold branch: fold_mode = n, perturbation = `lift_m`,
@@ -119,7 +120,7 @@ inline constexpr int kMinRingsGrid = 17;
 /// fabric, so a fit's objective does not jump with the mesh): 10 mm inside the
 /// disc's edge to 15 mm outside it at 0.4 of the nominal spacing, tapering over
 /// 15 mm (the bend over the rim and the folds' roots; chosen on the drapemeter's
-/// geometry in docs/model-discrepancy.md section 24, not fitted).
+/// geometry, not fitted: docs/decisions/0019-drapemeter-mesh.md).
 RingGrading drapemeter_rim_grading(const DrapeSetup& setup);
 
 /// The specimen's flat mesh for `setup` (setup.mesh at setup.grid), centre at the origin.
@@ -155,7 +156,7 @@ DrapeResult measure_drape(const ClothSystem& s, const DrapeSetup& setup, const M
 
 /// The coarsest level of simulate_drape's continuation (7.5 mm cells on 300 mm):
 /// the grid where a drape from flat chooses its fold branch for every finer grid
-/// (docs/model-discrepancy.md section 19).
+/// (docs/decisions/0012-coarsest-level-41.md).
 inline constexpr int kCoarsestLevel = 41;
 
 /// RestOptions::shift_before_projection of the continuation's finer levels [s]:
@@ -167,13 +168,13 @@ inline constexpr double kFineShiftPseudoTime = 0.01;
 /// of the records' lab by default (--laying) for its drapes from flat, and
 /// writes into the fitted preset (fabric::Provenance::laying_load), so that
 /// `drape simulate`, `predict` and the widget lay that preset as its lab did.
-/// Chosen on the lab's set-a records (the ninth session's fitted presets from
+/// Chosen on the lab's set-a records (their fitted presets of 2026-11-30 from
 /// flat at grids 41, 61, 81; candidates 0.2, 0.3, 0.4, 0.5 and 1) by the loss
 /// |D - lab D| / 2 points + |folds - lab folds| (the tolerances),
 /// leave-one-out: each of the ten held-out records got 0.4 from the other
 /// nine, and held out its from-flat |D error| went 3.41 -> 2.18 points, the
-/// |fold error| 1.20 -> 0.70 against the whole load at once (docs/estimate.md,
-/// tenth session). A lab's value, not a fabric's: presets without it (the
+/// |fold error| 1.20 -> 0.70 against the whole load at once
+/// (docs/decisions/0013-laying-0-4.md). A lab's value, not a fabric's: presets without it (the
 /// starters) are laid at once.
 inline constexpr double kLabLaying = 0.4;
 
@@ -181,13 +182,13 @@ inline constexpr double kLabLaying = 0.4;
 /// lie when laid, what `drape fit` assumes by default (--perturbation) for its
 /// drapes from flat and writes into the preset (fabric::Provenance::perturbation_m),
 /// as kLabLaying. Chosen on the lab's set-a records like the laying: each
-/// record fitted at 1, 3, 6 and 10 mm (nineteenth session), its preset draped
+/// record fitted at 1, 3, 6 and 10 mm (2026-12-01), its preset draped
 /// from flat with seeds 1-3 at grids 41 and 61 and seed 1 at 81, loss
 /// |D - lab D| / 2 points + |folds - lab folds| over those seven drapes; leave-
 /// one-out, nine held-out records got 6 mm from the other nine (one got 3), and
 /// held out the from-flat |D error| went 2.02 -> 1.63 points, the loss 2.03 ->
 /// 1.93, the drapes within 2 points and 1 fold 44 -> 57 %, while the |fold
-/// error| went 1.01 -> 1.11 against 1 mm (docs/model-discrepancy.md section 30).
+/// error| went 1.01 -> 1.11 against 1 mm (docs/decisions/0021-perturbation-6mm.md).
 /// A lab's value, not a fabric's: presets without it (the starters) keep
 /// kStartLift.
 inline constexpr double kLabWaviness = 0.006;

@@ -219,7 +219,8 @@ ClothMesh make_ring_disc(double diameter, int n, const RingGrading& grading, dou
     std::vector<std::vector<int>> ring{{0}};
     // Each ring turned by the golden angle against the one inside it: no ring's
     // vertices line up with another's, so the mesh has no preferred directions
-    // (a square lattice's 4-fold symmetry locks folds: docs/probes/lattice.cpp).
+    // (fold crests find no lattice directions to settle on, as on a square
+    // lattice; docs/decisions/0019-drapemeter-mesh.md).
     const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
     for (int k = 1; k <= K; ++k) {
         const double r = radii[static_cast<std::size_t>(k - 1)];

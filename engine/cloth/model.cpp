@@ -296,7 +296,8 @@ void add_twist_stencil(ClothModel& m, const ClothMesh& mesh, int a, int b, int c
 /// and whatever the triangles' shapes. (The hinge stencil used until 2026-11-30
 /// - the second difference across each edge, a third of the hinge's area -
 /// gave 0.45 B on a disc of concentric rings and 0.34..0.95 B by direction on
-/// a square lattice split into triangles: docs/probes/lattice.cpp iso.)
+/// a square lattice split into triangles, measured by rolling the disc
+/// isometrically onto a cylinder at each direction: docs/decisions/0014-triangle-model-plate-and-fibres.md.)
 void add_triangle_curvature_stencils(ClothModel& m, const ClothMesh& mesh, const std::map<std::pair<int, int>, std::vector<int>>& edge_tris,
                                      double Bu, double Bv, double cb)
 {
@@ -351,7 +352,7 @@ void add_triangle_curvature_stencils(ClothModel& m, const ClothMesh& mesh, const
         };
         // Conditioning: smallest over largest singular value of the design (u, v in
         // units of sqrt(A)): 0.036..0.25, median 0.15, over the 4,914 triangles of the
-        // split square lattice and the ring disc at grid 41 (docs/probes/lattice.cpp).
+        // split square lattice and the ring disc at grid 41 (measured 2026-11-30).
         auto conditioning = [](const Eigen::JacobiSVD<Eigen::MatrixXd>& s) {
             return s.singularValues().size() == 6 ? s.singularValues()(5) / s.singularValues()(0) : 0.0;
         };
@@ -548,7 +549,8 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
             }
         m.description = "grid mass-spring model (stretch, shear, quadratic bending) from continuum parameters";
         // Every family measures arcs: with the warp and weft springs alone the
-        // diagonals across a fold still read its crest as compression (section 24).
+        // diagonals across a fold still read its crest as compression
+        // (docs/decisions/0019-drapemeter-mesh.md).
         if (opt.arc_membrane) add_spring_arcs(m, mesh, {SpringKind::StretchU, SpringKind::StretchV, SpringKind::Shear});
         if (lb > 0) {
             // The compression limit (Spring::fc, Param::BucklingLength) of the strip each

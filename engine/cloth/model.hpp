@@ -119,8 +119,8 @@ struct BendStencil {
 /// them, shorter than the line by h^3 kappa^2 / 24 (h its length, kappa the line's
 /// curvature): a fold crest one cell in radius reads 4 % compression where the
 /// cloth has none, and past the compression limit's onset that costs work the
-/// continuum does not do, more on coarser meshes (the membrane locking of
-/// docs/model-discrepancy.md sections 15 and 24). With an arc the spring's length
+/// continuum does not do, more on coarser meshes (the membrane locking measured in
+/// docs/decisions/0019-drapemeter-mesh.md). With an arc the spring's length
 /// is the line's: |x_i - x_j| + c_0 |s_0|^2 + c_1 |s_1|^2, s_e = sum_a w_a x_a the
 /// second derivative of the positions along the spring's direction at its end e
 /// (the grid's central differences; least squares over the 3x3 block at the hem),
@@ -162,21 +162,23 @@ struct ModelOptions {
     /// Contact of mesh edges with curved colliders (pedestal rim, spheres), not only
     /// of vertices: without it a coarse element between a vertex on the disc and one
     /// hanging below it cuts the corner of the pedestal (3.9 mm deep at grid 25), and
-    /// the laser slices next to the disc come out too narrow. See docs/model-discrepancy.md.
+    /// the laser slices next to the disc come out too narrow (docs/decisions/0001-edge-contact.md).
     bool edge_contact = true;
     /// Self-contact (engine/cloth/self_contact.hpp): a barrier pushes apart every
     /// point and triangle and every two edges of the cloth that come closer than
     /// its thickness (kMinSelfContactDistance at the least; a layer resting on
     /// another sits about 0.8 of it above), and no step of the static solver or
     /// the implicit integrator lets them pass through each other. Off by default: a drapemeter's folds stay open, and
-    /// the proximity search costs time (docs/performance.md); the garment scenes
-    /// switch it on. Explicit integrators ignore it (a barrier needs the step filter).
+    /// the proximity search costs time; the garment scenes switch it on
+    /// (docs/decisions/0007-self-contact-garments-only.md). Explicit integrators ignore it (a barrier needs the step filter).
     bool self_collision = false;
     /// The grid's bending stencils carry their fourth-order correction
     /// (BendStencil::quartic): a fold crest one cell in radius stores the continuum's
-    /// bending energy to about 4 % (7 % at 45 degrees) instead of 15 % short. Measured in docs/model-discrepancy.md
-    /// section 18 (three of the four starters converge within 0.7 point over grids
-    /// 41-81 with it); off by default until a set-a refit shows its held-out error.
+    /// bending energy to about 4 % (7 % at 45 degrees) instead of 15 % short. Off in the
+    /// engine (the unit tests' synthetic records and the blind suite are made without
+    /// it); on in `drape fit`'s defaults and the starter presets, where with grid 41
+    /// as the coarsest level the starters converge within 1 point over grids 41-81 and
+    /// the fits' held-out error falls (docs/decisions/0011-bending-correction.md).
     /// A general triangle mesh's stencils need none (exact for quadratic surfaces; a grid garment, the tablecloth, has it).
     /// Presets carry it as model.bending_correction.
     bool bending_correction = false;

@@ -69,7 +69,7 @@ struct RestOptions {
     /// the drape leaves along its negative curvature, which the projected Hessian
     /// does not see: it crept off such a saddle for 600 iterations (a grid-41 drape
     /// of DL-A08's preset, 924 Newton iterations; 332 with the shift, the same rest
-    /// state - docs/performance.md, twenty-second session). 0: the solver does not
+    /// state; docs/decisions/0023-late-shift-from-flat.md). 0: the solver does not
     /// (warm re-solves, a prescribed fold branch, garments - as before 2026-12-02);
     /// from_flat_options (drape.hpp: simulate_drape, rest_from_flat) then sets
     /// kLateShiftResidual for a drape from the random mix (DrapeSetup::fold_mode 0).

@@ -568,7 +568,7 @@ private slots:
 
     /// `drape fit` fits with the crest-corrected bending stencils by default and
     /// the preset says so; --plain-bending fits and writes the plain ones
-    /// (docs/model-discrepancy.md section 19). A coarse, short fit: only the flag.
+    /// (docs/decisions/0011-bending-correction.md). A coarse, short fit: only the flag.
     void fitBendingStencilsDefault()
     {
         QTemporaryDir tmp;

@@ -55,9 +55,9 @@ private slots:
         QVERIFY2(std::isfinite(measured_D) && measured_nodes > 0, fit.out.constData());
         // Three seeds: from flat the fold count is a bifurcation each seed picks
         // (this preset lays 6, 7 or 8 folds, a fold more about 1.5 points more D),
-        // so one seed says little about the preset (docs/model-discrepancy.md
-        // section 36: the twenty-third session's preset passed at seed 1 with a
-        // spread of 0.82 and had 1.11 and 1.38 at seeds 2 and 3).
+        // so one seed says little about the preset (docs/results-log.md: the
+        // preset of 2026-12-02 before the hem fix passed at seed 1 with a spread of
+        // 0.82 and had 1.11 and 1.38 at seeds 2 and 3).
         double sum = 0, spread_max = 0;
         int drapes = 0;
         for (const char* seed : {"1", "2", "3"}) {
@@ -97,10 +97,10 @@ private slots:
         // every seed.
         // Not met for this limp preset: D falls by 1.1-1.4 points from grid 41 to 81
         // at every seed with the fold count unchanged - the rim bend under-resolved
-        // on the coarser grids (docs/model-discrepancy.md sections 24 and 36). An
+        // on the coarser grids (docs/decisions/0019-drapemeter-mesh.md). An
         // expected failure, so the day it holds the test says so (XPASS fails).
         qInfo("largest D spread over grids 41-81: %.2f points", spread_max);
-        QEXPECT_FAIL("", "issue 14's 1-point convergence over grids 41-81 is not met by the bundled preset (1.1-1.4 points per seed): docs/model-discrepancy.md section 36", Continue);
+        QEXPECT_FAIL("", "issue 14's 1-point convergence over grids 41-81 is not met by the bundled preset (1.1-1.4 points per seed): docs/decisions/0019-drapemeter-mesh.md", Continue);
         QVERIFY2(spread_max <= 1.0, qPrintable(QString("D spread up to %1 points over grids 41-81").arg(spread_max)));
     }
 };

@@ -184,8 +184,8 @@ private slots:
         // projected Hessian (RestOptions::shift_before_projection, which
         // simulate_drape sets there). It changes the path's cost, not the drape:
         // the same grid-41 rest interpolated onto grid 45 and polished both ways.
-        // A heavy anisotropic fabric laid as the lab lays it (DL-A07's fit of the
-        // nineteenth session), whose grid-45 level has exact Hessians that do not
+        // A heavy anisotropic fabric laid as the lab lays it (DL-A07's fit of
+        // 2026-12-01), whose grid-45 level has exact Hessians that do not
         // factorise; tst_starter_library (slow) measures the cotton starter at 81.
         FabricParams p;
         p[Param::AreaDensity] = 0.28;
@@ -232,7 +232,7 @@ private slots:
         // exact Hessian that does not factorise marks a saddle; a larger proximal
         // shift first lets the Newton step follow its negative curvature, where the
         // projected Hessian crept off it. The same rest state, fewer iterations.
-        // DL-A09's fit (twenty-first session) at grid 25, laid as its lab lays it
+        // DL-A09's fit (2026-12-02) at grid 25, laid as its lab lays it
         // (rest_from_flat: the path the widget's live drapes below grid 41 take).
         FabricParams p;
         p[Param::AreaDensity] = 0.38;
@@ -384,8 +384,8 @@ private slots:
         // gravity, then under all of it. The end state is a rest state of the
         // whole load (the residual is the full problem's), 1 is the load at once
         // bit for bit, and the lighter first load buckles the overhang into
-        // fewer folds (the mechanism docs/estimate.md's tenth session measures
-        // on set-a: 8 -> 6 folds for the cotton starter at grid 41).
+        // fewer folds (the mechanism docs/decisions/0013-laying-0-4.md measures
+        // on set-a; here 8 -> 6 folds for the cotton starter at grid 41).
         FabricParams p;
         p[Param::Shear] = 100;
         DrapeSetup s = small(25, 1);

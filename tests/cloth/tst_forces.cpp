@@ -237,7 +237,7 @@ private slots:
     /// short (analytic: 1 - 2 r sin(h / 2r) / h); the arc (SpringArc) removes that
     /// to O((h kappa)^4), at the hem too (its least-squares weights are exact for
     /// quadratics). The compression that chords read at fold crests is what made a
-    /// coarse grid drape stiffer (docs/model-discrepancy.md section 24).
+    /// coarse grid drape stiffer (docs/decisions/0019-drapemeter-mesh.md).
     void arc_springs_read_no_strain_on_an_isometric_bend()
     {
         const ClothMesh mesh = make_disc(0.3, 41, 0.0);

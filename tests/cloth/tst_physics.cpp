@@ -401,7 +401,7 @@ private slots:
     /// stores (Bu c^4 + 2 sqrt(Bu Bv) c^2 s^2 + Bv s^4) kappa^2 / 2 per unit area,
     /// the grid model's law. Until 2026-11-30 a hinge stencil gave 0.45 B on a
     /// disc of concentric rings and 0.34..0.95 B by direction on a square lattice
-    /// split into triangles (docs/probes/lattice.cpp iso).
+    /// split into triangles (docs/decisions/0014-triangle-model-plate-and-fibres.md).
     void triangle_mesh_bending_is_the_orthotropic_plate_data()
     {
         QTest::addColumn<int>("mesh");
@@ -717,7 +717,7 @@ private slots:
     /// Contact is checked on mesh edges, not only at vertices: a coarse sheet
     /// draped over the pedestal does not cut the corner of its rim (with vertex
     /// contact only, grid 17 cuts it by millimetres, which narrows the laser
-    /// slices next to the disc; docs/model-discrepancy.md).
+    /// slices next to the disc; docs/decisions/0001-edge-contact.md).
     void coarse_sheet_does_not_cut_the_pedestal_rim()
     {
         DrapeSetup setup;

@@ -27,8 +27,7 @@ struct Drape {
 Drape drape_skirt(const std::shared_ptr<const Mannequin>& m, const std::string& fabric)
 {
     // The skirt `drape garment` and the demo drape (96 segments): at 64 the
-    // denim skirt's static solve stalls at a relative residual of about 2
-    // (docs/performance.md, "Garments").
+    // denim skirt's static solve stalls at a relative residual of about 2.
     Scene scene = make_skirt_scene(m, *library::find_starter(fabric));
     Drape d;
     d.status = drape_to_rest(scene, garment_rest_options());

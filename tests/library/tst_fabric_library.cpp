@@ -310,7 +310,7 @@ private slots:
         QVERIFY_THROWS_EXCEPTION(ParameterError, b.import_all(json{{"format", "other"}}, "doc4"));
     }
 
-    /// A preset `drape fit` wrote before the typed format (the fourth session's
+    /// A preset `drape fit` wrote before the typed format (the 2026-11-22
     /// docs/fit-report preset, kept in tests/library/data; keys before the
     /// unit-suffix rule) loads, and enters the library with its fit
     /// quality (the reduced chi-square) - the library used to look for fields

@@ -116,8 +116,8 @@ private slots:
     /// proximal shift on the exact Hessian before the projected one
     /// (RestOptions::shift_before_projection): the cotton starter at grid 81 had
     /// cycled there between failed exact and projected steps (1,182 Newton
-    /// iterations in all, 668 with the shift; docs/performance.md, twentieth
-    /// session). The same drape both ways, in fewer iterations.
+    /// iterations in all, 668 with the shift; docs/decisions/0022-fine-level-shift.md).
+    /// The same drape both ways, in fewer iterations.
     void finerLevelShiftKeepsTheDrape()
     {
         const fabric::FabricPreset p = fabric::load_fabric(std::string(DRAPE_SOURCE_DIR) + "/data/library/cotton-plain-weave.json");

@@ -26,7 +26,7 @@ DRAPE_FUZZ_TARGET(contours)(const std::uint8_t* data, std::size_t size)
             if (d > 0) fuzz::require(st.depths[d] > st.depths[d - 1], "depths increase");
             const auto& r = st.profiles[d].r;
             fuzz::require(r.size() >= 8 && r.size() <= 36000, "rays per depth");
-            for (double x : r) fuzz::require(std::isnan(x) || (x >= 0.5 * R2 - 1e-12 && x <= 1.5 * R1 + 1e-12), "radius range");
+            for (double x : r) fuzz::require(std::isnan(x) || (x >= 0.5 * R2 - 1e-12 && x <= record::kMaxContourReach * R1 + 1e-12), "radius range");
         }
     } catch (const drape::Error&) {
     }

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -60,6 +61,9 @@ fs::path Record::file(const std::string& name) const
     if (p.is_absolute()) throw FileError(where + " is an absolute path; a record names files inside its own folder");
     for (const auto& part : p)
         if (part == "..") throw FileError(where + " climbs out of the record folder with '..'");
+    // ".", "./." or "./": the folder itself, whatever links there are.
+    if (const fs::path n = p.lexically_normal(); n.empty() || n == "." || n == "./")
+        throw FileError(where + " names the record folder itself, not a file in it");
     const fs::path full = dir / p;
     // A symbolic link may still lead out: compare the resolved locations.
     // Fails closed: a name that cannot be resolved (a symbolic-link loop, a
@@ -70,7 +74,9 @@ fs::path Record::file(const std::string& name) const
     const fs::path real_file = fs::weakly_canonical(full, ec);
     if (ec) throw FileError(where + " cannot be resolved (" + ec.message() + ")");
     const auto rel = real_file.lexically_relative(real_dir);
-    if (rel.empty() || *rel.begin() == ".." || rel == ".")
+    if (rel == "." || (!rel.empty() && rel.lexically_normal() == "."))
+        throw FileError(where + " leads (through a symbolic link) to the record folder itself, not a file in it");
+    if (rel.empty() || *rel.begin() == "..")
         throw FileError(where + " leads out of the record folder (through a symbolic link) to " + printable(real_file.string()));
     return full;
 }
@@ -567,9 +573,10 @@ ContourStack parse_contours(const std::string& text, const std::string& path, do
 
     // Bounds of a physical drape: below the pedestal top and above the floor;
     // outside half the disc radius (the cloth hangs outside the pedestal) and
-    // within 1.5 specimen radii of the axis (a specimen off centre by a third
-    // of its radius is still read; 1e308 is not).
-    const double depth_max_mm = 1e3 * pedestal_height, r_min_mm = 0.5e3 * R2, r_max_mm = 1.5e3 * R1;
+    // within kMaxContourReach specimen radii of the axis (a specimen off centre
+    // by a fifth of its radius is still read; 1e308 mm or a 40 % larger radius
+    // is not).
+    const double depth_max_mm = 1e3 * pedestal_height, r_min_mm = 0.5e3 * R2, r_max_mm = kMaxContourReach * 1e3 * R1;
     std::vector<Row> rows;
     int line_no = 1;
     while (std::getline(in, line)) {
@@ -594,9 +601,9 @@ ContourStack parse_contours(const std::string& text, const std::string& path, do
             throw FileError(where + "theta_deg = " + format_value(r.theta) + " is outside [0, 360) deg");
         const double rr = std::hypot(r.x, r.y);
         if (!(rr >= r_min_mm) || rr > r_max_mm)
-            throw FileError(where + "the point (" + format_value(r.x) + ", " + format_value(r.y) + ") mm lies " + format_value(rr) +
-                            " mm from the axis, outside [" + format_value(r_min_mm) + ", " + format_value(r_max_mm) +
-                            "] mm (half the disc radius .. 1.5 specimen radii)");
+            throw FileError(where + "x_mm, y_mm: the point (" + format_value(r.x) + ", " + format_value(r.y) + ") mm lies " +
+                            format_value(rr) + " mm from the axis, outside [" + format_value(r_min_mm) + ", " + format_value(r_max_mm) +
+                            "] mm (half the disc radius .. " + format_value(kMaxContourReach) + " specimen radii)");
         rows.push_back(r);
         if (rows.size() > kMaxProfileValues)
             throw FileError(path + ": more than " + std::to_string(kMaxProfileValues) + " rows (more rays than this reader allocates)");
@@ -652,6 +659,22 @@ ContourStack parse_contours(const std::string& text, const std::string& path, do
         st.points[s].emplace_back(r.x * 1e-3, r.y * 1e-3);
     }
     return st;
+}
+
+bool no_contour_rows(const fs::path& file)
+{
+    std::error_code ec;
+    const auto size = fs::file_size(file, ec);
+    if (ec || size > kMaxContoursBytes) return false;
+    std::ifstream in(file, std::ios::binary);
+    if (!in) return false;
+    std::string line;
+    int lines = 0;
+    while (std::getline(in, line)) {
+        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        if (++lines > 1 || line.find("depth_mm") == std::string::npos) return false;
+    }
+    return true;
 }
 
 ContourStack read_contours(const Record& rec)

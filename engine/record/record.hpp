@@ -188,6 +188,17 @@ ContourStack read_contours_file(const std::filesystem::path& file, double theta_
 /// The same from the file's text (tests and the fuzzer); `where` names it in messages.
 ContourStack parse_contours(const std::string& text, const std::string& where, double theta_step_deg, double R1, double R2,
                             double pedestal_height);
+/// The farthest a contour point may lie from the axis, as a multiple of the
+/// specimen's reach: a drape hangs inside its own radius (set-a and set-d: at
+/// most 0.99 of it), so 1.2 leaves room for a specimen laid a fifth of its
+/// radius off centre; a point beyond it is a wrong unit or a broken file.
+inline constexpr double kMaxContourReach = 1.2;
+/// True for a contours file without data: empty, blank, or its header line
+/// only (a lab without a laser profiler, or one that cut no depth: set-d's
+/// DL-D3-240-180). Such a record has no contours; it is not a bad file. A file
+/// that cannot be read, or is larger than read_contours takes, is false (the
+/// reader then says why).
+bool no_contour_rows(const std::filesystem::path& file);
 /// Largest contours.csv read [bytes].
 inline constexpr std::size_t kMaxContoursBytes = std::size_t(64) << 20;
 

@@ -121,7 +121,10 @@ private slots:
             const char* expect;
         };
         const std::vector<Case> cases = {
-            {"huge", {"5,0,1e308,0"}, "outside"},
+            {"huge", {"5,0,1e308,0"}, "x_mm, y_mm: the point (1e+308, 0) mm lies 1e+308 mm from the axis, outside [37.5, 180]"},
+            {"nan", {"5,0,nan,0"}, "column 'x_mm': 'nan' is not a number"},
+            {"inf", {"5,0,110,-inf"}, "column 'y_mm': '-inf' is not a number"},
+            {"far", {"5,0,0,181"}, "lies 181 mm from the axis"}, // 1.2 specimen radii is 180 mm
             {"zero", {"5,0,0,0"}, "outside"},
             {"depth", {"-5,0,110,0"}, "depth_mm"},
             {"theta", {"5,1e300,110,0"}, "theta_deg"},
@@ -134,6 +137,9 @@ private slots:
             const QString e = file_error([&] { record::read_contours(record::read_record(d)); });
             QVERIFY2(e.contains("contours.csv:") && e.contains(c.expect), qPrintable(QString(c.name) + ": " + e));
         }
+        // Within 1.2 specimen radii a point is read (a specimen laid off centre).
+        const fs::path near = make_record("reach", minimal_meta(), ring(5, 179));
+        QCOMPARE(record::read_contours(record::read_record(near)).profiles[0].size(), 36);
         // meta.json fields out of their physical range.
         struct MetaCase {
             const char* field;
@@ -212,9 +218,19 @@ private slots:
         meta["contours"]["file"] = "contours.csv\ncontours.csv";
         const fs::path d2 = make_record("ctrl", meta, ring(5, 110));
         QVERIFY(file_error([&] { record::read_contours(record::read_record(d2)); }).contains("control character"));
-        meta["contours"]["file"] = ".";
-        const fs::path d3 = make_record("dot", meta, ring(5, 110));
-        QVERIFY(!file_error([&] { record::read_contours(record::read_record(d3)); }).isEmpty());
+        // The folder itself is named as such, not as a symbolic link out (issue 55).
+        for (const std::string dot : {".", "./", "./.", "sub/.."}) {
+            meta["contours"]["file"] = dot;
+            const fs::path d3 = make_record("dot", meta, ring(5, 110));
+            const QString e = file_error([&] { record::read_contours(record::read_record(d3)); });
+            QVERIFY2(!e.contains("symbolic link") && (e.contains("names the record folder itself") || e.contains("'..'")),
+                     qPrintable(QString::fromStdString(dot) + ": " + e));
+        }
+        meta["contours"]["file"] = "here.csv";
+        const fs::path d4 = make_record("dotlink", meta, ring(5, 110));
+        fs::create_directory_symlink(".", d4 / "here.csv");
+        const QString e4 = file_error([&] { record::read_contours(record::read_record(d4)); });
+        QVERIFY2(e4.contains("through a symbolic link") && e4.contains("the record folder itself"), qPrintable(e4));
     }
 
     void missing_pieces_are_named()

@@ -9,6 +9,7 @@
 #include "engine/capture/report.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -173,15 +174,23 @@ void print_text(const capture::Measurement& m)
         for (int k = 1; k <= std::min(4, c.harmonics); ++k) std::printf(" %.1f", c.fit.magnitude(k) * 1e3);
         std::printf(" mm\n");
     }
-    for (const auto& s : m.not_measured) std::printf("  not measured: %s\n", s.c_str());
-    for (const auto& s : m.warnings) std::printf("  warning: %s\n", s.c_str());
+    // File names and cells in these come from the record: printed escaped.
+    for (const auto& s : m.not_measured) std::printf("  not measured: %s\n", printable(s, 1000).c_str());
+    for (const auto& s : m.warnings) std::printf("  warning: %s\n", printable(s, 1000).c_str());
 }
 
-/// Exit code of one measurement: 1 when refused, or when a photo gave no D.
+/// Exit code of one measurement: 1 when refused, when a photo gave no D, or
+/// when a file the record names is there but bad (what was measured is printed
+/// first; the error names the file, line, field and value).
 int verdict(const capture::Measurement& m, bool photo, const std::string& what)
 {
+    for (const auto& e : m.bad_files) std::cerr << "drape measure: " << printable(e, 400) << "\n";
+    const int bad = m.bad_files.empty() ? 0 : 1;
+    if (bad)
+        std::cerr << "drape measure: " << printable(what) << ": " << m.bad_files.size()
+                  << " file(s) of the record could not be read (bad input, exit 1); what could be measured is printed\n";
     if (m.refused) {
-        std::cerr << "drape measure: " << what << ": refused (" << m.refused->check << "): " << m.refused->message
+        std::cerr << "drape measure: " << printable(what) << ": refused (" << m.refused->check << "): " << printable(m.refused->message, 1000)
                   << "\n  what to try: " << m.refused->remedy << "\n";
         return 1;
     }
@@ -189,10 +198,10 @@ int verdict(const capture::Measurement& m, bool photo, const std::string& what)
         std::string why;
         for (const auto& s : m.not_measured)
             if (s.rfind("top view", 0) == 0) why = s;
-        std::cerr << "drape measure: " << what << ": no drape coefficient: " << (why.empty() ? "top view not measured" : why) << "\n";
+        std::cerr << "drape measure: " << printable(what) << ": no drape coefficient: " << printable(why.empty() ? "top view not measured" : why, 1000) << "\n";
         return 1;
     }
-    return 0;
+    return bad;
 }
 
 void write_outputs(const cli::Args& a, const record::Record& rec, const capture::Measurement& m)
@@ -245,7 +254,13 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
     if (photos.empty()) throw FileError(folder.string() + ": no photos (.jpg, .jpeg, .png, .tif, .bmp) in the folder");
     const auto table = a.get("--table");
     if (!table) throw cli::UsageError("--batch needs --table OUT.csv or OUT.json");
-    const bool as_json = fs::path(*table).extension() == ".json";
+    // The table is what its name says: CSV or JSON, nothing written under another name.
+    std::string table_ext = fs::path(*table).extension().string();
+    std::transform(table_ext.begin(), table_ext.end(), table_ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (table_ext != ".csv" && table_ext != ".json")
+        throw cli::UsageError("--table " + printable(*table) + ": the table is written as CSV (.csv) or JSON (.json), not '" +
+                              printable(table_ext.empty() ? std::string("no extension") : table_ext) + "'");
+    const bool as_json = table_ext == ".json";
     cli::prepare_output_file(*table, "--table");
     std::optional<fs::path> overlays;
     if (auto d = a.get("--overlays")) {
@@ -264,6 +279,9 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
     for (std::size_t i = 0; i < photos.size(); ++i) {
         const fs::path& p = photos[i];
         const std::string name = p.filename().string();
+        // File names are untrusted text: escape sequences and control bytes are
+        // escaped (\x1B) on the terminal and in the CSV; the JSON escapes them itself.
+        const std::string shown = printable(name, 400);
         json row = {{"photo", name}};
         std::string status = "measured", check, message;
         capture::Measurement m;
@@ -288,7 +306,12 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
         } catch (const Error& e) {
             status = "error";
             message = e.what();
+        } catch (const cv::Exception& e) {
+            // OpenCV on a photo it cannot take: this photo's row, not the whole run.
+            status = "error";
+            message = name + ": OpenCV: " + e.what();
         }
+        message = printable(message, 1000);
         if (status != "measured") ++failed;
         const auto& tv = m.top;
         const bool ok = status == "measured";
@@ -300,7 +323,7 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
             row["measurement"] = capture::to_json(m);
         }
         rows.push_back(row);
-        csv << csv_cell(name) << "," << status << "," << check << "," << num_cell(D) << ","
+        csv << csv_cell(shown) << "," << status << "," << check << "," << num_cell(D) << ","
             << num_cell(ok ? tv.dc_uncertainty_percent : std::nan("")) << "," << (ok ? tv.perspective : "") << ","
             << num_cell(ok ? tv.uncorrected.dc_percent : std::nan("")) << "," << num_cell(ok ? tv.disc_plane.dc_percent : std::nan("")) << ","
             << num_cell(ok ? tv.hem.dc_percent : std::nan("")) << "," << num_cell(ok ? tv.hem.uncertainty_percent : std::nan("")) << ","
@@ -309,14 +332,16 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
             << num_cell(m.view ? m.view->camera_height * 1e3 : std::nan(""), 0) << ","
             << (m.view ? (m.view->camera_height_known ? "yes" : "no") : "") << "," << csv_cell(message) << "\n";
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        std::fprintf(stderr, "[%zu/%zu] %-28s %s", i + 1, photos.size(), name.c_str(), status.c_str());
+        // The table so far, rewritten atomically after every photo: a later
+        // failure or an interrupted run keeps every row measured before it.
+        write_file_atomic(*table, as_json ? cli::dump_json(json({{"folder", folder.string()}, {"photos", rows}}), 1) + "\n" : csv.str());
+        std::fprintf(stderr, "[%zu/%zu] %-28s %s", i + 1, photos.size(), shown.c_str(), status.c_str());
         if (ok) std::fprintf(stderr, "  D = %.1f %% +- %.1f (%s)", D, tv.dc_uncertainty_percent, tv.perspective.c_str());
         else if (!check.empty()) std::fprintf(stderr, " (%s)", check.c_str());
         std::fprintf(stderr, "   %.0f s, about %.0f s left\n", elapsed, elapsed / static_cast<double>(i + 1) * static_cast<double>(photos.size() - i - 1));
     }
-    write_file_atomic(*table, as_json ? cli::dump_json(json({{"folder", folder.string()}, {"photos", rows}}), 1) + "\n" : csv.str());
     std::fprintf(stderr, "%zu photos: %zu measured, %d refused or failed; table in %s\n", photos.size(),
-                 photos.size() - static_cast<std::size_t>(failed), failed, table->c_str());
+                 photos.size() - static_cast<std::size_t>(failed), failed, printable(*table).c_str());
     return failed ? 1 : 0;
 }
 
@@ -401,8 +426,12 @@ DRAPE_COMMAND({"measure", "measure a drape-test record, a single top photo, or a
                "  --camera-height H  optical centre above the disc top; or --focal-px F (the lens in pixels)\n"
                "  --pedestal-height H  the stand's height (default 120mm)\n"
                "  --write-meta FILE  write the meta.json these flags describe (keep it beside the photo)\n"
+               "  --table FILE     the batch's table: FILE.csv or FILE.json (rewritten after every photo, so a run\n"
+               "                   cut short keeps the rows measured before; a photo that fails is a row with its error)\n"
                "Exit codes: 0 measured; 1 refused (the check and what to try are printed) or bad input; 2 bad command\n"
-               "line. Files that are missing or unreadable in a lab record are listed under not_measured.",
+               "line. Files missing from a lab record are listed under not_measured (exit 0); a file the record names\n"
+               "that is there but cannot be read (a value out of range, a cell that is not a number, a photo that is\n"
+               "not what meta.json says) is listed too, and measure exits 1 after printing the rest.",
                run_measure});
 
 } // namespace

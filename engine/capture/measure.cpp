@@ -23,6 +23,13 @@ Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
     if (std::filesystem::exists(rec.file(rec.contours_file))) {
         try {
             stack = record::read_contours(rec);
+        } catch (const Error& e) {
+            out.not_measured.push_back(std::string("laser contours: ") + e.what());
+            // A file without rows (a lab without a profiler, or one that cut no
+            // depth) holds no contours: not measured, not bad input.
+            if (!record::no_contour_rows(rec.file(rec.contours_file))) out.bad_files.push_back(e.what());
+        }
+        if (stack) try {
             measure_contours(rec, *stack, out);
         } catch (const Error& e) {
             out.not_measured.push_back(std::string("laser contours: ") + e.what());
@@ -46,6 +53,7 @@ Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
             return true;
         } catch (const Error& e) {
             out.not_measured.push_back(station + " view: " + e.what());
+            out.bad_files.push_back(e.what());
             return false;
         }
     };
@@ -57,6 +65,8 @@ Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
             have_top = true;
         } catch (const Error& e) {
             out.not_measured.push_back(std::string("top view: ") + e.what());
+            std::error_code ec;
+            if (std::filesystem::exists(rec.dir / rec.top_photo->image, ec)) out.bad_files.push_back(e.what());
         }
     } else {
         have_top = load("top", out.top_image);

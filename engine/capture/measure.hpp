@@ -37,6 +37,12 @@ struct Measurement {
     std::string hem_min_source;            ///< which evidence gave it
     std::vector<std::string> measured;     ///< what was measured
     std::vector<std::string> not_measured; ///< "what: why"
+    /// Files the record names that are there but could not be read (a value out
+    /// of range, a cell that is not a number, a photo that is not what
+    /// meta.json says): each error as the reader gave it (file, line, field,
+    /// value). Also in not_measured; `drape measure` exits 1 on any (bad input),
+    /// after printing what it did measure.
+    std::vector<std::string> bad_files;
     std::vector<std::string> warnings;
     cv::Mat top_image, side_image;         ///< kept for overlays (empty when absent)
 };
@@ -63,7 +69,8 @@ struct MeasureOptions {
 };
 
 /// Segments and measures a record. Missing or broken optional files
-/// (photos, contours) are listed in not_measured; a broken meta.json throws.
+/// (photos, contours) are listed in not_measured (the broken ones in
+/// bad_files too); a broken meta.json throws.
 Measurement measure_record(const record::Record& rec, const MeasureOptions& opt = {});
 
 } // namespace drape::capture

@@ -49,4 +49,31 @@ double bilinear(const cv::Mat& m, double x, double y)
     return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
 }
 
+double colour_spread(const cv::Mat& bgr)
+{
+    if (bgr.empty()) return 0;
+    cv::Scalar mean, sd;
+    cv::meanStdDev(bgr, mean, sd);
+    return std::max({sd[0], sd[1], sd[2]});
+}
+
+cv::Mat grabcut_input(const cv::Mat& img)
+{
+    if (img.cols < 2 || img.rows < 1) return img;
+    const cv::Rect left(0, 0, img.cols - 1, img.rows), right(1, 0, img.cols - 1, img.rows);
+    cv::Mat diff;
+    cv::absdiff(img(left), img(right), diff);
+    cv::Mat grey;
+    cv::transform(diff, grey, cv::Matx13f(1, 1, 1)); // 0 where all three channels are equal
+    const double flat = static_cast<double>(left.area() - cv::countNonZero(grey)) / static_cast<double>(left.area());
+    if (flat <= 0.5) return img;
+    cv::Mat noise(img.size(), CV_16SC3), out;
+    cv::RNG rng(12345);
+    rng.fill(noise, cv::RNG::UNIFORM, -1, 2); // -1, 0 or +1
+    img.convertTo(out, CV_16SC3);
+    out += noise;
+    out.convertTo(out, CV_8UC3); // saturating: 255 + 1 stays 255, 255 - 1 is 254
+    return out;
+}
+
 } // namespace drape::capture::detail

@@ -172,6 +172,7 @@ nlohmann::ordered_json to_json(const Measurement& m)
     j["contours"] = cs;
     j["measured"] = m.measured;
     j["not_measured"] = m.not_measured;
+    j["bad_files"] = m.bad_files;
     j["warnings"] = m.warnings;
     return j;
 }

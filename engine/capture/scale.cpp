@@ -279,7 +279,7 @@ cv::Mat rough_cloth_mask(const cv::Mat& bgr)
     const int bx = std::max(3, small.cols / 25), by = std::max(3, small.rows / 25);
     cv::Mat mask(small.size(), CV_8U, cv::Scalar(cv::GC_BGD)), bgd, fgd;
     cv::Rect rect(bx, by, small.cols - 2 * bx, small.rows - 2 * by);
-    cv::grabCut(small, mask, rect, bgd, fgd, 4, cv::GC_INIT_WITH_RECT);
+    cv::grabCut(detail::grabcut_input(small), mask, rect, bgd, fgd, 4, cv::GC_INIT_WITH_RECT);
     cv::Mat fg = (mask == cv::GC_FGD) | (mask == cv::GC_PR_FGD);
     cv::morphologyEx(fg, fg, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5}));
     cv::Mat labels, stats, centroids;

@@ -305,6 +305,13 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
     ViewGeometry g;
     if (single) {
         const auto& tp = *rec.top_photo;
+        // Nothing in the photo (one colour throughout): said at once, before
+        // the disc search and GrabCut look for what is not there.
+        if (const double spread = colour_spread(out.top_image); spread < kMinColourSpread)
+            throw RefusalError({"no-cloth",
+                                "no cloth found: " + image_name + " is one uniform colour (colour spread " + fmt("%.2f", spread) +
+                                    " levels of 255): no drape, disc or background in it",
+                                "photograph the drape on its stand (a lens cap, a blank or overexposed file shows nothing)"});
         cv::Mat rough;
         if (!(tp.disc_centre_px && tp.disc_radius_px)) rough = rough_cloth_mask(out.top_image);
         g = solve_view(rec, out.top_image, lab, rough);

@@ -2,6 +2,7 @@
 #include "engine/capture/export.hpp"
 #include "engine/capture/image.hpp"
 #include "engine/capture/measure.hpp"
+#include "engine/capture/pixels.hpp"
 #include "engine/capture/report.hpp"
 #include "engine/core/error.hpp"
 #include "synthetic.hpp"
@@ -170,6 +171,7 @@ private slots:
         const auto m = capture::measure_record(rec);
         QVERIFY(!m.top.measured);
         QVERIFY(any_contains(m.not_measured, "truncated"));
+        QVERIFY(any_contains(m.bad_files, "truncated"));
     }
 
     void wrong_image_size_is_flagged()
@@ -287,6 +289,13 @@ private slots:
         const auto m = capture::measure_record(rec);
         QVERIFY(m.top.measured); // the photo is still measured
         QVERIFY(any_contains(m.not_measured, "missing column 'y_mm'"));
+        QVERIFY(any_contains(m.bad_files, "missing column 'y_mm'")); // there but bad: drape measure exits 1
+        // Its header only: no contours (a lab without a profiler), not a bad file.
+        std::ofstream(dir / "contours.csv", std::ios::trunc) << "depth_mm,theta_deg,x_mm,y_mm\n";
+        const auto none = capture::measure_record(rec);
+        QVERIFY(any_contains(none.not_measured, "laser contours") && none.bad_files.empty());
+        fs::remove(dir / "contours.csv");
+        QVERIFY(capture::measure_record(rec).bad_files.empty()); // missing: not measured, not bad
         // A non-numeric cell names its line.
         {
             std::ofstream f(dir / "contours.csv");
@@ -361,6 +370,30 @@ private slots:
         const double r = (s.R0 + s.A - 0.004) / 0.25e-3;
         const int x = 600 + static_cast<int>(r * std::cos(s.phase)), y = 600 - static_cast<int>(r * std::sin(s.phase));
         QVERIFY(tex.at<cv::Vec3b>(y, x) != cv::Vec3b(255, 255, 255));
+    }
+
+    /// A photo of one colour is refused at once and GrabCut never sees a flat
+    /// image (OpenCV 4.6's GrabCut ran for minutes on a uniform 480 x 363 px one);
+    /// a photo with sensor noise reaches it unchanged.
+    void flat_images_are_safe_for_grabcut()
+    {
+        using namespace capture::detail;
+        const cv::Mat grey(363, 480, CV_8UC3, cv::Scalar(128, 128, 128));
+        QVERIFY(colour_spread(grey) < kMinColourSpread);
+        const cv::Mat dithered = grabcut_input(grey);
+        QVERIFY(colour_spread(dithered) > 0.5 && colour_spread(dithered) < kMinColourSpread);
+        double lo = 0, hi = 0;
+        cv::minMaxLoc(dithered.reshape(1), &lo, &hi);
+        QVERIFY(lo >= 127 && hi <= 129);
+        cv::Mat white(10, 10, CV_8UC3, cv::Scalar(255, 255, 255)); // saturates: 254 or 255, never 0
+        cv::minMaxLoc(grabcut_input(white).reshape(1), &lo, &hi);
+        QVERIFY(lo >= 254);
+        cv::Mat noisy(363, 480, CV_8UC3);
+        cv::RNG(7).fill(noisy, cv::RNG::NORMAL, 128, 2.5);
+        QVERIFY(colour_spread(noisy) > kMinColourSpread);
+        QCOMPARE(cv::norm(grabcut_input(noisy), noisy, cv::NORM_INF), 0.0);
+        // The same answer every time.
+        QCOMPARE(cv::norm(grabcut_input(grey), dithered, cv::NORM_INF), 0.0);
     }
 
     void missing_meta_is_an_error()

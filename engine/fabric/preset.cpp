@@ -103,11 +103,16 @@ FitSummary read_fit(const JsonReader& r, const json& root)
     else if (j.contains("quality")) f.reduced_chi2 = r.number_in(root, "fit.quality", 0, 1e300); // before typed presets
     else if (f.dof > 0) f.reduced_chi2 = f.chi2 / f.dof;
     if (j.contains("grid_bound")) f.grid_bound = r.boolean(root, "fit.grid_bound");
-    if (j.contains("records") && j["records"].is_array() && !j["records"].empty() && j["records"][0].is_object()) {
-        // The set-up of the first record: `drape predict` scales its grid by it.
+    if (j.contains("records") && !j["records"].is_array()) r.fail("fit.records", "must be an array, got " + describe_json(j["records"]));
+    if (j.contains("records") && !j["records"].empty() && j["records"][0].is_object()) {
+        // The set-up of the first record: `drape predict` scales its grid by it,
+        // so a value of another type is an error, not "unknown" (a string
+        // "0.15" made predict drape at half the fit's mesh density).
         const json& first = j["records"][0];
         for (auto [key, out] : {std::pair{"sample_diameter_m", &f.sample_diameter_m}, {"disc_diameter_m", &f.disc_diameter_m}})
-            if (first.contains(key) && first[key].is_number()) {
+            if (first.contains(key)) {
+                if (!first[key].is_number())
+                    r.fail(std::string("fit.records[0].") + key, "must be a number [m], got " + describe_json(first[key]));
                 const double d = first[key].get<double>();
                 if (!(d > 0 && d <= 5))
                     r.fail(std::string("fit.records[0].") + key, "= " + format_value(d) + " m is outside (0, 5] m");

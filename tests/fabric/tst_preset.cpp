@@ -279,6 +279,30 @@ private slots:
             }
             return QString();
         };
+        // A set-up value of another type is refused, not "unknown" (issue 55: a string
+        // "0.15" was ignored and predict draped at grid 41 instead of 83).
+        for (const char* key : {"sample_diameter_m", "disc_diameter_m"})
+            for (const json& bad : {json("0.15"), json(nullptr), json::array({0.15})}) {
+                json k = j;
+                k["fit"]["records"][0] = {{"sample_diameter_m", 0.3}, {"disc_diameter_m", 0.15}};
+                k["fit"]["records"][0][key] = bad;
+                e = load_error(k);
+                QVERIFY2(e.contains(QString("fit.records[0].") + key) && e.contains("p.json") && e.contains("must be a number"),
+                         qPrintable(e));
+            }
+        {
+            json k = j;
+            k["fit"]["records"] = "DL-A04";
+            e = load_error(k);
+            QVERIFY2(e.contains("fit.records") && e.contains("array"), qPrintable(e));
+        }
+        // The provenance's grid is an integer, a string is refused too.
+        for (const json& bad : {json("83"), json(41.5), json(nullptr)}) {
+            json k = j;
+            k["provenance"] = {{"tool", "drape fit"}, {"grid", bad}};
+            e = load_error(k);
+            QVERIFY2(e.contains("provenance.grid") && e.contains("p.json"), qPrintable(e));
+        }
         j["fit"]["records"][0]["sample_diameter_m"] = 0.3;
         QCOMPARE(fabric_from_json(j, "p.json").fit->sample_diameter_m, 0.3);
         // The lab's laying in the provenance: a fraction of gravity in (0, 1].

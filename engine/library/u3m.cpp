@@ -3,6 +3,7 @@
 
 #include "engine/cloth/params.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/json_reader.hpp"
 #include "engine/core/units.hpp"
 
 #include <algorithm>
@@ -157,6 +158,8 @@ fabric::FabricPreset preset_from_u3m(const json& j, const std::string& where, st
     if (!m.contains("name") || !m["name"].is_string() || m["name"].get<std::string>().empty())
         throw ParameterError(where + ": field 'material.name' is missing or empty");
     const std::string name = m["name"].get<std::string>();
+    if (m.contains("physics") && !m["physics"].is_object() && !m["physics"].is_null())
+        throw ParameterError(where + ": field 'material.physics' = " + describe_json(m["physics"]) + " must be an object");
     const json physics = m.contains("physics") && m["physics"].is_object() ? m["physics"] : json::object();
     const json custom = j.contains("custom") && j["custom"].is_object() ? j["custom"] : json::object();
     const json block = custom.contains(kBlock) && custom[kBlock].is_object() ? custom[kBlock] : json::object();
@@ -189,7 +192,12 @@ fabric::FabricPreset preset_from_u3m(const json& j, const std::string& where, st
     if (p.composition.empty() && physics.contains("composition") && physics["composition"].is_object() &&
         physics["composition"].contains("parts") && physics["composition"]["parts"].is_array()) {
         std::string text;
-        for (const json& part : physics["composition"]["parts"]) {
+        for (std::size_t i = 0; i < physics["composition"]["parts"].size(); ++i) {
+            const json& part = physics["composition"]["parts"][i];
+            // A ratio that is not a number would print as "0 % cotton": refused, named.
+            if (part.is_object() && part.contains("ratio") && !part["ratio"].is_number())
+                throw ParameterError(where + ": field 'material.physics.composition.parts[" + std::to_string(i) + "].ratio' = " +
+                                     describe_json(part["ratio"]) + " is not a number (a fraction of 1)");
             const double r = number_or(part, "ratio", 0);
             std::string fibre = part.contains("name") && part["name"].is_string() ? part["name"].get<std::string>()
                                 : part.contains("type") && part["type"].is_string() ? part["type"].get<std::string>()
@@ -205,7 +213,12 @@ fabric::FabricPreset preset_from_u3m(const json& j, const std::string& where, st
     bool changed = false;
     std::string overridden;
     auto take = [&](const char* key, cloth::Param id, double scale, const char* unit) {
-        if (!physics.contains(key) || !physics[key].is_number()) return;
+        // null: not stated (our own export writes null for what it does not know).
+        if (!physics.contains(key) || physics[key].is_null()) return;
+        // Anything else that is not a number ("sixty") was dropped silently: refused, named.
+        if (!physics[key].is_number())
+            throw ParameterError(where + ": field 'material.physics." + key + "' = " + describe_json(physics[key]) +
+                                 " is not a number (in " + unit + ")");
         const double value = physics[key].get<double>() * scale;
         if (std::abs(value - v[id]) <= 1e-9 * std::max(1.0, std::abs(v[id]))) return;
         v[id] = value;

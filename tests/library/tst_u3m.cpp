@@ -168,6 +168,39 @@ private slots:
         json heavy = foreign;
         heavy["material"]["physics"]["weight"] = 5e6;
         QVERIFY_THROWS_EXCEPTION(drape::ParameterError, library::preset_from_u3m(heavy, "d.u3m"));
+
+        // A value of the wrong type is refused by name, never dropped (issue 55: "sixty"
+        // was read as no weight at all); null is "not stated".
+        auto error = [](const json& doc) {
+            try {
+                library::preset_from_u3m(doc, "e.u3m");
+            } catch (const drape::ParameterError& e) {
+                return std::string(e.what());
+            }
+            return std::string();
+        };
+        json words = foreign;
+        words["material"]["physics"]["weight"] = "sixty";
+        std::string e = error(words);
+        QVERIFY2(e.find("e.u3m") != std::string::npos && e.find("material.physics.weight") != std::string::npos &&
+                     e.find("sixty") != std::string::npos,
+                 e.c_str());
+        json thick = foreign;
+        thick["material"]["physics"]["thickness"] = json::array({0.6});
+        e = error(thick);
+        QVERIFY2(e.find("material.physics.thickness") != std::string::npos, e.c_str());
+        json ratio = foreign;
+        ratio["material"]["physics"]["composition"]["parts"][1]["ratio"] = "5 %";
+        e = error(ratio);
+        QVERIFY2(e.find("material.physics.composition.parts[1].ratio") != std::string::npos, e.c_str());
+        json physics = foreign;
+        physics["material"]["physics"] = "heavy";
+        e = error(physics);
+        QVERIFY2(e.find("material.physics") != std::string::npos && e.find("heavy") != std::string::npos, e.c_str());
+        json unstated = foreign;
+        unstated["material"]["physics"]["weight"] = nullptr;
+        QCOMPARE(library::preset_from_u3m(unstated, "f.u3m").params[cloth::Param::AreaDensity],
+                 cloth::FabricParams()[cloth::Param::AreaDensity]);
     }
 
     void compositionParts()

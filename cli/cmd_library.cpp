@@ -161,16 +161,23 @@ int run_library(const std::vector<std::string>& argv)
         cli::Args a(rest, with_common({}), {"--json"});
         if (a.positionals().size() != 1) throw cli::UsageError("library show needs one NAME");
         const FabricLibrary lib = open(a, FabricLibrary::Mode::ReadOnly);
-        const FabricRecord r = lib.get(a.positionals().front());
+        // The name as every command resolves it ("silk": the starter's "Silk (class preset)").
+        const FabricRecord r = library_fabric(lib, a.positionals().front());
+        const bool stored = r.revision > 0;
         if (a.has("--json")) {
-            std::cout << cli::dump_json(record_json(r, true)) << "\n";
+            json j = record_json(r, true);
+            j["stored"] = stored; // false: a starter fabric this library does not hold
+            std::cout << cli::dump_json(j) << "\n";
             return 0;
         }
         std::printf("name:         %s\ncomposition:  %s\nformat:       %s\nweight:       %.1f g/m^2\n", r.name.c_str(),
                     r.composition.c_str(), r.format.c_str(), r.areal_density_kg_m2 * 1e3);
+        if (!stored)
+            std::printf("stored:       no - the starter fabric built into drape, not in %s (drape library add '%s' stores it)\n",
+                        lib.path().c_str(), r.name.c_str());
         std::printf("D:            %s %%\nfit quality:  %s\ncreated:      %s\nmodified:     %s (revision %d)\n",
                     fmt_opt(r.drape_coefficient_percent, "%.1f").c_str(), fmt_opt(r.fit_quality, "%.4g").c_str(),
-                    r.created.c_str(), r.modified.c_str(), r.revision);
+                    stored ? r.created.c_str() : "-", stored ? r.modified.c_str() : "-", r.revision);
         if (!r.preset.is_seed()) {
             std::printf("parameters:\n");
             for (const auto& s : cloth::param_table())
@@ -237,14 +244,17 @@ int run_library(const std::vector<std::string>& argv)
         } else {
             if (a.positionals().size() != 1) throw cli::UsageError("library export needs NAME or --all");
             const std::string f = a.get_or("--format", "drapekit");
-            const std::string name = a.positionals().front();
+            if (f != "u3m" && f != "blender" && f != "drapekit" && f != "drapekit-fabric" && f != "seed19" && f != "seed-19")
+                throw cli::UsageError("--format: '" + f + "' must be drapekit, seed19, u3m or blender");
+            // The name as every command resolves it ("silk": the starter's "Silk (class preset)").
+            const FabricRecord r = library_fabric(lib, a.positionals().front());
+            const std::string& name = r.name;
             what = "'" + name + "'";
             if (f == "u3m") {
-                const FabricRecord r = lib.get(name);
                 doc = preset_to_u3m(r.preset, {r.created, r.modified});
             } else if (f == "blender") {
                 // A Python script, not JSON.
-                const std::string script = preset_to_blender_script(lib.get(name).preset);
+                const std::string script = preset_to_blender_script(r.preset);
                 const auto out = a.get("--out");
                 if (out && *out != "-") {
                     drape::write_file_atomic(*out, script);
@@ -260,7 +270,10 @@ int run_library(const std::vector<std::string>& argv)
                 if (f == "drapekit" || f == "drapekit-fabric") pf = PresetFormat::Drapekit;
                 else if (f == "seed19" || f == "seed-19") pf = PresetFormat::Seed19;
                 else throw cli::UsageError("--format: '" + f + "' must be drapekit, seed19, u3m or blender");
-                doc = lib.export_preset(name, pf);
+                if (r.revision > 0) doc = lib.export_preset(name, pf);
+                else if (pf == PresetFormat::Drapekit) doc = r.preset_json; // a starter this library does not hold
+                else throw ParameterError("starter fabric '" + name + "' holds continuum parameters; the seed's 19 grid constants "
+                                          "describe one particular grid, so it is exported as drapekit-fabric only");
             }
         }
         const auto out = a.get("--out");

@@ -1,6 +1,7 @@
 #include "engine/library/resolve.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/library/schema.hpp"
 #include "engine/library/starter.hpp"
 
 #include <filesystem>
@@ -30,6 +31,33 @@ FabricLibrary open_library(const std::string& path_in, FabricLibrary::Mode mode)
     return FabricLibrary(path, mode);
 }
 
+std::optional<FabricRecord> find_fabric(const FabricLibrary& lib, const std::string& name)
+{
+    if (auto r = lib.find(name)) return r;
+    if (auto s = find_starter(name))
+        if (auto r = lib.find(s->name)) return r;
+    return std::nullopt;
+}
+
+FabricRecord library_fabric(const FabricLibrary& lib, const std::string& name)
+{
+    if (auto r = find_fabric(lib, name)) return std::move(*r);
+    const auto s = find_starter(name);
+    if (!s) return lib.get(name); // throws NotFoundError naming the library and the name
+    const Columns c = derive_columns(*s);
+    FabricRecord r;
+    r.name = s->name;
+    r.composition = c.composition;
+    r.format = c.format;
+    r.areal_density_kg_m2 = c.weight;
+    r.drape_coefficient_percent = c.drape_percent;
+    r.fit_quality = c.fit_quality;
+    r.revision = 0;
+    r.preset = *s;
+    r.preset_json = fabric::fabric_to_json(*s);
+    return r;
+}
+
 fabric::FabricPreset resolve_fabric(const std::string& name, const std::string& library_path)
 {
     std::error_code ec;
@@ -40,7 +68,7 @@ fabric::FabricPreset resolve_fabric(const std::string& name, const std::string& 
     if (fs::exists(lib_path, ec)) {
         try {
             const FabricLibrary lib(lib_path, FabricLibrary::Mode::ReadOnly);
-            if (auto r = lib.find(name)) return r->preset;
+            if (auto r = find_fabric(lib, name)) return r->preset;
             library_note = "not in the fabric library " + lib_path;
         } catch (const FileError& e) {
             library_note = std::string("the fabric library could not be read (") + e.what() + ")";

@@ -59,6 +59,7 @@ int run(const std::vector<std::string>& argv)
     Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed | kLaying | kMesh | kPerturbation) + std::set<std::string>{"--seeds", "--branch"},
            setup_switches(kDiscGrip) + std::set<std::string>{"--json", "--quiet", "--vertex-contact-only"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
+    reject_duplicate_records(a.positionals());
     const fabric::FabricPreset preset = load_fabric_flags(a);
     if (preset.is_seed())
         throw UsageError("--fabric: " + *a.get("--fabric") + " is a seed-19 preset; compare needs a drapekit-fabric preset");

@@ -39,7 +39,8 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
   --disc-diameter L     pedestal disc diameter (default 150mm)
   --pedestal-height L   pedestal height (default 120mm)
   --edge-radius L       rounding of the pedestal top edge (default 0.5mm)
-  --grid N              nodes across the specimen (default 60; seed-19 presets use their own grid)
+  --grid N              nodes across the specimen (default 60; a seed-19 preset drapes on its own grid,
+                        u + 1 nodes across, and refuses another)
   --mesh M              the specimen's mesh: grid (default: the square lattice) | rings
                         (concentric rings refined to 0.4 of the spacing at the pedestal's rim, where
                         the cloth bends over it; docs/model-discrepancy.md section 25)
@@ -97,7 +98,7 @@ int run(const std::vector<std::string>& argv)
     cloth::DrapeSetup defaults;
     defaults.grid = 60;
     defaults = preset.laid(defaults); // a fitted preset is laid (and as wavy) as its records' lab laid them
-    const cloth::DrapeSetup setup = parse_setup(a, defaults);
+    const cloth::DrapeSetup setup = on_preset_grid(a, preset, parse_setup(a, defaults));
     cloth::RestOptions ro;
     try {
         ro.integrator = cloth::parse_integrator(a.get_or("--integrator", "static"));
@@ -156,6 +157,7 @@ int run(const std::vector<std::string>& argv)
     if (!check_drape_result(r, setup)) return 4;
     auto summary = cloth::drape_summary_json(r, setup, ro.integrator);
     const auto sys = cloth::make_drape_system(preset.material(), setup, preset.model); // the mesh topology
+    summary["fabric_model"] = fabric_model_name(preset); // "grid" above is the mesh draped: a seed-19 preset's own
     summary["self_collision"] = preset.model.self_collision;
     // The crest correction is the grid stencils' (the ring mesh's triangle model has
     // its own exact-for-quadratics stencils): true only where it was applied.

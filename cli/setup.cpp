@@ -1,6 +1,7 @@
 #include "cli/setup.hpp"
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 
 #ifdef HAVE_DRAPE_LIBRARY
@@ -8,6 +9,7 @@
 #endif
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 
@@ -129,9 +131,37 @@ fabric::FabricPreset load_fabric_flags(const Args& a, const std::string& fallbac
     fabric::FabricPreset preset = fabric::load_fabric(*arg);
 #endif
     if (a.get_all("--set").empty()) return preset;
-    preset.set_params(apply_set_flags(a, preset.params));
+    to_continuum(preset, apply_set_flags(a, preset.params), "--set");
     return preset;
 }
+
+void to_continuum(fabric::FabricPreset& preset, const cloth::FabricParams& p, const std::string& flag)
+{
+    if (preset.seed)
+        std::fprintf(stderr,
+                     "note: %s turns the seed-19 preset '%s' into its continuum equivalent (stretch, shear, mass and dampers "
+                     "from its grid springs; bending the parameter table's default unless --set gives it: flexion springs "
+                     "have no continuum counterpart), draped on the command's grid, not on its own %d nodes across "
+                     "(\"fabric_model\": \"continuum\" in --json)\n",
+                     flag.c_str(), printable(preset.name).c_str(), preset.seed->u + 1);
+    preset.set_params(p);
+}
+
+cloth::DrapeSetup on_preset_grid(const Args& a, const fabric::FabricPreset& preset, cloth::DrapeSetup s)
+{
+    if (!preset.seed) return s;
+    const int own = preset.seed->u + 1;
+    if (a.has("--grid") && s.grid != own)
+        throw UsageError("--grid " + std::to_string(s.grid) + ": '" + printable(preset.name) +
+                         "' is a seed-19 preset, whose 19 constants are the springs of its own " + std::to_string(preset.seed->u) +
+                         " x " + std::to_string(preset.seed->v) + " cell grid (" + std::to_string(own) +
+                         " nodes across); it drapes on that grid only. Leave --grid out, or --set a parameter to drape its "
+                         "continuum equivalent on any grid");
+    s.grid = own;
+    return s;
+}
+
+const char* fabric_model_name(const fabric::FabricPreset& preset) { return preset.seed ? "seed-19" : "continuum"; }
 
 cloth::FabricParams apply_set_flags(const Args& a, cloth::FabricParams p)
 {

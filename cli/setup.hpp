@@ -3,6 +3,7 @@
 // the fabric (a preset file or a built-in, with --set KEY=VALUE overrides from
 // the parameter table). One parser, so a flag means the same in every command.
 #include "cli/command.hpp"
+#include "cli/record_args.hpp" // the RECORD_DIR arguments, read the same way by fit and compare
 
 #include "engine/cloth/drape.hpp"
 #include "engine/fabric/preset.hpp"
@@ -67,9 +68,25 @@ cloth::DrapeSetup parse_setup(const Args& a, cloth::DrapeSetup defaults);
 /// built-in, a fabric of the default library or a starter fabric by short name
 /// (library::resolve_fabric), with parameters overridden from the parameter table (KEY a
 /// table key, VALUE a number in the key's unit; e.g. --set bend_warp_Nm=2e-6).
-/// An override turns a seed-19 preset into its continuum equivalent.
-/// `fallback` (when not empty) is the fabric when --fabric is not given.
+/// An override turns a seed-19 preset into its continuum equivalent, and says
+/// so on stderr (to_continuum). `fallback` (when not empty) is the fabric when
+/// --fabric is not given.
 fabric::FabricPreset load_fabric_flags(const Args& a, const std::string& fallback = {});
+/// `preset` with its physics replaced by the continuum parameters `p`
+/// (FabricPreset::set_params). A seed-19 preset becomes a continuum one, which
+/// is a different model (its flexion springs have no continuum counterpart, and
+/// it drapes on the command's grid, not its own): a note on stderr says so,
+/// naming `flag` (what asked for the change) and the preset.
+void to_continuum(fabric::FabricPreset& preset, const cloth::FabricParams& p, const std::string& flag);
+/// The set-up `s` on the grid `preset` drapes on. A seed-19 preset's 19
+/// constants are the springs of its own grid (u + 1 nodes across), where the
+/// engine drapes it whatever the set-up says: `s.grid` becomes that grid (so
+/// a summary reports the mesh that was draped), and a `--grid` naming another
+/// is a UsageError. A continuum preset's `s` is returned as it is.
+cloth::DrapeSetup on_preset_grid(const Args& a, const fabric::FabricPreset& preset, cloth::DrapeSetup s);
+/// "seed-19" (the preset's own grid springs) or "continuum": what a summary
+/// reports as "fabric_model".
+const char* fabric_model_name(const fabric::FabricPreset& preset);
 /// The value flags load_fabric_flags reads: --fabric and --set.
 std::set<std::string> fabric_flags();
 /// p with every --set KEY=VALUE applied (a key of the parameter table, a value

@@ -10,7 +10,11 @@
 #include <QTemporaryDir>
 #include <QTest>
 
+#include "cli/command.hpp"
+#include "cli/record_args.hpp"
+
 #include <cmath>
+#include <filesystem>
 
 #include <unistd.h>
 
@@ -652,6 +656,224 @@ private slots:
         const QByteArray err = p.readAllStandardError();
         QCOMPARE(p.exitCode(), 1);
         QVERIFY2(err.contains("\\x1B[2J\\xFF") && !err.contains('\x1b') && !err.contains('\xff'), err.constData());
+    }
+
+    // ---- issue 55, part 4: no input gets a confident wrong answer ----------------
+
+    /// A seed-19 preset drapes on its own grid: --grid naming another is refused
+    /// (it drew 709 vertices and reported "grid": 61), the summary reports the
+    /// grid it draped; --set turns it into a continuum preset and says so.
+    void seedPresetsDrapeOnTheirOwnGrid()
+    {
+        QTemporaryDir tmp;
+        Out o = run({"simulate", "--fabric", "seed-table1", "--grid", "61", "--json"});
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("--grid 61") && o.err.contains("seed-19") && o.err.contains("31 nodes across"), qPrintable(o.err));
+        o = run({"predict", "--fabric", "seed-table1", "--grid", "61", "--json"});
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("--grid 61") && o.err.contains("seed-19"), qPrintable(o.err));
+        // A seed-19 file (the paper's Table 1: 30 x 30 cells).
+        const QString seed = tmp.path() + "/seed.json";
+        QFile f(seed);
+        QVERIFY(f.open(QIODevice::WriteOnly));
+        f.write(R"({"format": "seed-19", "name": "seed", "w": 30, "h": 30, "u": 30, "v": 30, "x0": -15, "y0": 15, "z0": 0,
+                   "ClothOverMass": 0.5, "SstKu": 150, "SstDu": 7, "SstKv": 150, "SstDv": 7, "SshK": 40, "SshD": 6,
+                   "SflKu": 24, "SflDu": 8, "SflKv": 24, "SflDv": 8})");
+        f.close();
+        o = run({"simulate", "--fabric", seed, "--grid", "41", "--quiet"});
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("'seed' is a seed-19 preset") && o.err.contains("30 x 30 cell grid (31 nodes across)"), qPrintable(o.err));
+        o = run({"simulate", "--fabric", seed, "--json"});
+        QVERIFY2(o.code == 0, qPrintable(o.err));
+        QJsonObject j = QJsonDocument::fromJson(o.out.toUtf8()).object();
+        QCOMPARE(j["grid"].toInt(), 31); // it drew 709 vertices and said 60
+        QCOMPARE(j["vertices"].toInt(), 709);
+        QCOMPARE(j["fabric_model"].toString(), QStringLiteral("seed-19"));
+        o = run({"predict", "--fabric", seed, "--grid", "31", "--json"}); // its own grid, named: taken
+        QVERIFY2(o.code == 0, qPrintable(o.err));
+        QCOMPARE(QJsonDocument::fromJson(o.out.toUtf8()).object()["grid"].toInt(), 31);
+        // --set: a continuum preset on the command's grid, said on stderr and in the summary.
+        o = run({"simulate", "--fabric", "seed-table1", "--set", "bend_warp_Nm=1e-5", "--grid", "9", "--json"});
+        QVERIFY2(o.code == 0, qPrintable(o.err));
+        j = QJsonDocument::fromJson(o.out.toUtf8()).object();
+        QCOMPARE(j["grid"].toInt(), 9);
+        QCOMPARE(j["fabric_model"].toString(), QStringLiteral("continuum"));
+        QVERIFY2(o.err.contains("note: --set turns the seed-19 preset 'seed-table1' into its continuum equivalent"), qPrintable(o.err));
+    }
+
+    /// The same record given twice (another spelling, a symbolic link) would
+    /// count twice: refused naming both (reject_duplicate_records, shared by fit
+    /// and compare).
+    void duplicateRecordsAreRefused()
+    {
+        namespace fs = std::filesystem;
+        QTemporaryDir tmp;
+        const fs::path root = tmp.path().toStdString();
+        fs::create_directories(root / "rec");
+        fs::create_directories(root / "other");
+        fs::create_directory_symlink(root / "rec", root / "link");
+        const std::string rec = (root / "rec").string();
+        auto refused = [](const std::vector<std::string>& dirs) -> QString {
+            try {
+                drape::cli::reject_duplicate_records(dirs);
+            } catch (const drape::cli::UsageError& e) {
+                return QString::fromStdString(e.what());
+            }
+            return {};
+        };
+        for (const std::string& same : {rec, rec + "/", rec + "/.", rec + "//", (root / "other" / ".." / "rec").string(), (root / "link").string(),
+                                        (root / "link/").string()}) {
+            const QString e = refused({rec, (root / "other").string(), same});
+            QVERIFY2(e.contains("RECORD_DIR") && e.contains(QString::fromStdString(same)), qPrintable(QString::fromStdString(same) + ": " + e));
+        }
+        QVERIFY(refused({rec, (root / "other").string()}).isEmpty());
+        // Relative spellings: ./rec and rec from the folder holding it.
+        const fs::path cwd = fs::current_path();
+        fs::current_path(root);
+        const QString rel = refused({"rec", "./rec/"});
+        const QString missing = refused({"none", "./none"}); // not there: compared by spelling, the reader says the rest
+        fs::current_path(cwd);
+        QVERIFY2(rel.contains("'rec' and './rec/'"), qPrintable(rel));
+        QVERIFY2(missing.contains("none"), qPrintable(missing));
+        QVERIFY(refused({(root / "none1").string(), (root / "none2").string()}).isEmpty());
+        // compare takes the check before any simulation.
+        const QString ex = DRAPE_SOURCE_DIR "/examples/DL-A04";
+        const Out o = run({"compare", ex, ex + "/", "--fabric", "silk", "--quiet"});
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("the same record folder"), qPrintable(o.err));
+    }
+
+    /// A record file that is there but bad is bad input (exit 1 naming file,
+    /// line, field and value), after what could be measured is printed; a
+    /// contour point no drape can reach (1e308, NaN, 40 % beyond the specimen) too.
+    void measureRefusesBadRecordFiles()
+    {
+        QTemporaryDir tmp;
+        const QString src = DRAPE_SOURCE_DIR "/examples/DL-A04";
+        QFile in(src + "/contours.csv");
+        QVERIFY(in.open(QIODevice::ReadOnly));
+        QList<QByteArray> lines = in.readAll().split('\n');
+        struct Case {
+            QByteArray cell, expect;
+        };
+        // Row 2 is depth 5 mm at 0 deg: x = 81.63 mm.
+        for (const Case& c : {Case{"1e308", "x_mm, y_mm: the point (1e+308"}, Case{"nan", "column 'x_mm': 'nan' is not a number"},
+                              Case{"-inf", "column 'x_mm': '-inf' is not a number"}, Case{"210", "lies 210 mm from the axis"}}) {
+            const QString rec = tmp.path() + "/rec-" + QString::fromLatin1(c.cell);
+            QDir().mkpath(rec);
+            for (const char* f : {"meta.json", "top.jpg", "side.jpg", "iso.jpg"}) QFile::copy(src + "/" + f, rec + "/" + f);
+            QList<QByteArray> l = lines;
+            QList<QByteArray> cells = l[1].split(',');
+            cells[2] = c.cell;
+            l[1] = cells.join(',');
+            QFile out(rec + "/contours.csv");
+            QVERIFY(out.open(QIODevice::WriteOnly));
+            out.write(l.join('\n'));
+            out.close();
+            const Out o = run({"measure", rec});
+            QCOMPARE(o.code, 1);
+            QVERIFY2(o.err.contains(rec + "/contours.csv:2:") && o.err.contains(QString::fromLatin1(c.expect)) &&
+                         o.err.contains("could not be read (bad input, exit 1)"),
+                     qPrintable(o.err));
+            QVERIFY2(o.out.contains("drape coefficient"), qPrintable(o.out)); // the photos are still measured
+        }
+        // A contours file with its header only is no contours (a lab without a profiler), not bad input.
+        const QString rec = tmp.path() + "/rec-header-only";
+        QDir().mkpath(rec);
+        for (const char* f : {"meta.json", "top.jpg", "side.jpg", "iso.jpg"}) QFile::copy(src + "/" + f, rec + "/" + f);
+        QFile out(rec + "/contours.csv");
+        QVERIFY(out.open(QIODevice::WriteOnly));
+        out.write(lines[0] + "\n");
+        out.close();
+        const Out o = run({"measure", rec});
+        QVERIFY2(o.code == 0 && o.out.contains("not measured: laser contours"), qPrintable(o.err));
+    }
+
+    /// --batch: the table is what its name says, file names reach the terminal
+    /// and the table escaped, a photo of nothing is refused at once (it spun in
+    /// GrabCut for minutes) and is a row, not a stalled run.
+    void batchTableAndNamesAreSafe()
+    {
+        QTemporaryDir tmp;
+        const QString dir = tmp.path() + "/photos";
+        QDir().mkpath(dir);
+        // A uniform grey 1152 x 872 PNG (stored, so written without an image library).
+        QByteArray raw;
+        for (int y = 0; y < 872; ++y) raw += '\0' + QByteArray(3 * 1152, char(128));
+        auto crc = [](const QByteArray& d) {
+            quint32 c = 0xffffffffu;
+            for (unsigned char b : d) {
+                c ^= b;
+                for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+            }
+            return c ^ 0xffffffffu;
+        };
+        auto be32 = [](quint32 v) {
+            const char b[4] = {char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+            return QByteArray(b, 4);
+        };
+        auto chunk = [&](const QByteArray& type, const QByteArray& d) { return be32(quint32(d.size())) + type + d + be32(crc(type + d)); };
+        const QByteArray z = qCompress(raw, 9).mid(4); // qCompress: 4-byte length, then a zlib stream
+        const QByteArray png = QByteArray("\x89PNG\r\n\x1a\n", 8) +
+                               chunk("IHDR", be32(1152) + be32(872) + QByteArray("\x08\x02\x00\x00\x00", 5)) + chunk("IDAT", z) +
+                               chunk("IEND", {});
+        for (const QString& name : {QString("a-grey.png"), QString("b\x1b[2J\x07x.png")}) {
+            QFile f(dir + "/" + name);
+            QVERIFY(f.open(QIODevice::WriteOnly));
+            f.write(png);
+        }
+        const QStringList flags{"--disc", "150mm", "--specimen", "300mm"};
+        Out o = run(QStringList{"measure", "--batch", dir, "--table", tmp.path() + "/t.xlsx"} + flags);
+        QCOMPARE(o.code, 2);
+        QVERIFY2(o.err.contains("--table") && o.err.contains(".xlsx"), qPrintable(o.err));
+        QVERIFY(!QFile::exists(tmp.path() + "/t.xlsx"));
+        o = run(QStringList{"measure", "--batch", dir, "--table", tmp.path() + "/t.csv"} + flags);
+        QCOMPARE(o.code, 1);
+        QVERIFY2(o.err.contains("b\\x1B[2J\\x07x.png") && !o.err.contains('\x1b') && !o.err.contains('\x07'), qPrintable(o.err));
+        QFile t(tmp.path() + "/t.csv");
+        QVERIFY(t.open(QIODevice::ReadOnly));
+        const QByteArray csv = t.readAll();
+        QCOMPARE(csv.count('\n'), 3); // header and one row per photo
+        QVERIFY2(csv.contains("a-grey.png,refused,no-cloth,") && csv.contains("b\\x1B[2J\\x07x.png,") && !csv.contains('\x1b'),
+                 csv.constData());
+        // One photo: the same refusal, at once.
+        o = run(QStringList{"measure", "--top", dir + "/a-grey.png"} + flags);
+        QCOMPARE(o.code, 1);
+        QVERIFY2(o.err.contains("refused (no-cloth): no cloth found"), qPrintable(o.err));
+    }
+
+    /// library show and export resolve a name as every other command does
+    /// ("silk": the starter's "Silk (class preset)"); a preset whose fit set-up
+    /// is a string is refused, not read as unknown.
+    void namesAndFitSetupAreReadOneWay()
+    {
+        QTemporaryDir tmp;
+        const QString env = "DRAPE_LIBRARY=" + tmp.path() + "/library.sqlite";
+        Out o = run({"library", "show", "silk"}, {env});
+        QVERIFY2(o.code == 0 && o.out.contains("Silk (class preset)") && !o.out.contains("stored:"), qPrintable(o.err));
+        o = run({"library", "export", "silk"}, {env});
+        QVERIFY2(o.code == 0 && QJsonDocument::fromJson(o.out.toUtf8()).object()["name"].toString() == "Silk (class preset)", qPrintable(o.err));
+        // A library that does not hold the starter: shown as the starter simulate would drape.
+        const QString other = tmp.path() + "/other.sqlite";
+        QCOMPARE(run({"library", "add", "cotton", "--library", other}).code, 0);
+        o = run({"library", "show", "silk", "--json", "--library", other});
+        QCOMPARE(o.code, 0);
+        QCOMPARE(QJsonDocument::fromJson(o.out.toUtf8()).object()["stored"].toBool(), false);
+        o = run({"library", "show", "velvet", "--library", other});
+        QVERIFY2(o.code == 1 && o.err.contains("no fabric named 'velvet'"), qPrintable(o.err));
+        // fit.records[0].sample_diameter_m as a string: predict's grid came from a 300 mm default.
+        QFile in(DRAPE_SOURCE_DIR "/docs/fit-report/DL-A08.fabric.json");
+        QVERIFY(in.open(QIODevice::ReadOnly));
+        QByteArray text = in.readAll();
+        QVERIFY(text.contains("\"sample_diameter_m\": 0.3"));
+        text.replace("\"sample_diameter_m\": 0.3", "\"sample_diameter_m\": \"0.15\"");
+        QFile out(tmp.path() + "/p.json");
+        QVERIFY(out.open(QIODevice::WriteOnly));
+        out.write(text);
+        out.close();
+        o = run({"predict", "--fabric", tmp.path() + "/p.json", "--quiet"}, {env});
+        QCOMPARE(o.code, 1);
+        QVERIFY2(o.err.contains("p.json: field 'fit.records[0].sample_diameter_m' must be a number [m], got string \"0.15\""), qPrintable(o.err));
     }
 };
 

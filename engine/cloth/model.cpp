@@ -495,6 +495,7 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
     m.friction = p[Param::Friction];
     m.bend_stiffening = p[Param::BendStiffeningRadius] * p[Param::BendStiffeningRadius];
     m.bend_softening = p[Param::BendSofteningRadius] * p[Param::BendSofteningRadius];
+    m.bend_peak = p[Param::BendPeakRadius] * p[Param::BendPeakRadius];
     add_common(m, mesh, opt.contact_depth);
     m.edge_contact = opt.edge_contact;
     m.self_contact_distance = opt.self_collision ? std::max(p[Param::Thickness], kMinSelfContactDistance) : 0.0;

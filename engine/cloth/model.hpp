@@ -245,6 +245,11 @@ struct ClothModel {
     /// B kappa / sqrt(1 + rho^2 kappa^2) that saturates at B / rho. 0 = linear. With
     /// BendStencil::quartic, of the corrected squared curvature (see there).
     double bend_softening = 0;
+    /// Peaking bending of every stencil [m^2] (R^2 of Param::BendPeakRadius): energy
+    /// k ln(1 + R^2 |d|^2) / (2 R^2) instead of k |d|^2 / 2, a moment B kappa / (1 + R^2
+    /// kappa^2) that peaks at B / (2 R) where kappa = 1 / R and falls beyond (a stencil
+    /// bent past it is not convex: the cloth hinges). 0 = linear; not with bend_softening.
+    double bend_peak = 0;
     bool edge_contact = true;         ///< see ModelOptions::edge_contact
     /// Self-contact distance d_hat [m] (ModelOptions::self_collision): 0 = off.
     double self_contact_distance = 0;

@@ -67,6 +67,11 @@ constexpr std::array<ParamSpec, kParamCount> kTable{{
      "wrinkling on a scale the mesh does not show, as woven fabric buckles at a small fraction of its tensile "
      "stiffness. A material length, the same on every mesh (0 = as stiff in compression as in tension, as in the "
      "seed paper)."},
+    {Param::BendPeakRadius, "bend_peak_radius_m", "", "m", 0.0, 0.05, 0.0, false, true, 0.0, 0.03,
+     "Bending whose moment peaks and then falls: the moment per unit width is B*kappa/(1 + (R*kappa)^2), at most "
+     "B/(2R) where the radius of curvature is R, where the tangent stiffness is 0 (cantilever measurements of real "
+     "fabrics put it near 5 mm), and falling in sharper bends, which hinge. Not with bend_softening_radius_m "
+     "(0 = linear bending, as in the seed paper)."},
 }};
 
 constexpr bool table_is_consistent()
@@ -110,6 +115,9 @@ void FabricParams::validate(const std::string& where) const
                                  std::string(s.unit) + " is outside [" + format_value(s.lower) + ", " +
                                  format_value(s.upper) + "]");
     }
+    if (values[static_cast<std::size_t>(Param::BendSofteningRadius)] > 0 && values[static_cast<std::size_t>(Param::BendPeakRadius)] > 0)
+        throw ParameterError(where + ": fields 'bend_softening_radius_m' and 'bend_peak_radius_m' are two laws of the bending's nonlinearity: "
+                             "set one (the other 0)");
 }
 
 } // namespace drape::cloth

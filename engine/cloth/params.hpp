@@ -32,6 +32,7 @@ enum class Param : int {
     BendStiffeningRadius, ///< [m] radius of curvature at which the bending stiffness doubles (0 = linear bending, the seed's)
     BendSofteningRadius,  ///< [m] bending that yields: moment B kappa / sqrt(1 + (rho kappa)^2), at most B / rho (0 = linear)
     BucklingLength,       ///< [m] compression limit of the membrane: at most pi^2 B / l^2 per unit width (0 = linear in compression)
+    BendPeakRadius,       ///< [m] bending whose moment peaks: B kappa / (1 + (R kappa)^2), at most B / (2 R) at kappa = 1 / R, falling beyond (0 = linear)
     Count
 };
 

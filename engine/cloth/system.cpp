@@ -110,8 +110,9 @@ namespace {
 
 /// The bending law of one stencil at s2 = |d|^2, d = sum w_a x_a: energy k g(sig) with
 /// g = (sqrt(1 + rho2 sig) - 1) / rho2 + beta sig^2 / 4 (g = sig / 2 + beta sig^2 / 4
-/// without softening) of the corrected squared curvature sig = s2 (1 + quartic s2 / 2)
-/// (ClothModel::bend_stiffening = beta, bend_softening = rho2, BendStencil::quartic;
+/// without softening; g = ln(1 + peak2 sig) / (2 peak2) + beta sig^2 / 4 with the
+/// peaking law) of the corrected squared curvature sig = s2 (1 + quartic s2 / 2)
+/// (ClothModel::bend_stiffening = beta, bend_softening = rho2, bend_peak = peak2, BendStencil::quartic;
 /// sig = s2 without the correction). The force is -k g1 ds d; the Hessian in d is
 /// k (c I + 2 c' d d^T) with c = g1 ds and c' = g2 ds^2 + g1 quartic. Without the
 /// correction that is k ((1/q + beta s2) I + (2 beta - rho2/q^3) d d^T), positive
@@ -124,15 +125,23 @@ struct BendLaw {
     double ds; ///< d sig / d s2 = 1 + quartic s2
 };
 
-BendLaw bend_law(double s2, double quartic, double beta, double rho2)
+BendLaw bend_law(double s2, double quartic, double beta, double rho2, double peak2)
 {
     const double sig = s2 * (1.0 + 0.5 * quartic * s2);
-    const double q = rho2 > 0 ? std::sqrt(1.0 + rho2 * sig) : 1.0;
     BendLaw l;
+    l.ds = 1.0 + quartic * s2;
+    if (peak2 > 0) {
+        // The peaking law (ClothModel::bend_peak = R^2): g = ln(1 + R^2 sig) / (2 R^2).
+        const double u = 1.0 + peak2 * sig;
+        l.g = std::log1p(peak2 * sig) / (2 * peak2) + 0.25 * beta * sig * sig;
+        l.g1 = 1.0 / u + beta * sig;
+        l.g2 = beta - peak2 / (u * u);
+        return l;
+    }
+    const double q = rho2 > 0 ? std::sqrt(1.0 + rho2 * sig) : 1.0;
     l.g = (rho2 > 0 ? (q - 1.0) / rho2 : 0.5 * sig) + 0.25 * beta * sig * sig;
     l.g1 = 1.0 / q + beta * sig;
     l.g2 = beta - rho2 / (2 * q * q * q);
-    l.ds = 1.0 + quartic * s2;
     return l;
 }
 
@@ -543,11 +552,11 @@ double ClothSystem::potential_energy(const Positions& X) const
         fb.law(fb.vec(X).norm(), es, de, d2e);
         e += es;
     }
-    const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening;
+    const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening, peak2 = m_model.bend_peak;
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        e += b.k * bend_law(s.squaredNorm(), b.quartic, beta, rho2).g;
+        e += b.k * bend_law(s.squaredNorm(), b.quartic, beta, rho2, peak2).g;
     }
     for (int i = 0; i < X.rows(); ++i) e -= m_model.mass(i) * m_model.gravity.dot(X.row(i).transpose());
     for (const auto& a : m_model.anchors) {
@@ -610,11 +619,11 @@ void ClothSystem::conservative_forces(const Positions& X, Positions& f) const
         const Vec3 fu = -de / l * u;
         for (int a = 0; a < 3; ++a) f.row(fb.v[a]) += (fb.w[a] * fu).transpose();
     }
-    const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening;
+    const double beta = m_model.bend_stiffening, rho2 = m_model.bend_softening, peak2 = m_model.bend_peak;
     for (const auto& b : m_model.bends) {
         Vec3 s = Vec3::Zero();
         for (int a = 0; a < b.n; ++a) s += b.w[a] * X.row(b.v[a]).transpose();
-        const BendLaw law = bend_law(s.squaredNorm(), b.quartic, beta, rho2);
+        const BendLaw law = bend_law(s.squaredNorm(), b.quartic, beta, rho2, peak2);
         const double c = b.k * law.g1 * law.ds;
         for (int a = 0; a < b.n; ++a) f.row(b.v[a]) -= (c * b.w[a] * s).transpose();
     }
@@ -914,15 +923,15 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         for (int p = 0; p < 3; ++p)
             for (int q = p + 1; q < 3; ++q, ++b) add_off(m_fiber_blocks[b], fb.w[p] * fb.w[q] * K);
     }
-    const double beta = m.bend_stiffening, rho2 = m.bend_softening;
+    const double beta = m.bend_stiffening, rho2 = m.bend_softening, peak2 = m.bend_peak;
     for (std::size_t s = 0; s < m.bends.size(); ++s) {
         const auto& b = m.bends[s];
         // The Hessian in d of bend_law's energy; vertex blocks are w_p w_q times it.
         Eigen::Matrix3d Kd = (b.k + damping_scale * b.d) * I;
-        if (beta > 0 || rho2 > 0 || b.quartic > 0) {
+        if (beta > 0 || rho2 > 0 || peak2 > 0 || b.quartic > 0) {
             Vec3 d = Vec3::Zero();
             for (int a = 0; a < b.n; ++a) d += b.w[a] * X.row(b.v[a]).transpose();
-            const BendLaw law = bend_law(d.squaredNorm(), b.quartic, beta, rho2);
+            const BendLaw law = bend_law(d.squaredNorm(), b.quartic, beta, rho2, peak2);
             const double c = law.g1 * law.ds, c1 = law.g2 * law.ds * law.ds + law.g1 * b.quartic;
             Kd += b.k * ((c - 1.0) * I + 2.0 * c1 * d * d.transpose());
         }

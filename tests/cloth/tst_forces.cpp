@@ -16,9 +16,11 @@ namespace {
 /// A small draped-looking state: the sheet bent over the pedestal edge so that
 /// springs are stretched and compressed, stencils bent and contacts active.
 std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed, double stiffening_radius = 0.0, double softening_radius = 0.0,
-                                       double buckling_length = 0.0, bool bending_correction = false, bool arc_membrane = false)
+                                       double buckling_length = 0.0, bool bending_correction = false, bool arc_membrane = false,
+                                       double peak_radius = 0.0)
 {
     FabricParams p;
+    p[Param::BendPeakRadius] = peak_radius;
     p[Param::BendStiffeningRadius] = stiffening_radius;
     p[Param::BendSofteningRadius] = softening_radius;
     p[Param::BucklingLength] = buckling_length;
@@ -66,30 +68,36 @@ private slots:
         QTest::addColumn<double>("buckling");
         QTest::addColumn<bool>("correction");
         QTest::addColumn<bool>("arc");
-        QTest::newRow("grid") << false << 0.0 << 0.0 << 0.0 << false << false;
-        QTest::newRow("triangle mesh") << true << 0.0 << 0.0 << 0.0 << false << false;
+        QTest::addColumn<double>("peak");
+        QTest::newRow("grid") << false << 0.0 << 0.0 << 0.0 << false << false << 0.0;
+        QTest::newRow("triangle mesh") << true << 0.0 << 0.0 << 0.0 << false << false << 0.0;
         // 20 mm: the nonlinear terms dominate in the sharp bends of this state.
-        QTest::newRow("grid, stiffening bending") << false << 0.02 << 0.0 << 0.0 << false << false;
-        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02 << 0.0 << 0.0 << false << false;
-        QTest::newRow("grid, softening bending") << false << 0.0 << 0.02 << 0.0 << false << false;
-        QTest::newRow("triangle mesh, both") << true << 0.01 << 0.02 << 0.0 << false << false;
+        QTest::newRow("grid, stiffening bending") << false << 0.02 << 0.0 << 0.0 << false << false << 0.0;
+        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02 << 0.0 << 0.0 << false << false << 0.0;
+        QTest::newRow("grid, softening bending") << false << 0.0 << 0.02 << 0.0 << false << false << 0.0;
+        QTest::newRow("triangle mesh, both") << true << 0.01 << 0.02 << 0.0 << false << false << 0.0;
         // The hoops of the folded overhang are compressed past the buckling load
         // (a buckling length of 30 mm, the mesh spacing of these states).
-        QTest::newRow("grid, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false << false;
-        QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << 0.03 << false << false;
+        QTest::newRow("grid, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false << false << 0.0;
+        QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << 0.03 << false << false << 0.0;
         // The stencils' fourth-order correction (30 mm cells: 300 mm^2 per stencil),
         // alone, with the material's softening, with its stiffening and with the
         // compression limit.
-        QTest::newRow("grid, crest-corrected bending") << false << 0.0 << 0.0 << 0.0 << true << false;
-        QTest::newRow("grid, crest-corrected and softening") << false << 0.0 << 0.02 << 0.0 << true << false;
-        QTest::newRow("grid, crest-corrected and stiffening") << false << 0.02 << 0.0 << 0.0 << true << false;
-        QTest::newRow("grid, crest-corrected, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << true << false;
+        QTest::newRow("grid, crest-corrected bending") << false << 0.0 << 0.0 << 0.0 << true << false << 0.0;
+        QTest::newRow("grid, crest-corrected and softening") << false << 0.0 << 0.02 << 0.0 << true << false << 0.0;
+        QTest::newRow("grid, crest-corrected and stiffening") << false << 0.02 << 0.0 << 0.0 << true << false << 0.0;
+        QTest::newRow("grid, crest-corrected, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << true << false << 0.0;
         // Springs that measure arcs (ModelOptions::arc_membrane), with the compression
         // limit their bent crests no longer trip, and with the crest-corrected stencils,
         // softening bending and the compression limit besides.
-        QTest::newRow("grid, arc membrane") << false << 0.0 << 0.0 << 0.0 << false << true;
-        QTest::newRow("grid, arc membrane, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false << true;
-        QTest::newRow("grid, arc membrane, crest-corrected, softening, buckling") << false << 0.0 << 0.02 << 0.03 << true << true;
+        QTest::newRow("grid, arc membrane") << false << 0.0 << 0.0 << 0.0 << false << true << 0.0;
+        QTest::newRow("grid, arc membrane, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false << true << 0.0;
+        QTest::newRow("grid, arc membrane, crest-corrected, softening, buckling") << false << 0.0 << 0.02 << 0.03 << true << true << 0.0;
+        // The peaking law (bend_peak_radius_m, 20 mm): this state's sharp bends are
+        // past the moment's peak, where a stencil's energy is not convex.
+        QTest::newRow("grid, peaking bending") << false << 0.0 << 0.0 << 0.0 << false << false << 0.02;
+        QTest::newRow("triangle mesh, peaking bending") << true << 0.0 << 0.0 << 0.0 << false << false << 0.02;
+        QTest::newRow("grid, crest-corrected, peaking, stiffening") << false << 0.01 << 0.0 << 0.0 << true << false << 0.02;
     }
     void forces_are_minus_energy_gradient()
     {
@@ -99,7 +107,8 @@ private slots:
         QFETCH(double, buckling);
         QFETCH(bool, correction);
         QFETCH(bool, arc);
-        auto s = bent_disc(triangles, 3, stiffening, softening, buckling, correction, arc);
+        QFETCH(double, peak);
+        auto s = bent_disc(triangles, 3, stiffening, softening, buckling, correction, arc, peak);
         Positions f;
         s->conservative_forces(s->x, f);
         const double h = 1e-7;
@@ -126,7 +135,8 @@ private slots:
         QFETCH(double, buckling);
         QFETCH(bool, correction);
         QFETCH(bool, arc);
-        auto s = bent_disc(triangles, 5, stiffening, softening, buckling, correction, arc);
+        QFETCH(double, peak);
+        auto s = bent_disc(triangles, 5, stiffening, softening, buckling, correction, arc, peak);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/false);
         const Eigen::MatrixXd Hu = Eigen::MatrixXd(H.matrix());
@@ -533,13 +543,16 @@ private slots:
         QTest::addColumn<double>("softening");
         QTest::addColumn<double>("buckling");
         QTest::addColumn<bool>("arc");
-        QTest::newRow("linear bending") << false << 0.0 << 0.0 << 0.0 << false;
-        QTest::newRow("stiffening bending") << false << 0.02 << 0.0 << 0.0 << false;
-        QTest::newRow("softening bending") << false << 0.0 << 0.02 << 0.0 << false;
+        QTest::addColumn<double>("peak");
+        QTest::newRow("linear bending") << false << 0.0 << 0.0 << 0.0 << false << 0.0;
+        QTest::newRow("stiffening bending") << false << 0.02 << 0.0 << 0.0 << false << 0.0;
+        QTest::newRow("softening bending") << false << 0.0 << 0.02 << 0.0 << false << 0.0;
         // The membrane fibres of a triangle mesh, compressed in the folded overhang.
-        QTest::newRow("triangle mesh") << true << 0.0 << 0.0 << 0.0 << false;
-        QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << 0.03 << false;
-        QTest::newRow("grid, arc membrane, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << true;
+        QTest::newRow("triangle mesh") << true << 0.0 << 0.0 << 0.0 << false << 0.0;
+        QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << 0.03 << false << 0.0;
+        QTest::newRow("grid, arc membrane, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << true << 0.0;
+        // Stencils bent past the peaking law's peak: not convex, projected.
+        QTest::newRow("peaking bending") << false << 0.0 << 0.0 << 0.0 << false << 0.02;
     }
     void projected_hessian_is_positive_semidefinite()
     {
@@ -548,7 +561,8 @@ private slots:
         QFETCH(double, softening);
         QFETCH(double, buckling);
         QFETCH(bool, arc);
-        auto s = bent_disc(triangles, 7, stiffening, softening, buckling, false, arc);
+        QFETCH(double, peak);
+        auto s = bent_disc(triangles, 7, stiffening, softening, buckling, false, arc, peak);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/true);
         const Eigen::MatrixXd Hd = Eigen::MatrixXd(Eigen::MatrixXd(H.matrix()).selfadjointView<Eigen::Upper>());

@@ -19,7 +19,7 @@
 //
 //   build/bin/bench_drape --late-shift [--grids 41,61] [--seeds K,K,...] [--preset FILE]...
 //
-// --late-shift (twenty-second session): every preset (the starters without
+// --late-shift (docs/decisions/0023-late-shift-from-flat.md): every preset (the starters without
 // --preset) draped from flat as `drape simulate` drapes it, per grid and seed,
 // with (the default) and without (late_shift_residual -1) the late shift (near
 // rest, a failed exact factorisation shifts before it projects): D (folds), Newton iterations and wall

@@ -42,6 +42,7 @@ as not identifiable.
                       | softening (+ yielding bending, bend_softening_radius_m)
                       | full (stiffening + tensile stiffness warp/weft)
                       | buckling (+ the membrane's compression limit, buckling_length_m)
+                      | peaking (+ bending whose moment peaks at a radius and falls beyond, bend_peak_radius_m)
   --recentre-contours measurement model: re-centre every contour stack (record and simulation)
                       on its own axis, for a profiler or specimen off the pedestal axis
   --untilt-contours   measurement model: as --recentre-contours with an axis that moves with depth
@@ -52,11 +53,11 @@ as not identifiable.
   --plain-bending     the grid's plain bending stencils (fits made before 2026-11-30). By
                       default the stencils carry their fourth-order correction (a fold crest one
                       cell in radius keeps its bending energy) and the preset says
-                      model.bending_correction (docs/model-discrepancy.md sections 18-19);
+                      model.bending_correction (docs/decisions/0011-bending-correction.md);
                       --bending-correction (the default) is still accepted
   --arc-membrane      the grid's springs measure the arc of their material line, not its chord
                       (a fold crest no longer reads as compression); the preset then says
-                      model.arc_membrane. Off by default: docs/model-discrepancy.md section 24
+                      model.arc_membrane. Off by default: docs/decisions/0019-drapemeter-mesh.md
   --channels LIST     fitted channels, any of dc,nodes,hem,contours (default all); the others
                       are held out: predicted and reported, not fitted
   --grid N            nodes across the specimen in the fit's simulations (default 41: 7.5 mm
@@ -104,6 +105,10 @@ as not identifiable.
                       drapes lay the count within 1 and gain more than the contours lose; the
                       report shows the contours' optimum, what moved and the chi2 it costs.
                       off: the preset is the contours' optimum
+  --prior on|off      on (default): priors from 251 real fabrics (Feng et al. 2022) in the objective:
+                      log10 of the warp/weft bending ratio ~ N(0, 0.3) and log10 of the mean bending
+                      ~ N(-5.0, 0.6) [N*m]; the report says which the prior, not the data, decided
+                      (fit.priors). A ratio beyond 3 is kept only when records of two set-ups confirm it
   --bending T         warp and weft bending: auto (default; fitted apart, and fitted again as one
                       bending when their ratio is beyond 3 but the data do not separate them - the
                       tied preset is kept unless chi2 rises by more than 9, the 3-sigma level), free (apart,
@@ -165,10 +170,11 @@ std::string measured_text(double v, const char* fmt)
 
 int run(const std::vector<std::string>& argv)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--shear", "--typical-shear", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation"},
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--shear", "--typical-shear", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation", "--prior"},
            {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
             "--bending-correction", "--plain-bending", "--arc-membrane"});
     if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
+    reject_duplicate_records(a.positionals()); // the same record twice would count twice
     const auto out = a.get("--out");
     if (!out) throw UsageError("--out FABRIC.json is required");
     // Fail now, not after minutes of fitting.
@@ -197,6 +203,7 @@ int run(const std::vector<std::string>& argv)
         throw UsageError("--refine-grid " + std::to_string(fo.refine_grid) + " must be above --grid " + std::to_string(fo.grid) + " (or 0)");
     fo.flat_check_grid = a.get_int("--flat-grid", fo.flat_check_grid, 0, 200);
     fo.flat_calibration = a.get_on_off("--flat-calibration", fo.flat_calibration);
+    fo.priors = a.get_on_off("--prior", fo.priors);
     fo.seed = static_cast<std::uint64_t>(a.get_int("--seed", 1, 0, 2000000000));
     fo.seeds_per_evaluation = a.get_int("--seeds", 2, 1, 16);
     fo.laying_load = parse_laying(a, fo.laying_load);
@@ -220,12 +227,12 @@ int run(const std::vector<std::string>& argv)
         throw UsageError("--recentre-contours and --untilt-contours are two measurement models of the profiler's axis: choose one");
     fo.model_options.edge_contact = !a.has("--vertex-contact-only");
     // The corrected stencils by default: with them the fitted presets carry over
-    // between meshes and drape from flat closer to their records (section 19).
+    // between meshes and drape from flat closer to their records (docs/decisions/0011-bending-correction.md).
     if (a.has("--bending-correction") && a.has("--plain-bending"))
         throw UsageError("--bending-correction and --plain-bending: choose one");
     if (a.has("--plain-bending")) fo.model_options.bending_correction = false;
     // Chords by default: with arcs alone the coarse grid's bending deficit at the
-    // rim shows (docs/model-discrepancy.md section 24).
+    // rim shows (docs/decisions/0019-drapemeter-mesh.md).
     fo.model_options.arc_membrane = a.has("--arc-membrane");
     if (fo.model_options.arc_membrane && fo.mesh != cloth::DrapeMesh::Grid)
         throw UsageError("--arc-membrane is the grid's springs; --mesh rings has the triangle model's fibre membrane");

@@ -1,4 +1,4 @@
-#include "engine/estimate/evaluator.hpp"
+#include "engine/estimate/detail/evaluator.hpp"
 
 #include "engine/cloth/rest_sensitivity.hpp"
 #include "engine/core/error.hpp"
@@ -54,6 +54,44 @@ cloth::DrapeSetup Evaluator::setup_for(int r, std::uint64_t seed, bool on_branch
 int Evaluator::branch_of(int r) const
 {
     return m_opt.branch != FoldBranch::Random ? measured_fold_branch(m_meas[static_cast<std::size_t>(r)].node_count) : 0;
+}
+
+namespace {
+bool is_bending_variable(const FitVariable& v)
+{
+    return v.name == "bend_Nm" || v.name == "bend_warp_Nm" || v.name == "bend_weft_Nm";
+}
+} // namespace
+
+std::vector<ResidualTerm> Evaluator::prior_terms(const cloth::FabricParams& p) const
+{
+    std::vector<ResidualTerm> out;
+    if (!m_opt.priors) return out;
+    if (std::none_of(m_vars.begin(), m_vars.end(), is_bending_variable)) return out;
+    const double w = p[Param::BendWarp], f = p[Param::BendWeft];
+    if (!(w > 0) || !(f > 0)) return out;
+    ResidualTerm a;
+    a.record = -1;
+    a.kind = "prior_anisotropy";
+    a.simulated = std::log10(w / f);
+    a.measured = 0;
+    a.sigma = m_opt.prior.anisotropy_sigma_decades;
+    ResidualTerm b = a;
+    b.kind = "prior_bending";
+    b.simulated = 0.5 * std::log10(w * f);
+    b.measured = m_opt.prior.bending_centre_log10_Nm;
+    b.sigma = m_opt.prior.bending_sigma_decades;
+    out.push_back(a);
+    out.push_back(b);
+    return out;
+}
+
+double Evaluator::prior_slope(const std::string& kind, std::size_t i) const
+{
+    const std::string& v = m_vars[i].name;
+    if (kind == "prior_anisotropy") return v == "bend_warp_Nm" ? 1.0 : v == "bend_weft_Nm" ? -1.0 : 0.0;
+    if (kind == "prior_bending") return v == "bend_Nm" ? 1.0 : (v == "bend_warp_Nm" || v == "bend_weft_Nm") ? 0.5 : 0.0;
+    return 0.0;
 }
 
 cloth::FabricParams Evaluator::params_at(const Eigen::VectorXd& x) const
@@ -119,6 +157,9 @@ Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
     }
     if (m_sigma_floor.size() == e.terms.size())
         for (std::size_t i = 0; i < e.terms.size(); ++i) e.terms[i].sigma = std::max(e.terms[i].sigma, m_sigma_floor[i]);
+    // After the floors (which are the records' rows'): the priors are not draws.
+    const auto pr = prior_terms(p);
+    e.terms.insert(e.terms.end(), pr.begin(), pr.end());
     bool comparable = true;
     if (!m_opt.term_sigmas.empty()) {
         // Given sigmas are per term of a fixed layout; a drape whose terms differ
@@ -499,7 +540,11 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
         }
     }
     const std::vector<std::size_t>& first = m_first_term;
-    if (first.back() != e.terms.size()) return J; // not this evaluator's terms
+    // The prior rows: linear in the log10 coordinates.
+    for (std::size_t row = first.back(); row < e.terms.size(); ++row)
+        for (int i = 0; i < n; ++i)
+            J(static_cast<Eigen::Index>(row), i) = prior_slope(e.terms[row].kind, static_cast<std::size_t>(i)) / e.terms[row].sigma;
+    if (first.back() + prior_terms(p).size() != e.terms.size()) return J; // not this evaluator's terms
     // The closure rows count seeds whose slice closed: no derivative (a flip
     // between x + d and x - d would read as a slope of thousands).
     auto keep_row = [&](std::size_t k) {
@@ -571,7 +616,7 @@ Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& 
             report("jacobian");
         }
         if (e.at_rest() && !ep.at_rest()) continue;
-        for (std::size_t k = 0; k < e.terms.size() && k < ep.terms.size(); ++k)
+        for (std::size_t k = 0; k < first.back() && k < e.terms.size() && k < ep.terms.size(); ++k)
             if (keep_row(k) && std::isfinite(ep.terms[k].simulated) && std::isfinite(e.terms[k].simulated))
                 J(static_cast<Eigen::Index>(k), i) = (ep.terms[k].simulated - e.terms[k].simulated) / h / e.terms[k].sigma;
     }
@@ -795,7 +840,7 @@ std::vector<EffectSignature> Evaluator::effect_signatures(const Eigen::VectorXd&
     }
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
     const std::vector<std::size_t>& first = m_first_term;
-    if (first.back() != e.terms.size()) return out;
+    if (first.back() + prior_terms(params_at(x)).size() != e.terms.size()) return out;
     auto photo_row = [](const std::string& kind) { return kind == "dc" || kind == "hem"; };
     for (std::size_t k = 0; k < lib.size() && all_at_rest; ++k) {
         auto& sig = out[k];

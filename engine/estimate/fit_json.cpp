@@ -79,6 +79,18 @@ json fit_to_json(const FitResult& r)
                              {"coarse_dof", r.refinement.coarse_dof}, {"fine_chi2", r.refinement.fine_chi2},
                              {"fine_dof", r.refinement.fine_dof}, {"reason", r.refinement.reason}};
     fit["bending"] = to_string(r.options.bending);
+    fit["priors_on"] = r.options.priors;
+    if (!r.priors.empty()) {
+        json pr = json::array();
+        for (const auto& u : r.priors)
+            pr.push_back({{"kind", u.kind},
+                          {"value_decades", u.value},
+                          {"centre_decades", u.centre},
+                          {"prior_sigma_decades", u.prior_sigma},
+                          {"data_sigma_decades", std::isfinite(u.data_sigma) ? json(u.data_sigma) : json(nullptr)},
+                          {"decided_by_prior", u.decided_by_prior}});
+        fit["priors"] = pr;
+    }
     if (r.flat_calibration.tried) {
         const auto& c = r.flat_calibration;
         fit["flat_calibration"] = {{"applied", c.applied},
@@ -116,6 +128,8 @@ json fit_to_json(const FitResult& r)
                    {"ratio_lower95", a.ratio_lower95},
                    {"ratio_upper95", std::isfinite(a.ratio_upper95) ? json(a.ratio_upper95) : json(nullptr)},
                    {"separated", a.separated},
+                   {"setups", a.setups},
+                   {"setups_confirming", a.setups_confirming},
                    {"tied_refit", a.refit},
                    {"tied", a.tied},
                    {"reason", a.reason}};

@@ -369,4 +369,12 @@ DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& l
     return f;
 }
 
+cloth::FabricParams params_for_record(const cloth::FabricParams& base, const MeasuredDrape& m)
+{
+    cloth::FabricParams p = base;
+    p[cloth::Param::AreaDensity] = m.areal_density;
+    p[cloth::Param::Thickness] = m.thickness;
+    return p;
+}
+
 } // namespace drape::estimate

@@ -153,4 +153,7 @@ DrapeFeatures drape_features(const MeasuredDrape& m);
 /// no photo count, else from the shadow outline, as the photo is).
 DrapeFeatures drape_features(const cloth::DrapeResult& r, const MeasuredDrape& like);
 
+/// The parameters of `base` with areal density and thickness from the record.
+cloth::FabricParams params_for_record(const cloth::FabricParams& base, const MeasuredDrape& m);
+
 } // namespace drape::estimate

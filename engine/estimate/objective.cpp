@@ -16,7 +16,8 @@ ModelVariant parse_model_variant(const std::string& name)
     if (name == "softening") return ModelVariant::Softening;
     if (name == "full") return ModelVariant::Full;
     if (name == "buckling") return ModelVariant::Buckling;
-    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, softening, full, buckling");
+    if (name == "peaking") return ModelVariant::Peaking;
+    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, softening, full, buckling, peaking");
 }
 
 std::string to_string(ModelVariant v)
@@ -27,6 +28,7 @@ std::string to_string(ModelVariant v)
     case ModelVariant::Softening: return "softening";
     case ModelVariant::Full: return "full";
     case ModelVariant::Buckling: return "buckling";
+    case ModelVariant::Peaking: return "peaking";
     }
     return "baseline";
 }
@@ -59,6 +61,7 @@ std::vector<FitVariable> fit_variables(ModelVariant v, bool tie_bending)
     if (v == ModelVariant::Stiffening || v == ModelVariant::Full) add(Param::BendStiffeningRadius);
     if (v == ModelVariant::Softening) add(Param::BendSofteningRadius);
     if (v == ModelVariant::Buckling) add(Param::BucklingLength);
+    if (v == ModelVariant::Peaking) add(Param::BendPeakRadius);
     if (v == ModelVariant::Full) {
         add(Param::StretchWarp);
         add(Param::StretchWeft);
@@ -191,6 +194,7 @@ double chi_square(const std::vector<ResidualTerm>& r)
 std::string channel_of(const std::string& kind)
 {
     if (kind == "dc" || kind == "nodes" || kind == "hem") return kind;
+    if (kind.rfind("prior", 0) == 0) return "prior";
     return "contours";
 }
 

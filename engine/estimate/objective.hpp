@@ -18,10 +18,12 @@ namespace drape::estimate {
 ///  - softening: baseline + yielding bending (bend_softening_radius_m, issue 7).
 ///  - full: stiffening + the tensile stiffnesses warp and weft.
 ///  - buckling: baseline + the membrane's compression limit (buckling_length_m).
+///  - peaking: baseline + bending whose moment peaks at a radius and falls beyond
+///    (bend_peak_radius_m; real fabrics' cantilever curves, Feng et al. 2022).
 /// Disc friction is not fitted: the static solver finds rest states without it
 /// (a rest state with friction depends on the path to it).
-enum class ModelVariant { Baseline, Stiffening, Softening, Full, Buckling };
-ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "stiffening" | "softening" | "full" | "buckling"; ParameterError otherwise
+enum class ModelVariant { Baseline, Stiffening, Softening, Full, Buckling, Peaking };
+ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "stiffening" | "softening" | "full" | "buckling" | "peaking"; ParameterError otherwise
 std::string to_string(ModelVariant v);
 
 /// One fitted coordinate: a parameter (or a tied group, e.g. stretch warp and

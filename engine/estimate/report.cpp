@@ -591,7 +591,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
     md << "## Residual analysis\n\n";
     if (r.residual.candidates.empty() && !r.residual.unexplained.empty()) md << "Candidate effects: " << r.residual.unexplained << ".\n\n";
     if (!r.residual.candidates.empty()) {
-        md << "### Candidate effects (engine-made signatures, docs/model-discrepancy.md section 11)\n\n";
+        md << "### Candidate effects (engine-made signatures, docs/model-discrepancy.md)\n\n";
         md << (r.residual.named_effect.empty() ? std::string("Named effect: **none**") : "Named effect: **" + r.residual.named_effect + "**");
         if (!r.residual.unexplained.empty()) md << " (" << r.residual.unexplained << ")";
         md << ".\n\n";

@@ -1,4 +1,4 @@
-#include "engine/estimate/stages.hpp"
+#include "engine/estimate/detail/stages.hpp"
 
 #include "engine/core/error.hpp"
 #include "engine/estimate/root.hpp"

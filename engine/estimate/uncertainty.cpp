@@ -1,4 +1,4 @@
-#include "engine/estimate/uncertainty.hpp"
+#include "engine/estimate/detail/uncertainty.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -133,7 +133,7 @@ void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, c
             // A bending whose bending length (B / (rho_A g))^(1/3) is shorter than the
             // mesh spacing is not resolved by the fit's grid: the coarse mesh's membrane
             // stiffness does part of the bending's work, and the value does not carry
-            // over to another grid (docs/model-discrepancy.md, section 5).
+            // over to another grid (docs/decisions/0004-fit-grid-41.md).
             if (sp.id == Param::BendWarp || sp.id == Param::BendWeft) {
                 const double rho_g = out.params[Param::AreaDensity] * 9.81;
                 const double c = std::cbrt(e.value / std::max(rho_g, 1e-12));
@@ -148,8 +148,8 @@ void parameter_estimates(FitResult& out, const std::vector<FitVariable>& vars, c
                 // tension T = rho_A g (R^2 - a^2) / (2 a) per unit length, and an elastica
                 // under T bends over an edge with a radius of about sqrt(B / T). A mesh
                 // coarser than that stores too little of that bend's energy and the
-                // preset's D moves with the grid by a point or two (docs/model-discrepancy.md
-                // section 24: DL-A04's preset, 4.9 / 6.9 mm against 7.5 mm, spread 1.49 over
+                // preset's D moves with the grid by a point or two (docs/decisions/0019-drapemeter-mesh.md:
+                // DL-A04's preset, 4.9 / 6.9 mm against 7.5 mm, spread 1.49 over
                 // grids 41-81). Said, not refitted: a finer grid costs several times the time.
                 if (rim_lever_m > 0) {
                     const double rim = std::sqrt(e.value / std::max(rho_g * rim_lever_m, 1e-12));

@@ -1,8 +1,8 @@
 // The blind suite of undeclared effects (issue 20), full version (`slow`):
 // each candidate family injected at several strengths into synthetic records
 // (two records per strength, other noise and phases), fitted with the baseline
-// model, and 20 clean records. Prints the detection tables (docs/model-discrepancy.md
-// section 11 carries them) and checks the stated detection limits and the false
+// model, and 20 clean records. Prints the detection tables (docs/model-discrepancy.md,
+// "Detection limits", carries them) and checks the stated detection limits and the false
 // alarm rate: every injection within its stated range named, at most 1 alarm in
 // 20 clean records.
 #include "engine/estimate/fit.hpp"
@@ -40,7 +40,7 @@ private slots:
         QTest::addColumn<QString>("unit");
         QTest::addColumn<double>("scale");
         // Candidates whose signature is alike the injected one's on these records
-        // (section 17): naming one of them is not a misnaming; any other name is.
+        // (docs/model-discrepancy.md, "How an effect is named"): naming one of them is not a misnaming; any other name is.
         QTest::addColumn<QStringList>("alike");
         QTest::newRow("profiler_off_axis") << "profiler_off_axis" << QList<double>{0.002, 0.004, 0.006, 0.008, 0.012} << 0.004 << 0.012 << "mm" << 1e3 << QStringList{};
         QTest::newRow("profiler_tilt") << "profiler_tilt" << QList<double>{0.03, 0.06, 0.1, 0.2} << 1.0 << 0.0 << "rad" << 1.0 << QStringList{"specimen_weight_gradient"};

@@ -123,7 +123,7 @@ private slots:
         // The profiler's cuts taken 6 mm deeper than the record declares (its height
         // datum off): every slice wider than the model's at the declared depth while
         // the photos' D and hem are right - the contour half of the rim signature
-        // the set-a fits show (docs/model-discrepancy.md section 37): the fit stiffens
+        // the set-a fits show (docs/model-discrepancy.md, "What the residual still shows"): the fit stiffens
         // the bending to widen the slices and D pays (+3.1 points as fitted). The
         // candidate profiler_depth is beyond noise with its amplitude near the 6 mm
         // (4.7 mm: the rest went into the bending); on the clean record

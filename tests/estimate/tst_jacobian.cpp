@@ -2,8 +2,8 @@
 // central differences of re-solved drapes, for every fitted coordinate of the
 // baseline and buckling models, at a drapemeter state with the pedestal's
 // contact active (every drape has it) and, for buckling, the compression limit.
-#include "engine/estimate/evaluator.hpp"
-#include "engine/estimate/uncertainty.hpp"
+#include "engine/estimate/detail/evaluator.hpp"
+#include "engine/estimate/detail/uncertainty.hpp"
 #include "synthetic.hpp"
 
 #include <QTest>

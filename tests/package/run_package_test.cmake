@@ -55,6 +55,16 @@ if(STEP STREQUAL "install")
       message(FATAL_ERROR "missing from the install: ${PREFIX}/${f}")
     endif()
   endforeach()
+  # The fit's internals (engine/estimate/detail: the evaluator, the stages, NLopt's
+  # header) are not part of the package.
+  foreach(f evaluator.hpp stages.hpp uncertainty.hpp)
+    if(EXISTS ${root}/${INCLUDEDIR}/drapekit/engine/estimate/${f} OR EXISTS ${root}/${INCLUDEDIR}/drapekit/engine/estimate/detail/${f})
+      message(FATAL_ERROR "an internal header of the fit is installed: engine/estimate/(detail/)${f}")
+    endif()
+  endforeach()
+  if(NOT EXISTS ${root}/${INCLUDEDIR}/drapekit/engine/estimate/fit.hpp OR NOT EXISTS ${root}/${INCLUDEDIR}/drapekit/engine/estimate/predict.hpp)
+    message(FATAL_ERROR "the fit's public headers (fit.hpp, predict.hpp) are missing from the install")
+  endif()
   # Every exported target is there, namespaced.
   file(READ ${root}/${LIBDIR}/cmake/Drapekit/DrapekitTargets.cmake targets)
   foreach(t core cloth fabric record capture estimate library importers widget)

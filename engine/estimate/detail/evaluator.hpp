@@ -6,7 +6,7 @@
 // estimate layer (fit.cpp, stages.cpp, uncertainty.cpp).
 #include "engine/cloth/drape.hpp"
 #include "engine/estimate/effects.hpp"
-#include "engine/estimate/fit.hpp"
+#include "engine/estimate/fit_types.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -175,6 +175,20 @@ public:
     /// Record r's drape from flat on FitOptions::flat_check_grid (draw_from_flat); nullptr = not drawn.
     const FineDrape* cold_fine(std::size_t r) const { return r < m_cold_fine.size() && m_cold_fine[r] ? &*m_cold_fine[r] : nullptr; }
     void set_planned(int n) { m_planned = n; }
+
+    /// Rows of the records' residual terms; the prior rows (FitOptions::priors)
+    /// follow them, to the end of an evaluation's terms.
+    std::size_t record_rows() const { return m_first_term.back(); }
+    /// Record r's residual rows: [first_row(r), first_row(r + 1)).
+    std::size_t first_row(std::size_t r) const { return m_first_term[r]; }
+    /// The prior rows at parameters p (empty without FitOptions::priors or without
+    /// a fitted bending): "prior_anisotropy" (log10 of warp / weft; 0 for a tied
+    /// bending, so a tied and a free fit have the same rows) and "prior_bending"
+    /// (log10 of their geometric mean), record -1, channel "prior".
+    std::vector<ResidualTerm> prior_terms(const cloth::FabricParams& p) const;
+    /// d(prior row k) / d(search coordinate i), unwhitened (the rows are linear in
+    /// the log10 coordinates).
+    double prior_slope(const std::string& kind, std::size_t i) const;
 
 private:
     void progress(const std::string& stage, bool starting);

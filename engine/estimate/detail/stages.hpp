@@ -2,7 +2,7 @@
 // The search stages of a fit, each on the evaluator (evaluator.hpp): the scan
 // of a common bending for the measured D, NLopt's global and local stages, and
 // the warp/weft mirror check. Internal to the estimate layer.
-#include "engine/estimate/evaluator.hpp"
+#include "engine/estimate/detail/evaluator.hpp"
 
 #include <nlopt.hpp>
 

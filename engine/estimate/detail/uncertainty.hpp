@@ -3,7 +3,7 @@
 // coordinates from the Jacobian of the smooth whitened residuals at the
 // optimum, and one estimate (role, value, 95 % interval, notes) per parameter
 // of the table. Internal to the estimate layer.
-#include "engine/estimate/evaluator.hpp"
+#include "engine/estimate/detail/evaluator.hpp"
 
 #include <vector>
 

@@ -33,7 +33,9 @@ int main(int argc, char** argv)
     const QCommandLineOption library("library", "Fabric library (SQLite); default $DRAPE_LIBRARY or ~/.local/share/drapekit/library.sqlite.", "file");
     const QCommandLineOption size("size", "Window size WxH (e.g. 1100x760).", "size");
     const QCommandLineOption list("list-fabrics", "Print the fabrics the demo offers and exit.");
-    cli.addOptions({script, garment, garmentFile, fabric, fabric2, shot, json, mannequin, unit, up, library, size, list});
+    const QCommandLineOption fit("fit", "Fit a fabric to a record folder (or a folder of records of one fabric) as the Fit button does, "
+                                        "show its predictions of the standard set-ups, write --screenshot of the window and exit.", "dir");
+    cli.addOptions({script, garment, garmentFile, fabric, fabric2, shot, json, mannequin, unit, up, library, size, list, fit});
     cli.process(app);
 
     drape::demo::DemoOptions o;
@@ -76,6 +78,25 @@ int main(int argc, char** argv)
         w.resize(wh[0].toInt(), wh[1].toInt());
     }
     w.show();
+    if (cli.isSet(fit)) {
+        int code = 0;
+        QObject::connect(&w, &drape::demo::MainWindow::fitFinished, &app, [&](bool ok, const QString& msg) {
+            std::printf("%s: %s\n", ok ? "fitted" : "fit failed", qPrintable(msg));
+            if (ok && !s.screenshot.isEmpty() && !w.grab().save(s.screenshot)) {
+                std::fprintf(stderr, "drape-demo: cannot write %s\n", qPrintable(s.screenshot));
+                ok = false;
+            }
+            code = ok ? 0 : 1;
+            QApplication::exit(code);
+        });
+        QString err;
+        if (!w.fitRecords(cli.value(fit), &err)) {
+            std::fprintf(stderr, "drape-demo: %s\n", qPrintable(err));
+            return 1;
+        }
+        app.exec();
+        return code;
+    }
     if (!cli.isSet(script) && !cli.isSet(garment) && !cli.isSet(garmentFile)) return app.exec();
 
     int code = 0;

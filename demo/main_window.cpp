@@ -1,6 +1,7 @@
 #include "demo/main_window.hpp"
 
 #include "engine/estimate/fit.hpp"
+#include "engine/estimate/predict.hpp"
 #include "engine/estimate/measured.hpp"
 #include "engine/library/fabric_library.hpp"
 
@@ -30,6 +31,7 @@
 #include <QTreeWidget>
 #include <QVBoxLayout>
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 
@@ -110,7 +112,10 @@ void MainWindow::buildUi()
     m_browser->setRootIsDecorated(false);
     m_browser->setSortingEnabled(true);
     m_browser->setMinimumHeight(150);
+    // The name takes what the numbers leave: they are sized to their contents.
+    m_browser->header()->setStretchLastSection(false);
     m_browser->header()->setSectionResizeMode(0, QHeaderView::Stretch);
+    for (int c = 1; c < 4; ++c) m_browser->header()->setSectionResizeMode(c, QHeaderView::ResizeToContents);
     m_browser->setToolTip(tr("Click: the fabric to drape. Ctrl+click: the second fabric (compare)."));
     form->addRow(m_browser);
     connect(m_search, &QLineEdit::textChanged, this, &MainWindow::filterBrowser);
@@ -142,6 +147,12 @@ void MainWindow::buildUi()
                          "or a folder of records of one fabric, then adds the result to the library."));
     connect(m_fit, &QPushButton::clicked, this, &MainWindow::fitFromRecord);
     form->addRow(m_fit);
+    m_predictions = new QLabel(panel);
+    m_predictions->setObjectName(QStringLiteral("predictions"));
+    m_predictions->setWordWrap(true);
+    m_predictions->setTextFormat(Qt::RichText);
+    m_predictions->setVisible(false);
+    form->addRow(m_predictions);
 
     auto* brow = new QHBoxLayout;
     m_drape = new QPushButton(tr("Drape"), panel);
@@ -297,7 +308,8 @@ void MainWindow::reloadFabrics(const QString& select)
         auto* item = new QTreeWidgetItem(m_browser);
         item->setText(0, QString::fromStdString(f.name));
         item->setData(0, Qt::UserRole, int(i));
-        item->setToolTip(0, QString::fromStdString(f.preset.composition));
+        item->setToolTip(0, f.preset.composition.empty() ? QString::fromStdString(f.name)
+                                                         : QStringLiteral("%1\n%2").arg(QString::fromStdString(f.name), QString::fromStdString(f.preset.composition)));
         item->setData(1, Qt::DisplayRole, std::round(f.preset.params[cloth::Param::AreaDensity] * 1e4) / 10);
         if (f.preset.drape) item->setData(2, Qt::DisplayRole, std::round(f.preset.drape->percent * 10) / 10);
         item->setText(3, QString::fromStdString(f.origin));
@@ -396,27 +408,53 @@ void MainWindow::showMessage(const QString& text)
 
 void MainWindow::fitFromRecord()
 {
-    const QString dir = QFileDialog::getExistingDirectory(this, tr("Drape-test record folder"),
+    const QString dir = QFileDialog::getExistingDirectory(this, tr("Drape-test record folder (one record, or records of one fabric)"),
                                                           QStringLiteral(DRAPE_SHARED_DIR "/data/drape-lab"));
     if (dir.isEmpty()) return;
+    QString err;
+    if (!fitRecords(dir, &err)) QMessageBox::warning(this, tr("Fit"), err);
+}
+
+namespace {
+/// What the fit job hands back: the preset's JSON and the predictions of the
+/// standard set-ups.
+struct FitOutcome {
+    nlohmann::json preset;
+    struct Row {
+        double d1 = 0, d2 = 0;   ///< the set-up [m]
+        bool fitted = false;     ///< one of the fitted records' set-ups
+        double dc = 0, lo = 0, hi = 0;
+        int nodes = 0, nodes_lo = 0, nodes_hi = 0;
+    };
+    std::vector<Row> rows;
+};
+
+/// The drapemeter's standard set-ups (Cusick; ISO 9073-9 uses 300 / 180 mm; the
+/// drape lab 240 / 180, 300 / 150 and 360 / 180 mm) [m].
+constexpr double kStandardSetups[][2] = {{0.24, 0.18}, {0.30, 0.15}, {0.36, 0.18}};
+} // namespace
+
+bool MainWindow::fitRecords(const QString& dir, QString* error)
+{
     namespace fs = std::filesystem;
     std::vector<estimate::MeasuredDrape> records;
     try {
         const fs::path p(dir.toStdString());
+        if (!fs::is_directory(p)) throw std::runtime_error(dir.toStdString() + ": no such folder (a record folder, or a folder of one fabric's records)");
         if (fs::exists(p / "meta.json")) records.push_back(estimate::load_record(p.string()));
         else
             for (const auto& e : fs::directory_iterator(p))
                 if (e.is_directory() && fs::exists(e.path() / "meta.json")) records.push_back(estimate::load_record(e.path().string()));
         if (records.empty()) throw std::runtime_error(dir.toStdString() + ": no record (meta.json) in this folder or its subfolders");
     } catch (const std::exception& e) {
-        QMessageBox::warning(this, tr("Fit"), QString::fromStdString(e.what()));
-        return;
+        if (error) *error = QString::fromStdString(e.what());
+        return false;
     }
-    auto result = std::make_shared<nlohmann::json>();
-    const std::string where = dir.toStdString();
+    auto outcome = std::make_shared<FitOutcome>();
     setBusy(true);
     m_cancel->setEnabled(true);
-    const bool started = m_fitJob.start(tr("fit"), [records, result, where](widget::JobContext& ctx) {
+    m_predictions->setVisible(false);
+    const bool started = m_fitJob.start(tr("fit"), [records, outcome](widget::JobContext& ctx) {
         // `drape fit`'s defaults (the lab's laying and waviness, the drapes from flat
         // at grid 61 and the calibration from flat included: the same preset as the CLI's).
         estimate::FitOptions o = estimate::drape_fit_defaults();
@@ -427,25 +465,66 @@ void MainWindow::fitFromRecord()
         };
         const estimate::FitResult r = estimate::fit_fabric(records, o);
         if (r.cancelled) throw std::runtime_error("cancelled");
-        *result = estimate::fit_to_json(r);
-        (void)where;
+        outcome->preset = estimate::fit_to_json(r);
+        // The standard set-ups the records did not cover, predicted as `drape predict`
+        // does (two drapes each, to keep it short; the CLI draws three).
+        const fabric::FabricPreset preset = fabric::fabric_from_json(outcome->preset, "fit");
+        for (const auto& su : kStandardSetups) {
+            FitOutcome::Row row;
+            row.d1 = su[0];
+            row.d2 = su[1];
+            for (const auto& rec : records)
+                row.fitted = row.fitted || (std::abs(rec.sample_diameter - su[0]) < 1e-4 && std::abs(rec.disc_diameter - su[1]) < 1e-4);
+            cloth::DrapeSetup s;
+            s.sample_diameter = su[0];
+            s.disc_diameter = su[1];
+            s.grid = 0;
+            ctx.report(-1.0, QStringLiteral("predicting %1 / %2 mm").arg(su[0] * 1e3).arg(su[1] * 1e3));
+            estimate::PredictOptions po;
+            po.seeds = 2;
+            po.cancel = ctx.cancelFlag();
+            const estimate::Prediction pr = estimate::predict_drape(preset, estimate::prediction_setup(preset, s), po);
+            if (ctx.cancelled()) throw std::runtime_error("cancelled");
+            row.dc = pr.dc_percent;
+            row.lo = pr.dc_lower95;
+            row.hi = pr.dc_upper95;
+            row.nodes = pr.node_count;
+            row.nodes_lo = pr.nodes_lower;
+            row.nodes_hi = pr.nodes_upper;
+            outcome->rows.push_back(row);
+        }
     });
     if (!started) {
         setBusy(false);
-        return;
+        if (error) *error = tr("another fit is running");
+        return false;
     }
-    connect(&m_fitJob, &widget::LongJob::finished, this, [this, result, records](bool ok, const QString& msg) {
+    connect(&m_fitJob, &widget::LongJob::finished, this, [this, outcome, records](bool ok, const QString& msg) {
         setBusy(false);
         // The fit's bar was a busy bar (no fraction of a fit is known ahead): stop it.
         m_progress->setRange(0, 1000);
         m_progress->setValue(ok ? 1000 : 0);
         if (!ok) {
             showMessage(tr("Fit: %1").arg(msg));
+            emit fitFinished(false, msg);
             return;
         }
-        QString name = QString::fromStdString(records.front().id) + tr(" (fitted)");
+        // One record: its id. Several (one fabric's set-ups): what their ids share up to a
+        // separator ("DL-D1-300-150", "DL-D1-360-180" -> "DL-D1"), else the first id.
+        std::string stem = records.front().id;
+        for (const auto& rec : records) {
+            std::size_t n = 0;
+            while (n < stem.size() && n < rec.id.size() && stem[n] == rec.id[n]) ++n;
+            stem.resize(n);
+        }
+        if (records.size() > 1) {
+            while (!stem.empty() && std::isalnum(static_cast<unsigned char>(stem.back()))) stem.pop_back();
+            while (!stem.empty() && !std::isalnum(static_cast<unsigned char>(stem.back()))) stem.pop_back();
+        }
+        if (stem.empty()) stem = records.front().id;
+        QString name = QString::fromStdString(stem) + tr(" (fitted)");
         try {
-            fabric::FabricPreset preset = fabric::fabric_from_json(*result, "fit of " + records.front().source);
+            fabric::FabricPreset preset = fabric::fabric_from_json(outcome->preset, "fit of " + records.front().source);
             preset.name = name.toStdString();
             const std::string path =
                 m_options.library.isEmpty() ? library::default_library_path() : m_options.library.toStdString();
@@ -455,8 +534,36 @@ void MainWindow::fitFromRecord()
             showMessage(tr("Fitted fabric added to the library %1").arg(QString::fromStdString(path)));
         } catch (const std::exception& e) {
             showMessage(tr("Fit: %1").arg(QString::fromStdString(e.what())));
+            emit fitFinished(false, QString::fromStdString(e.what()));
+            return;
         }
+        QString html = tr("<b>%1</b>: the drape it predicts (95 % interval)").arg(name.toHtmlEscaped());
+        html += QStringLiteral("<table cellspacing=\"4\"><tr><th align=\"left\">%1</th><th>D [%]</th><th>folds</th></tr>").arg(tr("set-up [mm]"));
+        for (const auto& r : outcome->rows) {
+            const QString setup = QStringLiteral("%1 / %2").arg(r.d1 * 1e3, 0, 'f', 0).arg(r.d2 * 1e3, 0, 'f', 0);
+            html += QStringLiteral("<tr><td>%1%2</td><td>%3 (%4..%5)</td><td>%6 (%7..%8)</td></tr>")
+                        .arg(setup, r.fitted ? tr(" fitted") : QString())
+                        .arg(r.dc, 0, 'f', 1)
+                        .arg(r.lo, 0, 'f', 0)
+                        .arg(r.hi, 0, 'f', 0)
+                        .arg(r.nodes)
+                        .arg(r.nodes_lo)
+                        .arg(r.nodes_hi);
+        }
+        html += QStringLiteral("</table>");
+        std::vector<std::pair<long, long>> setups;
+        for (const auto& rec : records) {
+            const std::pair<long, long> k{std::lround(rec.sample_diameter * 1e4), std::lround(rec.disc_diameter * 1e4)};
+            if (std::find(setups.begin(), setups.end(), k) == setups.end()) setups.push_back(k);
+        }
+        if (setups.size() < 2)
+            html += tr("<i>Fitted on one set-up: a preset predicts other set-ups poorly from one drape. Drape the same specimen "
+                       "once more at a second set-up and fit a folder holding both records: the intervals above narrow.</i>");
+        m_predictions->setText(html);
+        m_predictions->setVisible(true);
+        emit fitFinished(true, name);
     }, Qt::SingleShotConnection);
+    return true;
 }
 
 QImage MainWindow::screenshot()

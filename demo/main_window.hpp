@@ -81,10 +81,19 @@ public:
     QProgressBar* progressBar() const { return m_progress; }
     /// Summary of the last drape of view A (and B) as JSON text.
     QByteArray summaryJson() const;
+    /// Fits a fabric to the records in `dir` (one record folder, or a folder of
+    /// records of one fabric, e.g. two set-ups), adds it to the library, and
+    /// predicts the drapemeter's standard set-ups it was not fitted on (with
+    /// their 95 % intervals, shown under the fit button). Emits fitFinished.
+    /// False (and a message) when the folder holds no record.
+    bool fitRecords(const QString& dir, QString* error = nullptr);
+    /// The predictions of the last fit (rich text; empty before one).
+    QLabel* predictionsLabel() const { return m_predictions; }
 
 signals:
     void drapeFinished(bool ok, const QString& message);
     void scriptFinished(int exitCode);
+    void fitFinished(bool ok, const QString& message);
 
 private:
     void buildUi();
@@ -117,6 +126,7 @@ private:
     QPushButton* m_shot = nullptr;
     QProgressBar* m_progress = nullptr;
     QLabel* m_status = nullptr;
+    QLabel* m_predictions = nullptr;
     widget::LongJob m_fitJob;
     int m_pending = 0;  ///< views still draping
     bool m_allOk = true;

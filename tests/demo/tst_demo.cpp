@@ -13,6 +13,7 @@
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QJsonArray>
+#include <QDir>
 #include <QProcess>
 #include <QTemporaryDir>
 #include <QSignalSpy>
@@ -31,6 +32,7 @@ private slots:
     void annulusPanel();
     void skirtDrapesOnBody();
     void scriptedRunWritesScreenshot();
+    void fitRefusesAFolderWithoutRecords();
 
 private:
     static int clothPixels(const QImage& img, const QRect& r, const QColor& cloth);
@@ -207,6 +209,27 @@ void TstDemo::scriptedRunWritesScreenshot()
     QVERIFY(o["cloth_min_z_m"].toDouble() < 0.6);
     QVERIFY(o["cloth_min_z_m"].toDouble() >= 0.0);
     QVERIFY(clothPixels(img, img.rect(), QColor(0xb0, 0x3a, 0x48)) > img.width() * img.height() / 50);
+}
+
+void TstDemo::fitRefusesAFolderWithoutRecords()
+{
+    // --fit on a folder that is not there, and on one with no meta.json in it or its
+    // subfolders: exit 1 and a message naming the folder, before any fit starts.
+    const QString exe = QCoreApplication::applicationDirPath() + "/../bin/drape-demo";
+    if (!QFile::exists(exe)) QSKIP("drape-demo is not built next to the tests");
+    const QString empty = m_tmp.filePath("no-records");
+    QVERIFY(QDir().mkpath(empty + "/sub"));
+    const QString missing = m_tmp.filePath("not-there");
+    for (const QString& dir : {missing, empty}) {
+        QProcess p;
+        p.start(exe, {"--fit", dir, "--screenshot", m_tmp.filePath("fit.png")});
+        QVERIFY(p.waitForFinished(60 * 1000));
+        QCOMPARE(p.exitCode(), 1);
+        const QString err = QString::fromLocal8Bit(p.readAllStandardError());
+        QVERIFY2(err.contains(dir), qPrintable(err));
+        QVERIFY2(err.contains(dir == missing ? "no such folder" : "no record (meta.json)"), qPrintable(err));
+        QVERIFY(!QFile::exists(m_tmp.filePath("fit.png")));
+    }
 }
 
 QTEST_MAIN(TstDemo)

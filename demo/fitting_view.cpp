@@ -73,6 +73,23 @@ bool FittingView::drape(GarmentChoice garment, const library::FabricChoice& fabr
         if (error) *error = tr("no garment mesh chosen");
         return false;
     }
+    setScene(garment, fabric);
+    m_pending = true;
+    drapeToRest();
+    return true;
+}
+
+bool FittingView::showUndraped(GarmentChoice garment, const library::FabricChoice& fabric)
+{
+    if (m_pending || controller()->running()) return false;
+    if (garment == GarmentChoice::Skirt && !m_mannequin) return false;
+    if (garment == GarmentChoice::Imported && garmentFile().isEmpty()) return false;
+    setScene(garment, fabric);
+    return true;
+}
+
+void FittingView::setScene(GarmentChoice garment, const library::FabricChoice& fabric)
+{
     m_garment = garment;
     m_fabricName = QString::fromStdString(fabric.name);
     setFabric(fabric.preset, m_fabricName);
@@ -80,9 +97,6 @@ bool FittingView::drape(GarmentChoice garment, const library::FabricChoice& fabr
                   : garment == GarmentChoice::Tablecloth ? widget::Drape::Tablecloth
                                                          : widget::Drape::GarmentMesh);
     controller()->scene()->setTitle(QStringLiteral("%1 · %2").arg(toString(garment), m_fabricName));
-    m_pending = true;
-    drapeToRest();
-    return true;
 }
 
 cloth::SolverStatus FittingView::lastStatus() const

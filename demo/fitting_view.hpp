@@ -34,6 +34,11 @@ public:
     /// with `error` set when a drape is already running or there is no body
     /// for a skirt; later trouble arrives as finished(false, message).
     bool drape(GarmentChoice garment, const library::FabricChoice& fabric, QString* error = nullptr);
+    /// Shows `garment` of `fabric` as it starts (the skirt's flat pattern at the
+    /// mannequin's waist, the flat tablecloth over the table), not draped: what the
+    /// controls name before Drape is pressed. False (and nothing changes) while a
+    /// drape runs or when a skirt has no body.
+    bool showUndraped(GarmentChoice garment, const library::FabricChoice& fabric);
     bool busy() const { return m_pending; }
     /// Stops the drape; finished(false, "cancelled") follows.
     void cancel();
@@ -52,6 +57,8 @@ signals:
     void finished(bool ok, const QString& message);
 
 private:
+    void setScene(GarmentChoice garment, const library::FabricChoice& fabric);
+
     std::shared_ptr<const importers::Mannequin> m_mannequin;
     GarmentChoice m_garment = GarmentChoice::Skirt;
     QString m_fabricName;

@@ -62,6 +62,8 @@ MainWindow::MainWindow(const DemoOptions& options, QWidget* parent) : QMainWindo
     QString err;
     const QString path = m_options.mannequin.isEmpty() ? QString::fromStdString(importers::default_mannequin_path()) : m_options.mannequin;
     if (!loadMannequin(path, &err)) showMessage(tr("Mannequin: %1").arg(err));
+    // Open on the scene the controls name, not the view's default drapemeter disc.
+    showChoices();
 }
 
 MainWindow::~MainWindow()
@@ -75,7 +77,9 @@ void MainWindow::buildUi()
     auto* h = new QHBoxLayout(central);
 
     auto* panel = new QWidget(central);
-    panel->setMaximumWidth(340);
+    // Wide enough for the library's longest names beside their numbers
+    // ("Cotton plain weave (class preset)"); the view takes the rest.
+    panel->setMaximumWidth(440);
     auto* form = new QFormLayout(panel);
 
     auto* mrow = new QHBoxLayout;
@@ -192,7 +196,11 @@ void MainWindow::buildUi()
     connect(m_compare, &QCheckBox::toggled, this, [this](bool on) {
         m_fabricB->setEnabled(on);
         m_viewB->setVisible(on);
+        showChoices();
     });
+    connect(m_garment, &QComboBox::currentIndexChanged, this, &MainWindow::showChoices);
+    connect(m_fabricA, &QComboBox::currentIndexChanged, this, &MainWindow::showChoices);
+    connect(m_fabricB, &QComboBox::currentIndexChanged, this, &MainWindow::showChoices);
     connect(m_drape, &QPushButton::clicked, this, [this] {
         QString err;
         if (!startDrape(&err)) showMessage(err);
@@ -263,6 +271,7 @@ void MainWindow::chooseMannequin()
     if (path.isEmpty()) return;
     QString err;
     if (!loadMannequin(path, &err)) QMessageBox::warning(this, tr("Mannequin"), err);
+    else showChoices();
 }
 
 bool MainWindow::setGarmentFile(const QString& path, QString* error)
@@ -343,6 +352,26 @@ bool MainWindow::draping() const
     return m_viewA->busy() || m_viewB->busy();
 }
 
+namespace {
+GarmentChoice garmentOf(const QComboBox* box)
+{
+    const QString name = box->currentData().toString();
+    return name == QLatin1String("tablecloth") ? GarmentChoice::Tablecloth
+           : name == QLatin1String("garment")  ? GarmentChoice::Imported
+                                               : GarmentChoice::Skirt;
+}
+} // namespace
+
+void MainWindow::showChoices()
+{
+    if (draping() || m_fabrics.empty()) return;
+    const GarmentChoice g = garmentOf(m_garment);
+    const int a = m_fabricA->currentIndex();
+    if (a >= 0 && a < int(m_fabrics.size())) m_viewA->showUndraped(g, m_fabrics[std::size_t(a)]);
+    const int b = m_fabricB->currentIndex();
+    if (m_compare->isChecked() && b >= 0 && b < int(m_fabrics.size())) m_viewB->showUndraped(g, m_fabrics[std::size_t(b)]);
+}
+
 bool MainWindow::startDrape(QString* error)
 {
     if (draping() || m_fitJob.running()) {
@@ -354,10 +383,7 @@ bool MainWindow::startDrape(QString* error)
         if (error) *error = tr("no fabric chosen");
         return false;
     }
-    const QString gname = m_garment->currentData().toString();
-    const GarmentChoice g = gname == QLatin1String("tablecloth") ? GarmentChoice::Tablecloth
-                            : gname == QLatin1String("garment")  ? GarmentChoice::Imported
-                                                                 : GarmentChoice::Skirt;
+    const GarmentChoice g = garmentOf(m_garment);
     m_allOk = true;
     m_pending = 0;
     if (!m_viewA->drape(g, m_fabrics[std::size_t(a)], error)) return false;

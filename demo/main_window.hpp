@@ -58,6 +58,10 @@ public:
 
     /// Starts the drape of the current choices in one or both views.
     bool startDrape(QString* error = nullptr);
+    /// Shows the current choices undraped in the view(s) (the skirt's pattern on
+    /// the mannequin, the flat tablecloth), as the window opens and when a
+    /// choice changes while nothing drapes.
+    void showChoices();
     bool draping() const;
     /// The view(s) as one image (side by side when comparing).
     QImage screenshot();

@@ -3,6 +3,8 @@
 // the body, and the screenshot shows the cloth around the hips.
 #include "importers/garment_scene.hpp"
 #include "demo/main_window.hpp"
+#include "widget/drape_controller.hpp"
+#include "widget/scene.hpp"
 
 #include <Eigen/Geometry>
 
@@ -30,6 +32,7 @@ private slots:
     void mannequinStandsOnFloor();
     void waistIsATorsoSection();
     void annulusPanel();
+    void opensOnTheSceneItsControlsName();
     void skirtDrapesOnBody();
     void scriptedRunWritesScreenshot();
     void fitRefusesAFolderWithoutRecords();
@@ -115,6 +118,29 @@ int TstDemo::clothPixels(const QImage& img, const QRect& r, const QColor& cloth)
             }
         }
     return n;
+}
+
+void TstDemo::opensOnTheSceneItsControlsName()
+{
+    // Before Drape is pressed the view shows what the controls name: the skirt's
+    // flat pattern around the mannequin, not the widget's default drapemeter disc;
+    // a changed choice shows at once.
+    demo::MainWindow w(demo::DemoOptions{});
+    w.resize(900, 700);
+    w.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&w));
+    QCOMPARE(w.garmentBox()->currentData().toString(), QStringLiteral("skirt"));
+    QVERIFY(!w.draping());
+    auto* c = w.viewA()->controller();
+    QCOMPARE(c->clothShape(), widget::Drape::Skirt);
+    // The scene is built off the UI thread: the mannequin and the pattern arrive.
+    QTRY_VERIFY_WITH_TIMEOUT(!c->colliders().isEmpty() && c->vertexCount() > 0, 30000);
+    QVERIFY(c->scene()->title().startsWith(QStringLiteral("skirt")));
+    const int table = w.garmentBox()->findData(QStringLiteral("tablecloth"));
+    QVERIFY(table >= 0);
+    w.garmentBox()->setCurrentIndex(table);
+    QCOMPARE(c->clothShape(), widget::Drape::Tablecloth);
+    QVERIFY(!w.draping());
 }
 
 void TstDemo::skirtDrapesOnBody()

@@ -44,6 +44,9 @@ function(drape_add_test)
   # tests run the same library code in-process, and glibc's default maps and
   # unmaps each large image buffer afresh (a quarter of a photo measurement in
   # page faults on a VM). ASan's allocator ignores them.
+  # Qt Test's watchdog (5 minutes per test function by default) follows the
+  # test's own TIMEOUT, so a loaded machine meets ctest's limit, not a hidden one.
+  math(EXPR _qt_timeout_ms "${T_TIMEOUT} * 1000")
   set_tests_properties(${T_NAME} PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT}
-    ENVIRONMENT "GLIBC_TUNABLES=glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=536870912")
+    ENVIRONMENT "GLIBC_TUNABLES=glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=536870912;QTEST_FUNCTION_TIMEOUT=${_qt_timeout_ms}")
 endfunction()

@@ -12,13 +12,11 @@ namespace drape::estimate {
 
 using nlohmann::json;
 
-json fit_to_json(const FitResult& r)
+namespace {
+
+/// Where the preset came from: the tool, the records and how the fit simulated them.
+fabric::Provenance provenance_of(const FitResult& r)
 {
-    fabric::FabricPreset preset;
-    preset.name = r.name.empty() ? (r.records.empty() ? std::string("fitted") : r.records.front().measured.id) : r.name;
-    preset.params = r.params;
-    preset.model = r.options.model_options; // what the fit simulated with (edge contact)
-    preset.source = "fitted by drape fit to drape-test records";
     fabric::Provenance provenance;
     provenance.tool = "drape fit";
     provenance.date = utc_now();
@@ -50,14 +48,12 @@ json fit_to_json(const FitResult& r)
     // preset is laid so by drape simulate / predict (FabricPreset::laying).
     provenance.laying_load = r.options.laying_load;
     provenance.perturbation_m = r.options.perturbation_m;
-    preset.provenance = provenance;
+    return provenance;
+}
 
-    fabric::FitSummary summary;
-    summary.chi2 = r.chi2;
-    summary.dof = r.dof;
-    summary.reduced_chi2 = r.chi2 / std::max(1, r.dof);
-    summary.grid_bound = r.grid_bound;
-    json fit;
+/// The search: its counts, trace, time and grid refinement.
+void add_search(json& fit, const FitResult& r)
+{
     fit["evaluations"] = r.evaluations;
     fit["simulations"] = r.simulations;
     fit["method"] = to_string(r.options.method);
@@ -78,6 +74,11 @@ json fit_to_json(const FitResult& r)
                              {"adopted", r.refinement.adopted},   {"coarse_chi2", r.refinement.coarse_chi2},
                              {"coarse_dof", r.refinement.coarse_dof}, {"fine_chi2", r.refinement.fine_chi2},
                              {"fine_dof", r.refinement.fine_dof}, {"reason", r.refinement.reason}};
+}
+
+/// The priors and what they decided.
+void add_priors(json& fit, const FitResult& r)
+{
     fit["bending"] = to_string(r.options.bending);
     fit["priors_on"] = r.options.priors;
     if (!r.priors.empty()) {
@@ -91,37 +92,46 @@ json fit_to_json(const FitResult& r)
                           {"decided_by_prior", u.decided_by_prior}});
         fit["priors"] = pr;
     }
-    if (r.flat_calibration.tried) {
-        const auto& c = r.flat_calibration;
-        fit["flat_calibration"] = {{"applied", c.applied},
-                                   {"scale", c.scale},
-                                   {"error_before_percent", c.error_before},
-                                   {"error_after_percent", c.error_after},
-                                   {"tolerance_percent", c.tolerance},
-                                   {"bend_warp_fitted_Nm", c.bend_warp_fitted},
-                                   {"bend_weft_fitted_Nm", c.bend_weft_fitted},
-                                   {"chi2_increase_linearised", std::isfinite(c.chi2_increase) ? json(c.chi2_increase) : json(nullptr)},
-                                   {"chi2_preset", c.applied && std::isfinite(c.chi2_preset) ? json(c.chi2_preset) : json(nullptr)},
-                                   {"steps", c.steps},
-                                   {"fold_error_before", c.fold_error_before},
-                                   {"fold_error_after", c.fold_error_after},
-                                   {"fold_search", c.fold_search},
-                                   {"fold_sigmas", c.fold_sigmas},
-                                   {"reason", c.reason}};
-        json tried = json::array();
-        for (const auto& t : c.history)
-            tried.push_back({{"kind", t.kind},
-                             {"scale", t.scale},
-                             {"sigmas", t.sigmas},
-                             {"error_percent", t.error},
-                             {"fold_error", t.fold_error},
-                             {"finer_grid", t.finer_grid},
-                             {"chi2_increase_linearised", std::isfinite(t.chi2_cost) ? json(t.chi2_cost) : json(nullptr)}});
-        fit["flat_calibration"]["steps_tried"] = tried;
-        json moved = json::object();
-        for (const auto& m : c.moved) moved[m.key] = {{"before", m.before}, {"after", m.after}};
-        fit["flat_calibration"]["moved"] = moved;
-    }
+}
+
+/// The flat calibration: the steps it tried and what it moved.
+void add_flat_calibration(json& fit, const FitResult& r)
+{
+    if (!r.flat_calibration.tried) return;
+    const auto& c = r.flat_calibration;
+    fit["flat_calibration"] = {{"applied", c.applied},
+                               {"scale", c.scale},
+                               {"error_before_percent", c.error_before},
+                               {"error_after_percent", c.error_after},
+                               {"tolerance_percent", c.tolerance},
+                               {"bend_warp_fitted_Nm", c.bend_warp_fitted},
+                               {"bend_weft_fitted_Nm", c.bend_weft_fitted},
+                               {"chi2_increase_linearised", std::isfinite(c.chi2_increase) ? json(c.chi2_increase) : json(nullptr)},
+                               {"chi2_preset", c.applied && std::isfinite(c.chi2_preset) ? json(c.chi2_preset) : json(nullptr)},
+                               {"steps", c.steps},
+                               {"fold_error_before", c.fold_error_before},
+                               {"fold_error_after", c.fold_error_after},
+                               {"fold_search", c.fold_search},
+                               {"fold_sigmas", c.fold_sigmas},
+                               {"reason", c.reason}};
+    json tried = json::array();
+    for (const auto& t : c.history)
+        tried.push_back({{"kind", t.kind},
+                         {"scale", t.scale},
+                         {"sigmas", t.sigmas},
+                         {"error_percent", t.error},
+                         {"fold_error", t.fold_error},
+                         {"finer_grid", t.finer_grid},
+                         {"chi2_increase_linearised", std::isfinite(t.chi2_cost) ? json(t.chi2_cost) : json(nullptr)}});
+    fit["flat_calibration"]["steps_tried"] = tried;
+    json moved = json::object();
+    for (const auto& m : c.moved) moved[m.key] = {{"before", m.before}, {"after", m.after}};
+    fit["flat_calibration"]["moved"] = moved;
+}
+
+/// The warp/weft ratio and the tie; the shear and its hold.
+void add_anisotropy_and_shear(json& fit, const FitResult& r)
+{
     if (r.anisotropy.assessed) {
         const auto& a = r.anisotropy;
         json an = {{"ratio_warp_weft", a.ratio},
@@ -161,6 +171,11 @@ json fit_to_json(const FitResult& r)
         }
         fit["shear_hold"] = sh;
     }
+}
+
+/// The parameter table and the correlations of the fitted coordinates.
+void add_parameters(json& fit, const FitResult& r)
+{
     json params = json::array();
     std::vector<std::string> not_identifiable;
     for (const auto& e : r.estimates) {
@@ -187,6 +202,11 @@ json fit_to_json(const FitResult& r)
         corr[r.variables[i].name] = row;
     }
     fit["correlation"] = corr;
+}
+
+/// Per record: D and nodes measured, fitted, as saved and from flat.
+json records_json(const FitResult& r)
+{
     json per = json::array();
     for (const auto& rf : r.records) {
         per.push_back({{"id", rf.measured.id},
@@ -222,27 +242,56 @@ json fit_to_json(const FitResult& r)
                        {"profiler_axis_offset_m", {rf.measured_features.axis_offset_m.x(), rf.measured_features.axis_offset_m.y()}},
                        {"profiler_axis_tilt_rad", {rf.measured_features.axis_tilt.x(), rf.measured_features.axis_tilt.y()}}});
     }
-    fit["records"] = per;
+    return per;
+}
+
+/// The preset's own drape coefficient on its first record's set-up: draped from
+/// flat (as predict, a CAD and the library use it) when the fit ran those drapes,
+/// else as fitted.
+void set_drape_reference(fabric::FabricPreset& preset, fabric::FitSummary& summary, const FitResult& r, const std::string& date)
+{
+    if (r.records.empty()) return;
+    summary.sample_diameter_m = r.records.front().measured.sample_diameter;
+    summary.disc_diameter_m = r.records.front().measured.disc_diameter;
+    const RecordFit& rf = r.records.front();
+    fabric::DrapeReference d;
+    const bool cold = rf.cold_seeds > 0 && std::isfinite(rf.cold_features.drape_coefficient_percent);
+    d.percent = cold ? rf.cold_features.drape_coefficient_percent : rf.simulated_features.drape_coefficient_percent;
+    d.kind = "simulated";
+    d.sample_diameter_m = rf.measured.sample_diameter;
+    d.disc_diameter_m = rf.measured.disc_diameter;
+    d.method = cold ? "drape fit: mean of " + std::to_string(rf.cold_seeds) + " drapes from flat (random start) at grid " +
+                          std::to_string(r.options.grid)
+                    : "drape fit: fitted drapes at grid " + std::to_string(r.options.grid);
+    d.date = date;
+    if (std::isfinite(d.percent)) preset.drape = d;
+}
+
+} // namespace
+
+json fit_to_json(const FitResult& r)
+{
+    fabric::FabricPreset preset;
+    preset.name = r.name.empty() ? (r.records.empty() ? std::string("fitted") : r.records.front().measured.id) : r.name;
+    preset.params = r.params;
+    preset.model = r.options.model_options; // what the fit simulated with (edge contact)
+    preset.source = "fitted by drape fit to drape-test records";
+    preset.provenance = provenance_of(r);
+
+    fabric::FitSummary summary;
+    summary.chi2 = r.chi2;
+    summary.dof = r.dof;
+    summary.reduced_chi2 = r.chi2 / std::max(1, r.dof);
+    summary.grid_bound = r.grid_bound;
+    json fit;
+    add_search(fit, r);
+    add_priors(fit, r);
+    add_flat_calibration(fit, r);
+    add_anisotropy_and_shear(fit, r);
+    add_parameters(fit, r);
+    fit["records"] = records_json(r);
     summary.details = fit;
-    if (!r.records.empty()) {
-        summary.sample_diameter_m = r.records.front().measured.sample_diameter;
-        summary.disc_diameter_m = r.records.front().measured.disc_diameter;
-        // The preset's own drape coefficient on its first record's set-up: draped
-        // from flat (as predict, a CAD and the library use it) when the fit ran
-        // those drapes, else as fitted.
-        const RecordFit& rf = r.records.front();
-        fabric::DrapeReference d;
-        const bool cold = rf.cold_seeds > 0 && std::isfinite(rf.cold_features.drape_coefficient_percent);
-        d.percent = cold ? rf.cold_features.drape_coefficient_percent : rf.simulated_features.drape_coefficient_percent;
-        d.kind = "simulated";
-        d.sample_diameter_m = rf.measured.sample_diameter;
-        d.disc_diameter_m = rf.measured.disc_diameter;
-        d.method = cold ? "drape fit: mean of " + std::to_string(rf.cold_seeds) + " drapes from flat (random start) at grid " +
-                              std::to_string(r.options.grid)
-                        : "drape fit: fitted drapes at grid " + std::to_string(r.options.grid);
-        d.date = provenance.date;
-        if (std::isfinite(d.percent)) preset.drape = d;
-    }
+    set_drape_reference(preset, summary, r, preset.provenance->date);
     preset.fit = summary;
     preset.extra["residual"] = residual_to_json(r.residual);
     return fabric::fabric_to_json(preset);

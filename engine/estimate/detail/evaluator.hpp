@@ -191,6 +191,38 @@ public:
     double prior_slope(const std::string& kind, std::size_t i) const;
 
 private:
+    // The linearisation (evaluator_linearise.cpp).
+    /// Features per record, seed and column: [r][s][column].
+    using FeatureTable = std::vector<std::vector<std::vector<DrapeFeatures>>>;
+    /// Record r's residual terms of the seeds' features in `column`, averaged over
+    /// the seeds; each depth's fraction of seeds whose slice closed in `closed`.
+    std::vector<ResidualTerm> seed_terms(int r, const FeatureTable& feats, std::size_t column, std::vector<double>& closed) const;
+    /// A linear coordinate at its lower bound of 0, where it switches an effect on.
+    bool at_switch(const Eigen::VectorXd& x, int i) const;
+    /// The coordinate step of column i's central difference along dx/dc.
+    double column_step(int i) const;
+    /// The columns the exact sensitivities serve.
+    std::vector<char> exact_columns(const Eigen::VectorXd& x, const cloth::FabricParams& p, const Evaluation& e) const;
+    /// The features along each exact column's dx/dc at +-step and +-step/2 (column
+    /// 4 i + 0..3); false when there is none or a rest state is not stable.
+    bool sensitivity_features(const cloth::FabricParams& p, const Evaluation& e, const std::vector<char>& exact, FeatureTable& feats);
+    /// Column i of J from those features, rows whose two slopes disagree left at 0.
+    void exact_column(int i, const Evaluation& e, const FeatureTable& feats, Eigen::MatrixXd& J);
+    /// Column i of J by a one-sided difference of warm re-solves.
+    void resolved_column(int i, const Eigen::VectorXd& x, const Evaluation& e, Eigen::MatrixXd& J);
+    /// The candidate effects that can be linearised here (out: every effect of the
+    /// library, why_not for the others); returns the parameters whose
+    /// sensitivities their signatures need.
+    std::vector<cloth::Param> signatures_available(const cloth::FabricParams& p, bool all_at_rest, Eigen::Index rows,
+                                                   std::vector<EffectSignature>& out) const;
+    /// The features of every record and seed without (`off`, column 0) and with
+    /// each available effect (`on[effect]`); effects that could not be made are
+    /// marked unavailable in `out`.
+    void signature_features(const cloth::FabricParams& p, const Evaluation& e, const std::vector<cloth::Param>& sens_params,
+                            std::vector<EffectSignature>& out, FeatureTable& off, std::vector<FeatureTable>& on);
+    /// One effect's signature columns from those features, on the rows it reaches.
+    void signature_columns(EffectSignature& sig, const Evaluation& e, const FeatureTable& off, const FeatureTable& on) const;
+
     void progress(const std::string& stage, bool starting);
     void draw_flat(const Eigen::VectorXd& x, FlatDraw which); ///< draw_from_flat's drapes
     /// One cold drape of record r at p (seed, on the branch or not), measured.

@@ -54,6 +54,117 @@ and per contour depth the mean radius and RMS fold amplitude differences
 (simulated - measured) in mm, and chi2 of the residual with the default noise
 model (the fit's before its drape-to-drape calibration, so chi2 differs from a fit's).)";
 
+/// Refuses a comparison that cannot be right (a term that is not finite), naming the term.
+void check_finite(const std::string& id, const std::vector<estimate::ResidualTerm>& terms, double chi2)
+{
+    if (!std::isfinite(chi2)) {
+        std::string which;
+        for (const auto& t : terms)
+            if (!std::isfinite(t.whitened())) {
+                which = t.kind + (t.depth_m > 0 ? " at depth " + format_value(t.depth_m * 1e3) + " mm" : std::string()) +
+                        ": simulated " + format_value(t.simulated) + ", measured " + format_value(t.measured);
+                break;
+            }
+        throw Error(id + ": the comparison's chi2 is not finite (" + which + ")");
+    }
+}
+
+/// One record's comparison: D, nodes, the hem and every depth's errors.
+nlohmann::json comparison_json(const std::string& id, int grid, cloth::DrapeMesh mesh, int seeds, int folds, double chi2,
+                               const std::vector<estimate::ResidualTerm>& terms, const estimate::DrapeFeatures& meas,
+                               const estimate::DrapeFeatures& sim, const std::vector<double>& closed)
+{
+    nlohmann::json rec = {{"record", id},
+                          {"grid", grid},
+                          {"mesh", cloth::to_string(mesh)},
+                          {"seeds", seeds},
+                          {"fold_branch", folds > 0 ? nlohmann::json(folds) : nlohmann::json(nullptr)},
+                          {"chi2", chi2},
+                          {"terms", static_cast<int>(terms.size())}};
+    nlohmann::json depths = nlohmann::json::array();
+    for (const auto& t : terms) {
+        if (t.kind == "dc")
+            rec["drape_coefficient_percent"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
+        else if (t.kind == "nodes")
+            rec["node_count"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
+        else if (t.kind == "hem")
+            rec["hem_min_z_m"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
+    }
+    // Radii of a simulated slice that does not close in any seed are not a
+    // contour (a cut through a few triangles): no error is computed for
+    // that depth; it is reported as not closed. The RMS runs over the
+    // depths that closed.
+    int unclosed = 0;
+    double sr = 0, sf = 0;
+    int n_closed = 0;
+    for (std::size_t d = 0; d < meas.contours.size() && d < sim.contours.size(); ++d) {
+        const auto& mc = meas.contours[d];
+        const auto& sc = sim.contours[d];
+        const double cf = d < closed.size() ? closed[d] : 0.0;
+        nlohmann::json dj = {{"depth_m", mc.depth_m}, {"closed_fraction", cf}, {"closed", cf > 0}};
+        const double er = sc.mean_radius_m - mc.mean_radius_m, ef = sc.fold_rms_m - mc.fold_rms_m;
+        if (cf > 0 && std::isfinite(er) && std::isfinite(ef)) {
+            dj["mean_radius_error_m"] = er;
+            dj["fold_rms_error_m"] = ef;
+            dj["cos2_error_m"] = sc.cos2_m - mc.cos2_m;
+            sr += er * er;
+            sf += ef * ef;
+            ++n_closed;
+        } else {
+            dj["mean_radius_error_m"] = nullptr;
+            dj["fold_rms_error_m"] = nullptr;
+            dj["cos2_error_m"] = nullptr;
+            ++unclosed;
+        }
+        depths.push_back(dj);
+    }
+    rec["depths"] = depths;
+    rec["unclosed_depths"] = unclosed;
+    if (n_closed > 0) {
+        rec["mean_radius_rms_error_m"] = std::sqrt(sr / n_closed);
+        rec["fold_rms_rms_error_m"] = std::sqrt(sf / n_closed);
+    }
+    return rec;
+}
+
+/// One record's comparison for a person.
+void print_comparison(const nlohmann::json& rec, const std::vector<estimate::ResidualTerm>& terms)
+{
+    const std::string id = rec["record"].get<std::string>();
+    const int grid = rec["grid"].get<int>(), seeds = rec["seeds"].get<int>();
+    const int folds = rec["fold_branch"].is_null() ? 0 : rec["fold_branch"].get<int>();
+    const int unclosed = rec["unclosed_depths"].get<int>();
+    const nlohmann::json& depths = rec["depths"];
+    auto v = [&](const char* k, const char* f) { return rec.contains(k) ? rec[k][f].get<double>() : NAN; };
+    std::printf("%s  grid %d, %d seeds%s, chi2 %.1f over %zu terms\n", id.c_str(), grid, seeds,
+                folds > 0 ? (", started on the measured " + std::to_string(folds) + "-fold branch").c_str() : "",
+                rec["chi2"].get<double>(), terms.size());
+    std::printf("  D      sim %5.1f %%  meas %5.1f %%  err %+5.1f\n", v("drape_coefficient_percent", "simulated"),
+                v("drape_coefficient_percent", "measured"), v("drape_coefficient_percent", "error"));
+    std::printf("  nodes  sim %5.1f    meas %5.1f    err %+5.1f\n", v("node_count", "simulated"), v("node_count", "measured"),
+                v("node_count", "error"));
+    if (rec.contains("hem_min_z_m"))
+        std::printf("  hem    sim %5.1f mm meas %5.1f mm err %+5.1f mm\n", 1e3 * v("hem_min_z_m", "simulated"),
+                    1e3 * v("hem_min_z_m", "measured"), 1e3 * v("hem_min_z_m", "error"));
+    if (rec.contains("mean_radius_rms_error_m"))
+        std::printf("  contours: RMS over the closed depths of the mean-radius error %.2f mm, of the fold-amplitude error %.2f mm\n",
+                    1e3 * rec["mean_radius_rms_error_m"].get<double>(), 1e3 * rec["fold_rms_rms_error_m"].get<double>());
+    if (unclosed > 0)
+        std::printf("  %d depth(s) where the simulated slice does not close (the drape does not reach that deep all round):"
+                    " no radius error there; chi2 counts them as closure misses\n",
+                    unclosed);
+    std::printf("  depth [mm]  mean radius err [mm]  fold RMS err [mm]\n");
+    for (const auto& d : depths) {
+        if (d["mean_radius_error_m"].is_null()) {
+            std::printf("  %6.0f      not closed\n", 1e3 * d["depth_m"].get<double>());
+            continue;
+        }
+        std::printf("  %6.0f      %+6.2f                %+6.2f%s\n", 1e3 * d["depth_m"].get<double>(),
+                    1e3 * d["mean_radius_error_m"].get<double>(), 1e3 * d["fold_rms_error_m"].get<double>(),
+                    d["closed_fraction"].get<double>() < 1 ? "   (closed in some seeds only)" : "");
+    }
+}
+
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv, fabric_flags() + setup_value_flags(kGrid | kSeed | kLaying | kMesh | kPerturbation) + std::set<std::string>{"--seeds", "--branch"},
@@ -130,98 +241,10 @@ int run(const std::vector<std::string>& argv)
         const estimate::DrapeFeatures sim = estimate::average_features(fs, &closed);
         const auto terms = estimate::residual_terms(0, meas, sim, closed, noise);
         const double chi2 = estimate::chi_square(terms);
-        // A comparison that cannot be right is refused, not printed.
-        if (!std::isfinite(chi2)) {
-            std::string which;
-            for (const auto& t : terms)
-                if (!std::isfinite(t.whitened())) {
-                    which = t.kind + (t.depth_m > 0 ? " at depth " + format_value(t.depth_m * 1e3) + " mm" : std::string()) +
-                            ": simulated " + format_value(t.simulated) + ", measured " + format_value(t.measured);
-                    break;
-                }
-            throw Error(m.id + ": the comparison's chi2 is not finite (" + which + ")");
-        }
-        nlohmann::json rec = {{"record", m.id},
-                              {"grid", grid},
-                              {"mesh", cloth::to_string(mesh)},
-                              {"seeds", seeds},
-                              {"fold_branch", folds > 0 ? nlohmann::json(folds) : nlohmann::json(nullptr)},
-                              {"chi2", chi2},
-                              {"terms", static_cast<int>(terms.size())}};
-        nlohmann::json depths = nlohmann::json::array();
-        for (const auto& t : terms) {
-            if (t.kind == "dc")
-                rec["drape_coefficient_percent"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
-            else if (t.kind == "nodes")
-                rec["node_count"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
-            else if (t.kind == "hem")
-                rec["hem_min_z_m"] = {{"simulated", t.simulated}, {"measured", t.measured}, {"error", t.simulated - t.measured}};
-        }
-        // Radii of a simulated slice that does not close in any seed are not a
-        // contour (a cut through a few triangles): no error is computed for
-        // that depth; it is reported as not closed. The RMS runs over the
-        // depths that closed.
-        int unclosed = 0;
-        double sr = 0, sf = 0;
-        int n_closed = 0;
-        for (std::size_t d = 0; d < meas.contours.size() && d < sim.contours.size(); ++d) {
-            const auto& mc = meas.contours[d];
-            const auto& sc = sim.contours[d];
-            const double cf = d < closed.size() ? closed[d] : 0.0;
-            nlohmann::json dj = {{"depth_m", mc.depth_m}, {"closed_fraction", cf}, {"closed", cf > 0}};
-            const double er = sc.mean_radius_m - mc.mean_radius_m, ef = sc.fold_rms_m - mc.fold_rms_m;
-            if (cf > 0 && std::isfinite(er) && std::isfinite(ef)) {
-                dj["mean_radius_error_m"] = er;
-                dj["fold_rms_error_m"] = ef;
-                dj["cos2_error_m"] = sc.cos2_m - mc.cos2_m;
-                sr += er * er;
-                sf += ef * ef;
-                ++n_closed;
-            } else {
-                dj["mean_radius_error_m"] = nullptr;
-                dj["fold_rms_error_m"] = nullptr;
-                dj["cos2_error_m"] = nullptr;
-                ++unclosed;
-            }
-            depths.push_back(dj);
-        }
-        rec["depths"] = depths;
-        rec["unclosed_depths"] = unclosed;
-        if (n_closed > 0) {
-            rec["mean_radius_rms_error_m"] = std::sqrt(sr / n_closed);
-            rec["fold_rms_rms_error_m"] = std::sqrt(sf / n_closed);
-        }
+        check_finite(m.id, terms, chi2);
+        const nlohmann::json rec = comparison_json(m.id, grid, mesh, seeds, folds, chi2, terms, meas, sim, closed);
         out.push_back(rec);
-        if (!json_out) {
-            auto v = [&](const char* k, const char* f) { return rec.contains(k) ? rec[k][f].get<double>() : NAN; };
-            std::printf("%s  grid %d, %d seeds%s, chi2 %.1f over %zu terms\n", m.id.c_str(), grid, seeds,
-                        folds > 0 ? (", started on the measured " + std::to_string(folds) + "-fold branch").c_str() : "",
-                        rec["chi2"].get<double>(), terms.size());
-            std::printf("  D      sim %5.1f %%  meas %5.1f %%  err %+5.1f\n", v("drape_coefficient_percent", "simulated"),
-                        v("drape_coefficient_percent", "measured"), v("drape_coefficient_percent", "error"));
-            std::printf("  nodes  sim %5.1f    meas %5.1f    err %+5.1f\n", v("node_count", "simulated"), v("node_count", "measured"),
-                        v("node_count", "error"));
-            if (rec.contains("hem_min_z_m"))
-                std::printf("  hem    sim %5.1f mm meas %5.1f mm err %+5.1f mm\n", 1e3 * v("hem_min_z_m", "simulated"),
-                            1e3 * v("hem_min_z_m", "measured"), 1e3 * v("hem_min_z_m", "error"));
-            if (rec.contains("mean_radius_rms_error_m"))
-                std::printf("  contours: RMS over the closed depths of the mean-radius error %.2f mm, of the fold-amplitude error %.2f mm\n",
-                            1e3 * rec["mean_radius_rms_error_m"].get<double>(), 1e3 * rec["fold_rms_rms_error_m"].get<double>());
-            if (unclosed > 0)
-                std::printf("  %d depth(s) where the simulated slice does not close (the drape does not reach that deep all round):"
-                            " no radius error there; chi2 counts them as closure misses\n",
-                            unclosed);
-            std::printf("  depth [mm]  mean radius err [mm]  fold RMS err [mm]\n");
-            for (const auto& d : depths) {
-                if (d["mean_radius_error_m"].is_null()) {
-                    std::printf("  %6.0f      not closed\n", 1e3 * d["depth_m"].get<double>());
-                    continue;
-                }
-                std::printf("  %6.0f      %+6.2f                %+6.2f%s\n", 1e3 * d["depth_m"].get<double>(),
-                            1e3 * d["mean_radius_error_m"].get<double>(), 1e3 * d["fold_rms_error_m"].get<double>(),
-                            d["closed_fraction"].get<double>() < 1 ? "   (closed in some seeds only)" : "");
-            }
-        }
+        if (!json_out) print_comparison(rec, terms);
     }
     if (json_out) std::cout << dump_json(out) << "\n";
     return all_converged ? 0 : 4;

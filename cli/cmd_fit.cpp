@@ -168,18 +168,9 @@ std::string measured_text(double v, const char* fmt)
     return buf;
 }
 
-int run(const std::vector<std::string>& argv)
+/// The fit's options from the flags, on drape fit's defaults.
+estimate::FitOptions fit_options(const Args& a)
 {
-    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--shear", "--typical-shear", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation", "--prior"},
-           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
-            "--bending-correction", "--plain-bending", "--arc-membrane"});
-    if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
-    reject_duplicate_records(a.positionals()); // the same record twice would count twice
-    const auto out = a.get("--out");
-    if (!out) throw UsageError("--out FABRIC.json is required");
-    // Fail now, not after minutes of fitting.
-    prepare_output_file(*out, "--out");
-    if (const auto rep = a.get("--report")) prepare_output_dir(*rep, "--report");
     estimate::FitOptions fo = estimate::drape_fit_defaults(); // every flag below falls back to it
     try {
         fo.model = estimate::parse_model_variant(a.get_or("--model", "baseline"));
@@ -247,9 +238,15 @@ int run(const std::vector<std::string>& argv)
     // Without --start the fit holds the membrane's compression limit at the
     // documented typical value (estimate::default_fit_start), not the seed's 0.
     if (!a.get_all("--set").empty()) fo.start = apply_set_flags(a, *fo.start);
-    const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
     if (const auto n = a.get("--name"); n && !try_normalize_name(*n))
         throw UsageError("--name: '" + printable(*n) + "' is not a name (1..200 characters of UTF-8 text, no control characters)");
+    return fo;
+}
+
+/// The records named on the command line, each with something to fit in the
+/// fitted channels.
+std::vector<estimate::MeasuredDrape> fit_records(const Args& a, const estimate::FitOptions& fo)
+{
     std::vector<estimate::MeasuredDrape> recs;
     for (const auto& dir : a.positionals()) recs.push_back(estimate::load_record(dir));
     // Every record must give the fit something to match in a fitted channel;
@@ -258,6 +255,98 @@ int run(const std::vector<std::string>& argv)
         if (fitted_terms(m, fo.channels) == 0)
             throw ParameterError(m.id + ": no measured value in the fitted channels (" + join(fo.channels) +
                                  "): nothing to fit it to (add the record's photos or contours, or fit other --channels)");
+    return recs;
+}
+
+/// drape fit --json: the preset's parameters, fit and residual.
+void print_fit_json(const Args& a, const estimate::FitOptions& fo, const estimate::FitResult& r, const nlohmann::json& preset, const std::string& out)
+{
+    nlohmann::json j;
+    j["preset_path"] = out;
+    j["name"] = r.name;
+    j["model"] = estimate::to_string(fo.model);
+    j["parameters"] = preset["parameters"];
+    j["fit"] = preset["fit"];
+    j["residual"] = preset["residual"];
+    if (const auto rep = a.get("--report")) j["report_dir"] = *rep;
+    std::cout << dump_json(j) << "\n";
+}
+
+/// drape fit's summary for a person: the parameters, each record, the residual
+/// and what the fit's policies did.
+void print_fit_text(const Args& a, const estimate::FitResult& r, const std::vector<std::string>& files, const std::string& out)
+{
+    std::printf("%s", estimate::parameter_table_markdown(r).c_str());
+    std::printf("\n");
+    for (const auto& rf : r.records) {
+        const bool has_dc = std::isfinite(rf.measured_features.drape_coefficient_percent);
+        const bool has_nodes = rf.measured_features.node_count >= 0;
+        std::printf("%-10s D measured %s %%  fitted %5.1f %%  (error %s)   nodes measured %s  fitted %4.1f  (error %s)\n",
+                    rf.measured.id.c_str(), measured_text(rf.measured_features.drape_coefficient_percent, "%5.1f").c_str(),
+                    rf.simulated_features.drape_coefficient_percent,
+                    measured_text(has_dc ? rf.dc_error_percent : NAN, "%+5.1f").c_str(),
+                    measured_text(has_nodes ? rf.measured_features.node_count : NAN, "%2.0f").c_str(),
+                    rf.simulated_features.node_count, measured_text(has_nodes ? rf.node_error : NAN, "%+4.1f").c_str());
+    }
+    for (const auto& rf : r.records)
+        if (rf.cold_seeds > 0) {
+            const bool has_dc = std::isfinite(rf.measured_features.drape_coefficient_percent);
+            const bool has_nodes = rf.measured_features.node_count >= 0;
+            std::printf("%-10s draped from flat (%d seeds): D %5.1f %% (error %s)   nodes %4.1f (error %s)\n", rf.measured.id.c_str(),
+                        rf.cold_seeds, rf.cold_features.drape_coefficient_percent,
+                        measured_text(has_dc ? rf.cold_dc_error_percent : NAN, "%+5.1f").c_str(), rf.cold_features.node_count,
+                        measured_text(has_nodes ? rf.cold_node_error : NAN, "%+4.1f").c_str());
+            if (rf.cold_fine_grid > 0)
+                std::printf("%-10s draped from flat on grid %d: D %5.1f %% (error %s)   nodes %4.0f (error %s)%s\n", rf.measured.id.c_str(),
+                            rf.cold_fine_grid, rf.cold_fine_features.drape_coefficient_percent,
+                            measured_text(has_dc ? rf.cold_fine_dc_error_percent : NAN, "%+5.1f").c_str(), rf.cold_fine_features.node_count,
+                            measured_text(has_nodes ? rf.cold_fine_node_error : NAN, "%+4.0f").c_str(),
+                            rf.cold_fine_converged ? "" : "   NOT AT REST (the solver's iteration limit)");
+        }
+    std::printf("\nchi2 %.1f for %d degrees of freedom; residual %s the measurement noise (contour RMS %.2f mm)\n", r.chi2, r.dof,
+                r.residual.exceeds_noise ? "EXCEEDS" : "is within", r.residual.rms_m * 1e3);
+    if (r.residual.held_out_terms > 0)
+        std::printf("held-out channels: %d terms, whitened RMS %.2f (fitted terms %.2f)\n", r.residual.held_out_terms,
+                    r.residual.held_out_rms_whitened, r.residual.fitted_rms_whitened);
+    for (const auto& b : r.residual.exceeds_because) std::printf("  beyond noise by %s\n", b.c_str());
+    for (std::size_t i = 0; i < r.residual.candidate_effects.size(); ++i)
+        std::printf("  candidate effect: %s (%s)\n", r.residual.candidate_effects[i].c_str(), r.residual.evidence[i].c_str());
+    for (const auto& c : r.residual.candidates)
+        if (c.verdict == "beyond noise")
+            std::printf("  effect test: %s beyond noise (z %.1f, delta chi2 %.1f for %d parameter(s), amplitude %.3g %s)\n", c.name.c_str(), c.z,
+                        c.delta_chi2, c.parameters, c.amplitude, c.amplitude_unit.c_str());
+    if (!r.residual.named_effect.empty()) std::printf("named effect: %s (refit with it explains the residual)\n", r.residual.named_effect.c_str());
+    else if (!r.residual.unexplained.empty()) std::printf("%s\n", r.residual.unexplained.c_str());
+    if (r.refinement.from_grid > 0) std::printf("grid refinement: %s\n", r.refinement.reason.c_str());
+    if (r.anisotropy.assessed && !r.anisotropy.reason.empty()) std::printf("bending: %s\n", r.anisotropy.reason.c_str());
+    if (r.shear_hold.assessed && !r.shear_hold.reason.empty()) std::printf("shear: %s\n", r.shear_hold.reason.c_str());
+    if (r.flat_calibration.tried) std::printf("from flat: %s\n", r.flat_calibration.reason.c_str());
+    if (r.grid_bound)
+        std::printf("WARNING: grid-bound preset: a fitted bending length is below the mesh spacing of grid %d; "
+                    "fit with a finer --grid for a preset that carries over to other grids\n",
+                    r.options.grid);
+    std::printf("%d evaluations, %ld simulations (final grid %d), %.2f s per simulation, %.1f s in all%s\n", r.evaluations,
+                r.simulations, r.options.grid, r.seconds_per_simulation, r.wall_seconds,
+                r.cancelled ? " (CANCELLED: best point so far)" : "");
+    std::printf("preset written to %s\n", out.c_str());
+    if (!files.empty()) std::printf("report: %zu files in %s\n", files.size(), a.get("--report")->c_str());
+}
+
+int run(const std::vector<std::string>& argv)
+{
+    Args a(argv, {"--out", "--report", "--model", "--grid", "--set", "--seed", "--seeds", "--global", "--local", "--start", "--name", "--channels", "--branch", "--refine-grid", "--method", "--bending", "--shear", "--typical-shear", "--laying", "--flat-grid", "--mesh", "--flat-calibration", "--perturbation", "--prior"},
+           {"--json", "--quiet", "--no-uncertainty", "--recentre-contours", "--untilt-contours", "--vertex-contact-only", "--cold-global", "--cold-local",
+            "--bending-correction", "--plain-bending", "--arc-membrane"});
+    if (a.positionals().empty()) throw UsageError("at least one RECORD_DIR is required");
+    reject_duplicate_records(a.positionals()); // the same record twice would count twice
+    const auto out = a.get("--out");
+    if (!out) throw UsageError("--out FABRIC.json is required");
+    // Fail now, not after minutes of fitting.
+    prepare_output_file(*out, "--out");
+    if (const auto rep = a.get("--report")) prepare_output_dir(*rep, "--report");
+    estimate::FitOptions fo = fit_options(a);
+    const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
+    const std::vector<estimate::MeasuredDrape> recs = fit_records(a, fo);
     Progress progress("fit", quiet);
     if (!quiet)
         fo.progress = [&progress](const estimate::FitProgress& p) {
@@ -291,72 +380,8 @@ int run(const std::vector<std::string>& argv)
     drape::write_file_atomic(*out, dump_json(preset) + "\n");
     std::vector<std::string> files;
     if (const auto rep = a.get("--report")) files = estimate::write_fit_report(r, *rep, *out);
-    if (json) {
-        nlohmann::json j;
-        j["preset_path"] = *out;
-        j["name"] = r.name;
-        j["model"] = estimate::to_string(fo.model);
-        j["parameters"] = preset["parameters"];
-        j["fit"] = preset["fit"];
-        j["residual"] = preset["residual"];
-        if (const auto rep = a.get("--report")) j["report_dir"] = *rep;
-        std::cout << dump_json(j) << "\n";
-    } else {
-        std::printf("%s", estimate::parameter_table_markdown(r).c_str());
-        std::printf("\n");
-        for (const auto& rf : r.records) {
-            const bool has_dc = std::isfinite(rf.measured_features.drape_coefficient_percent);
-            const bool has_nodes = rf.measured_features.node_count >= 0;
-            std::printf("%-10s D measured %s %%  fitted %5.1f %%  (error %s)   nodes measured %s  fitted %4.1f  (error %s)\n",
-                        rf.measured.id.c_str(), measured_text(rf.measured_features.drape_coefficient_percent, "%5.1f").c_str(),
-                        rf.simulated_features.drape_coefficient_percent,
-                        measured_text(has_dc ? rf.dc_error_percent : NAN, "%+5.1f").c_str(),
-                        measured_text(has_nodes ? rf.measured_features.node_count : NAN, "%2.0f").c_str(),
-                        rf.simulated_features.node_count, measured_text(has_nodes ? rf.node_error : NAN, "%+4.1f").c_str());
-        }
-        for (const auto& rf : r.records)
-            if (rf.cold_seeds > 0) {
-                const bool has_dc = std::isfinite(rf.measured_features.drape_coefficient_percent);
-                const bool has_nodes = rf.measured_features.node_count >= 0;
-                std::printf("%-10s draped from flat (%d seeds): D %5.1f %% (error %s)   nodes %4.1f (error %s)\n", rf.measured.id.c_str(),
-                            rf.cold_seeds, rf.cold_features.drape_coefficient_percent,
-                            measured_text(has_dc ? rf.cold_dc_error_percent : NAN, "%+5.1f").c_str(), rf.cold_features.node_count,
-                            measured_text(has_nodes ? rf.cold_node_error : NAN, "%+4.1f").c_str());
-                if (rf.cold_fine_grid > 0)
-                    std::printf("%-10s draped from flat on grid %d: D %5.1f %% (error %s)   nodes %4.0f (error %s)%s\n", rf.measured.id.c_str(),
-                                rf.cold_fine_grid, rf.cold_fine_features.drape_coefficient_percent,
-                                measured_text(has_dc ? rf.cold_fine_dc_error_percent : NAN, "%+5.1f").c_str(), rf.cold_fine_features.node_count,
-                                measured_text(has_nodes ? rf.cold_fine_node_error : NAN, "%+4.0f").c_str(),
-                                rf.cold_fine_converged ? "" : "   NOT AT REST (the solver's iteration limit)");
-            }
-        std::printf("\nchi2 %.1f for %d degrees of freedom; residual %s the measurement noise (contour RMS %.2f mm)\n", r.chi2, r.dof,
-                    r.residual.exceeds_noise ? "EXCEEDS" : "is within", r.residual.rms_m * 1e3);
-        if (r.residual.held_out_terms > 0)
-            std::printf("held-out channels: %d terms, whitened RMS %.2f (fitted terms %.2f)\n", r.residual.held_out_terms,
-                        r.residual.held_out_rms_whitened, r.residual.fitted_rms_whitened);
-        for (const auto& b : r.residual.exceeds_because) std::printf("  beyond noise by %s\n", b.c_str());
-        for (std::size_t i = 0; i < r.residual.candidate_effects.size(); ++i)
-            std::printf("  candidate effect: %s (%s)\n", r.residual.candidate_effects[i].c_str(), r.residual.evidence[i].c_str());
-        for (const auto& c : r.residual.candidates)
-            if (c.verdict == "beyond noise")
-                std::printf("  effect test: %s beyond noise (z %.1f, delta chi2 %.1f for %d parameter(s), amplitude %.3g %s)\n", c.name.c_str(), c.z,
-                            c.delta_chi2, c.parameters, c.amplitude, c.amplitude_unit.c_str());
-        if (!r.residual.named_effect.empty()) std::printf("named effect: %s (refit with it explains the residual)\n", r.residual.named_effect.c_str());
-        else if (!r.residual.unexplained.empty()) std::printf("%s\n", r.residual.unexplained.c_str());
-        if (r.refinement.from_grid > 0) std::printf("grid refinement: %s\n", r.refinement.reason.c_str());
-        if (r.anisotropy.assessed && !r.anisotropy.reason.empty()) std::printf("bending: %s\n", r.anisotropy.reason.c_str());
-        if (r.shear_hold.assessed && !r.shear_hold.reason.empty()) std::printf("shear: %s\n", r.shear_hold.reason.c_str());
-        if (r.flat_calibration.tried) std::printf("from flat: %s\n", r.flat_calibration.reason.c_str());
-        if (r.grid_bound)
-            std::printf("WARNING: grid-bound preset: a fitted bending length is below the mesh spacing of grid %d; "
-                        "fit with a finer --grid for a preset that carries over to other grids\n",
-                        r.options.grid);
-        std::printf("%d evaluations, %ld simulations (final grid %d), %.2f s per simulation, %.1f s in all%s\n", r.evaluations,
-                    r.simulations, r.options.grid, r.seconds_per_simulation, r.wall_seconds,
-                    r.cancelled ? " (CANCELLED: best point so far)" : "");
-        std::printf("preset written to %s\n", out->c_str());
-        if (!files.empty()) std::printf("report: %zu files in %s\n", files.size(), a.get("--report")->c_str());
-    }
+    if (json) print_fit_json(a, fo, r, preset, *out);
+    else print_fit_text(a, r, files, *out);
     return r.cancelled ? 3 : 0;
 }
 

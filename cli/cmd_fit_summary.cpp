@@ -145,32 +145,9 @@ Entry read_report(const std::string& label, const std::string& dir)
     return e;
 }
 
-int run(const std::vector<std::string>& argv)
+/// One row per record and fit, in summary.md and summary.json.
+nlohmann::json record_rows(std::ostringstream& md, const std::vector<std::string>& ids, const std::vector<std::string>& labels, const std::vector<Entry>& entries)
 {
-    Args a(argv, {"--out"}, {});
-    const auto out = a.get("--out");
-    if (!out) throw UsageError("--out DIR is required");
-    if (a.positionals().empty()) throw UsageError("at least one LABEL=REPORT_DIR is required");
-    std::vector<Entry> entries;
-    std::vector<std::string> labels;
-    for (const auto& arg : a.positionals()) {
-        const auto eq = arg.find('=');
-        if (eq == std::string::npos || eq == 0) throw UsageError("'" + arg + "' is not LABEL=REPORT_DIR");
-        const std::string label = arg.substr(0, eq);
-        for (char c : label)
-            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_')
-                throw UsageError("label '" + label + "' may only hold letters, digits, '-' and '_' (it names output files)");
-        if (std::find(labels.begin(), labels.end(), label) == labels.end()) labels.push_back(label);
-        entries.push_back(read_report(label, arg.substr(eq + 1)));
-    }
-    std::filesystem::create_directories(*out);
-    std::vector<std::string> ids;
-    for (const auto& e : entries)
-        if (std::find(ids.begin(), ids.end(), e.id) == ids.end()) ids.push_back(e.id);
-    std::sort(ids.begin(), ids.end());
-
-    // Table.
-    std::ostringstream md;
     md << "| record | fit | D meas. [%] | D fit [%] | D err | nodes meas. | nodes fit | D err cold | nodes err cold | D err cold, finer grid | "
           "nodes err cold, finer grid | calibrated from flat | chi2 / dof | rim z | beyond noise | candidate effects |\n"
        << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -208,7 +185,13 @@ int run(const std::vector<std::string>& argv)
                               {"chi2", e.chi2}, {"dof", e.dof},
                               {"rim_z", e.rim_z}, {"exceeds_noise", e.exceeds}, {"candidate_effects", e.candidates}});
             }
-    // Aggregates per label.
+    return js;
+}
+
+/// The aggregates per fit (label).
+void label_rows(std::ostringstream& md, const std::vector<std::string>& labels, const std::vector<Entry>& entries)
+{
+    char buf[512];
     md << "\n| fit | records | mean D err | RMS D err | records with \\|D err\\| <= 2 | records with \\|node err\\| <= 1 | both | both, draped from flat | "
           "both, as fitted and from flat at two grids | waviness from flat [mm] | mean chi2 / dof | beyond noise |\n"
        << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -251,68 +234,75 @@ int run(const std::vector<std::string>& argv)
                       bc, ba, wv, cd / n, beyond);
         md << buf;
     }
-    drape::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());
-    drape::write_file_atomic((std::filesystem::path(*out) / "summary.json").string(), dump_json(js) + "\n");
+}
 
-    // D error per record (one row each), one marker per label.
-    {
-        estimate::Plot pl(820, 140 + 34 * static_cast<int>(ids.size()), "drape coefficient: fitted - measured", "D error [percentage points]", "");
-        std::vector<std::pair<double, std::string>> ticks;
-        const double dy = 0.6 / static_cast<double>(labels.size());
-        for (std::size_t i = 0; i < ids.size(); ++i) {
-            const double y0 = static_cast<double>(ids.size() - i);
-            ticks.push_back({y0, ids[i]});
-            for (std::size_t li = 0; li < labels.size(); ++li)
-                for (const auto& e : entries)
-                    if (e.id == ids[i] && e.label == labels[li]) {
-                        const double d = e.d_fit - e.d_meas, y = y0 + 0.3 - dy * (static_cast<double>(li) + 0.5);
-                        pl.interval(std::min(0.0, d), d, std::max(0.0, d), y, estimate::category(static_cast<int>(li)));
-                    }
-        }
-        for (std::size_t li = 0; li < labels.size(); ++li) pl.points({}, {}, estimate::category(static_cast<int>(li)), labels[li]);
-        pl.set_yticklabels(ticks);
-        pl.set_yrange(0.4, static_cast<double>(ids.size()) + 0.6);
-        double lo = -3, hi = 3;
-        for (const auto& e : entries) lo = std::min(lo, e.d_fit - e.d_meas - 0.5), hi = std::max(hi, e.d_fit - e.d_meas + 0.5);
-        pl.set_xrange(lo, hi);
-        pl.line({2.0, 2.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
-        pl.line({-2.0, -2.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
-        pl.line({0.0, 0.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {0, 0, 0}, "", 1);
-        std::string ls;
-        for (const auto& l : labels) ls += (ls.empty() ? "" : ", ") + l;
-        pl.set_caption("dashed: +-2 points (issue 4's target). Fits: " + ls);
-        pl.save((std::filesystem::path(*out) / "dc_error.png").string());
+/// dc_error.png: the D error per record (one row each), one marker per fit.
+void plot_dc_error(const std::filesystem::path& out, const std::vector<std::string>& ids, const std::vector<std::string>& labels, const std::vector<Entry>& entries)
+{
+    estimate::Plot pl(820, 140 + 34 * static_cast<int>(ids.size()), "drape coefficient: fitted - measured", "D error [percentage points]", "");
+    std::vector<std::pair<double, std::string>> ticks;
+    const double dy = 0.6 / static_cast<double>(labels.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+        const double y0 = static_cast<double>(ids.size() - i);
+        ticks.push_back({y0, ids[i]});
+        for (std::size_t li = 0; li < labels.size(); ++li)
+            for (const auto& e : entries)
+                if (e.id == ids[i] && e.label == labels[li]) {
+                    const double d = e.d_fit - e.d_meas, y = y0 + 0.3 - dy * (static_cast<double>(li) + 0.5);
+                    pl.interval(std::min(0.0, d), d, std::max(0.0, d), y, estimate::category(static_cast<int>(li)));
+                }
     }
-    // The same for the presets draped from flat (the fit's grid, the bar to the
-    // finer grid's drape), where reports have them: how the preset drapes in a CAD.
-    if (std::any_of(entries.begin(), entries.end(), [](const Entry& e) { return std::isfinite(e.d_cold); })) {
-        estimate::Plot pl(820, 140 + 34 * static_cast<int>(ids.size()), "drape coefficient draped from flat: preset - measured",
-                          "D error [percentage points]", "");
-        std::vector<std::pair<double, std::string>> ticks;
-        const double dy = 0.6 / static_cast<double>(labels.size());
-        double lo = -3, hi = 3;
-        for (std::size_t i = 0; i < ids.size(); ++i) {
-            const double y0 = static_cast<double>(ids.size() - i);
-            ticks.push_back({y0, ids[i]});
-            for (std::size_t li = 0; li < labels.size(); ++li)
-                for (const auto& e : entries)
-                    if (e.id == ids[i] && e.label == labels[li] && std::isfinite(e.d_cold)) {
-                        const double d = e.d_cold - e.d_meas, f = std::isfinite(e.d_fine) ? e.d_fine - e.d_meas : d;
-                        const double y = y0 + 0.3 - dy * (static_cast<double>(li) + 0.5);
-                        pl.interval(std::min(d, f), d, std::max(d, f), y, estimate::category(static_cast<int>(li)));
-                        lo = std::min(lo, std::min(d, f) - 0.5), hi = std::max(hi, std::max(d, f) + 0.5);
-                    }
-        }
-        for (std::size_t li = 0; li < labels.size(); ++li) pl.points({}, {}, estimate::category(static_cast<int>(li)), labels[li]);
-        pl.set_yticklabels(ticks);
-        pl.set_yrange(0.4, static_cast<double>(ids.size()) + 0.6);
-        pl.set_xrange(lo, hi);
-        for (const double x : {-2.0, 2.0}) pl.line({x, x}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
-        pl.line({0.0, 0.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {0, 0, 0}, "", 1);
-        pl.set_caption("marker: the fit's grid (mean of its seeds); bar to the finer grid's drape (--flat-grid). dashed: +-2 points");
-        pl.save((std::filesystem::path(*out) / "dc_error_flat.png").string());
+    for (std::size_t li = 0; li < labels.size(); ++li) pl.points({}, {}, estimate::category(static_cast<int>(li)), labels[li]);
+    pl.set_yticklabels(ticks);
+    pl.set_yrange(0.4, static_cast<double>(ids.size()) + 0.6);
+    double lo = -3, hi = 3;
+    for (const auto& e : entries) lo = std::min(lo, e.d_fit - e.d_meas - 0.5), hi = std::max(hi, e.d_fit - e.d_meas + 0.5);
+    pl.set_xrange(lo, hi);
+    pl.line({2.0, 2.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
+    pl.line({-2.0, -2.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
+    pl.line({0.0, 0.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {0, 0, 0}, "", 1);
+    std::string ls;
+    for (const auto& l : labels) ls += (ls.empty() ? "" : ", ") + l;
+    pl.set_caption("dashed: +-2 points (issue 4's target). Fits: " + ls);
+    pl.save((out / "dc_error.png").string());
+}
+
+/// dc_error_flat.png: the same for the presets draped from flat (the fit's grid,
+/// the bar to the finer grid's drape), where reports have them: how the preset
+/// drapes in a CAD.
+void plot_dc_error_flat(const std::filesystem::path& out, const std::vector<std::string>& ids, const std::vector<std::string>& labels, const std::vector<Entry>& entries)
+{
+    if (std::none_of(entries.begin(), entries.end(), [](const Entry& e) { return std::isfinite(e.d_cold); })) return;
+    estimate::Plot pl(820, 140 + 34 * static_cast<int>(ids.size()), "drape coefficient draped from flat: preset - measured",
+                      "D error [percentage points]", "");
+    std::vector<std::pair<double, std::string>> ticks;
+    const double dy = 0.6 / static_cast<double>(labels.size());
+    double lo = -3, hi = 3;
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+        const double y0 = static_cast<double>(ids.size() - i);
+        ticks.push_back({y0, ids[i]});
+        for (std::size_t li = 0; li < labels.size(); ++li)
+            for (const auto& e : entries)
+                if (e.id == ids[i] && e.label == labels[li] && std::isfinite(e.d_cold)) {
+                    const double d = e.d_cold - e.d_meas, f = std::isfinite(e.d_fine) ? e.d_fine - e.d_meas : d;
+                    const double y = y0 + 0.3 - dy * (static_cast<double>(li) + 0.5);
+                    pl.interval(std::min(d, f), d, std::max(d, f), y, estimate::category(static_cast<int>(li)));
+                    lo = std::min(lo, std::min(d, f) - 0.5), hi = std::max(hi, std::max(d, f) + 0.5);
+                }
     }
-    // Contour errors against depth, per label.
+    for (std::size_t li = 0; li < labels.size(); ++li) pl.points({}, {}, estimate::category(static_cast<int>(li)), labels[li]);
+    pl.set_yticklabels(ticks);
+    pl.set_yrange(0.4, static_cast<double>(ids.size()) + 0.6);
+    pl.set_xrange(lo, hi);
+    for (const double x : {-2.0, 2.0}) pl.line({x, x}, {0.4, static_cast<double>(ids.size()) + 0.6}, {120, 120, 120}, "", 1, true);
+    pl.line({0.0, 0.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {0, 0, 0}, "", 1);
+    pl.set_caption("marker: the fit's grid (mean of its seeds); bar to the finer grid's drape (--flat-grid). dashed: +-2 points");
+    pl.save((out / "dc_error_flat.png").string());
+}
+
+/// radius_error_LABEL.png, fold_error_LABEL.png: the contour errors against depth, per fit.
+void plot_contour_errors(const std::filesystem::path& out, const std::vector<std::string>& ids, const std::vector<std::string>& labels, const std::vector<Entry>& entries)
+{
     for (const auto& l : labels)
         for (const bool radius : {true, false}) {
             estimate::Plot pl(760, 460, std::string(radius ? "contour mean radius" : "RMS fold amplitude") + ": simulated - measured (" + l + ")",
@@ -331,8 +321,43 @@ int run(const std::vector<std::string>& argv)
                 }
             pl.hline(0.0, {0, 0, 0}, false);
             pl.set_yrange(-7, 7);
-            pl.save((std::filesystem::path(*out) / ((radius ? "radius_error_" : "fold_error_") + l + ".png")).string());
+            pl.save((out / ((radius ? "radius_error_" : "fold_error_") + l + ".png")).string());
         }
+}
+
+int run(const std::vector<std::string>& argv)
+{
+    Args a(argv, {"--out"}, {});
+    const auto out = a.get("--out");
+    if (!out) throw UsageError("--out DIR is required");
+    if (a.positionals().empty()) throw UsageError("at least one LABEL=REPORT_DIR is required");
+    std::vector<Entry> entries;
+    std::vector<std::string> labels;
+    for (const auto& arg : a.positionals()) {
+        const auto eq = arg.find('=');
+        if (eq == std::string::npos || eq == 0) throw UsageError("'" + arg + "' is not LABEL=REPORT_DIR");
+        const std::string label = arg.substr(0, eq);
+        for (char c : label)
+            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_')
+                throw UsageError("label '" + label + "' may only hold letters, digits, '-' and '_' (it names output files)");
+        if (std::find(labels.begin(), labels.end(), label) == labels.end()) labels.push_back(label);
+        entries.push_back(read_report(label, arg.substr(eq + 1)));
+    }
+    std::filesystem::create_directories(*out);
+    std::vector<std::string> ids;
+    for (const auto& e : entries)
+        if (std::find(ids.begin(), ids.end(), e.id) == ids.end()) ids.push_back(e.id);
+    std::sort(ids.begin(), ids.end());
+
+    std::ostringstream md;
+    const nlohmann::json js = record_rows(md, ids, labels, entries);
+    label_rows(md, labels, entries);
+    drape::write_file_atomic((std::filesystem::path(*out) / "summary.md").string(), md.str());
+    drape::write_file_atomic((std::filesystem::path(*out) / "summary.json").string(), dump_json(js) + "\n");
+
+    plot_dc_error(*out, ids, labels, entries);
+    plot_dc_error_flat(*out, ids, labels, entries);
+    plot_contour_errors(*out, ids, labels, entries);
     std::cout << md.str();
     return 0;
 }

@@ -86,6 +86,114 @@ Drapes a round specimen over the drapemeter pedestal to rest and measures it
                         respect to each parameter (comma-separated keys of the parameter table, or
                         all): dx/dp = H^-1 df/dp, one factorisation, no further drapes (static solver))";
 
+/// --sensitivity KEY,...|all: the parameters whose exact sensitivities of D and
+/// the hem the command prints.
+std::vector<cloth::Param> sensitivity_params(const Args& a, const fabric::FabricPreset& preset, const cloth::RestOptions& ro)
+{
+    std::vector<cloth::Param> sens_params;
+    if (const auto keys = a.get("--sensitivity")) {
+        if (ro.integrator != cloth::Integrator::Static) throw UsageError("--sensitivity needs the static solver (a rest state)");
+        if (preset.seed) throw UsageError("--sensitivity: a seed-19 preset's grid springs are not continuum parameters");
+        for (const auto& key : split_list(*keys)) {
+            if (key == "all") {
+                for (const auto& sp : cloth::param_table())
+                    if (sp.affects_statics && preset.params[sp.id] != 0) sens_params.push_back(sp.id);
+                continue;
+            }
+            const cloth::ParamSpec* sp = cloth::find_param(key);
+            if (!sp) throw UsageError("--sensitivity: unknown parameter '" + printable(key) + "'");
+            if (!sp->affects_statics) throw UsageError("--sensitivity " + key + ": a damper does not move a rest state");
+            if (preset.params[sp->id] == 0) throw UsageError("--sensitivity " + key + ": the value is 0 (set it with --set first)");
+            sens_params.push_back(sp->id);
+        }
+        if (sens_params.empty()) throw UsageError("--sensitivity: no parameter");
+    }
+    return sens_params;
+}
+
+/// The model's switches from the flags (contact, self-collision, the bending
+/// stencils, the membrane), refused where the preset or the mesh has no such choice.
+void apply_model_flags(const Args& a, fabric::FabricPreset& preset, const cloth::DrapeSetup& setup)
+{
+    preset.model.edge_contact = !a.has("--vertex-contact-only");
+    preset.model.self_collision = a.has("--self-collision");
+    if (a.has("--bending-correction")) {
+        if (preset.seed) throw UsageError("--bending-correction: a seed-19 preset has grid springs, no bending stencils to correct");
+        if (a.has("--plain-bending")) throw UsageError("--bending-correction and --plain-bending: choose one");
+        preset.model.bending_correction = true;
+    }
+    if (a.has("--plain-bending")) preset.model.bending_correction = false;
+    if (a.has("--arc-membrane")) {
+        if (preset.seed) throw UsageError("--arc-membrane: a seed-19 preset's grid springs are its own constants");
+        if (a.has("--chord-membrane")) throw UsageError("--arc-membrane and --chord-membrane: choose one");
+        if (setup.mesh != cloth::DrapeMesh::Grid)
+            throw UsageError("--arc-membrane is the grid's springs; --mesh " + std::string(cloth::to_string(setup.mesh)) +
+                             " has the triangle model's fibre membrane");
+        preset.model.arc_membrane = true;
+    }
+    if (a.has("--chord-membrane")) preset.model.arc_membrane = false;
+}
+
+#ifdef HAVE_DRAPE_CAPTURE
+/// A picture of the rest state for a person (OUT/rest.png): the cloth and the
+/// pedestal.
+void write_rest_picture(const std::string& out, const cloth::DrapeResult& r, const cloth::DrapeSetup& setup, const cloth::ClothSystem& sys,
+                        const fabric::FabricPreset& preset)
+{
+    // The pedestal: a cylinder (top cap and side) 1 mm below the cloth it carries.
+    const int seg = 64;
+    const double rad = 0.5 * setup.disc_diameter, top = -1e-3, bottom = -setup.pedestal_height;
+    cloth::Positions ped(2 * seg + 1, 3);
+    cloth::Triangles pf(3 * seg, 3);
+    for (int k = 0; k < seg; ++k) {
+        const double t = 2 * M_PI * k / seg;
+        ped.row(k) << rad * std::cos(t), rad * std::sin(t), top;
+        ped.row(seg + k) << rad * std::cos(t), rad * std::sin(t), bottom;
+    }
+    ped.row(2 * seg) << 0, 0, top;
+    for (int k = 0; k < seg; ++k) {
+        const int k1 = (k + 1) % seg;
+        pf.row(3 * k) << 2 * seg, k, k1;
+        pf.row(3 * k + 1) << k, seg + k, seg + k1;
+        pf.row(3 * k + 2) << k, seg + k1, k1;
+    }
+    char title[160];
+    std::snprintf(title, sizeof title, "%s  D = %.1f %%, %d nodes (%.0f/%.0f mm, grid %d)", preset.name.c_str(),
+                  r.metrics.drape_coefficient_percent, r.metrics.node_count, setup.sample_diameter * 1e3,
+                  setup.disc_diameter * 1e3, setup.grid);
+    capture::write_mesh_picture(out + "/rest.png",
+                                {{&r.x, &sys.mesh().F, cv::Scalar(72, 58, 176)}, {&ped, &pf, cv::Scalar(150, 150, 150)}},
+                                title);
+}
+#endif
+
+/// The rest state for a person: D, nodes, the hem, the solver, how it was laid
+/// and the sensitivities.
+void print_simulation(const cloth::DrapeResult& r, const cloth::DrapeSetup& setup, const cloth::RestOptions& ro, const nlohmann::json& summary,
+                      const fabric::FabricPreset& preset, const std::vector<cloth::DrapeMetricSensitivity>& sens)
+{
+    std::printf("drape coefficient  %.1f %%\n", r.metrics.drape_coefficient_percent);
+    std::printf("nodes              %d\n", r.metrics.node_count);
+    std::printf("hem height         %.1f .. %.1f mm (below the pedestal top)\n", r.hem.min_z * 1e3, r.hem.max_z * 1e3);
+    std::printf("self-intersections %ld (self-collision %s)\n", summary["self_intersections"].get<long>(),
+                preset.model.self_collision ? "on" : "off");
+    std::printf("solver             %s: %s, %ld steps, %ld force evaluations, %.2f s\n", to_string(ro.integrator).c_str(),
+                to_string(r.status.outcome).c_str(), r.status.steps, r.status.force_evaluations, r.status.wall_seconds);
+    if (ro.integrator == cloth::Integrator::Static && setup.laying_load < 1)
+        std::printf("laying             first at rest under %s g (the preset's lab; --laying 1: the whole load at once)\n",
+                    format_value(setup.laying_load).c_str());
+    if (setup.fold_mode == 0 && setup.perturbation != cloth::kStartLift)
+        std::printf("start              flat, %s mm wavy at most (the preset's lab; --perturbation 1mm: the engine's default)\n",
+                    format_value(setup.perturbation * 1e3).c_str());
+    if (!r.status.message.empty()) std::printf("                   %s\n", r.status.message.c_str());
+    if (!sens.empty()) std::printf("sensitivity        D change for +10 %% of each parameter (exact, at this rest state):\n");
+    for (const auto& t : sens) {
+        const auto& sp = cloth::spec(t.param);
+        std::printf("  %-26s %10.4g %-7s  dD %+7.2f points   mean hem %+7.2f mm\n", std::string(sp.key).c_str(), t.value,
+                    std::string(sp.unit).c_str(), t.d_drape_coefficient_percent * 0.1 * t.value, t.d_hem_mean_z * 0.1 * t.value * 1e3);
+    }
+}
+
 int run(const std::vector<std::string>& argv)
 {
     Args a(argv,
@@ -113,42 +221,9 @@ int run(const std::vector<std::string>& argv)
     ro.max_sim_time = a.get_double("--max-time", 60.0);
     if (!(ro.max_sim_time > 0) || ro.max_sim_time > 1e5) throw UsageError("--max-time must be in (0, 1e5] s of simulated time");
     const bool json = a.has("--json"), quiet = a.has("--quiet") || json;
-    std::vector<cloth::Param> sens_params;
-    if (const auto keys = a.get("--sensitivity")) {
-        if (ro.integrator != cloth::Integrator::Static) throw UsageError("--sensitivity needs the static solver (a rest state)");
-        if (preset.seed) throw UsageError("--sensitivity: a seed-19 preset's grid springs are not continuum parameters");
-        for (const auto& key : split_list(*keys)) {
-            if (key == "all") {
-                for (const auto& sp : cloth::param_table())
-                    if (sp.affects_statics && preset.params[sp.id] != 0) sens_params.push_back(sp.id);
-                continue;
-            }
-            const cloth::ParamSpec* sp = cloth::find_param(key);
-            if (!sp) throw UsageError("--sensitivity: unknown parameter '" + printable(key) + "'");
-            if (!sp->affects_statics) throw UsageError("--sensitivity " + key + ": a damper does not move a rest state");
-            if (preset.params[sp->id] == 0) throw UsageError("--sensitivity " + key + ": the value is 0 (set it with --set first)");
-            sens_params.push_back(sp->id);
-        }
-        if (sens_params.empty()) throw UsageError("--sensitivity: no parameter");
-    }
+    const std::vector<cloth::Param> sens_params = sensitivity_params(a, preset, ro);
     ro.trace = a.has("--trace");
-    preset.model.edge_contact = !a.has("--vertex-contact-only");
-    preset.model.self_collision = a.has("--self-collision");
-    if (a.has("--bending-correction")) {
-        if (preset.seed) throw UsageError("--bending-correction: a seed-19 preset has grid springs, no bending stencils to correct");
-        if (a.has("--plain-bending")) throw UsageError("--bending-correction and --plain-bending: choose one");
-        preset.model.bending_correction = true;
-    }
-    if (a.has("--plain-bending")) preset.model.bending_correction = false;
-    if (a.has("--arc-membrane")) {
-        if (preset.seed) throw UsageError("--arc-membrane: a seed-19 preset's grid springs are its own constants");
-        if (a.has("--chord-membrane")) throw UsageError("--arc-membrane and --chord-membrane: choose one");
-        if (setup.mesh != cloth::DrapeMesh::Grid)
-            throw UsageError("--arc-membrane is the grid's springs; --mesh " + std::string(cloth::to_string(setup.mesh)) +
-                             " has the triangle model's fibre membrane");
-        preset.model.arc_membrane = true;
-    }
-    if (a.has("--chord-membrane")) preset.model.arc_membrane = false;
+    apply_model_flags(a, preset, setup);
     Progress progress("simulate", quiet);
     if (!quiet) ro.progress = progress.solver_callback(ro);
     cloth::single_threaded_blas(); // the same rounding as the widget, predict and garment: the same rest state
@@ -182,57 +257,11 @@ int run(const std::vector<std::string>& argv)
         // The summary as printed (with the self-intersection count and any sensitivities).
         write_file_atomic(*out + "/summary.json", summary.dump(2) + "\n");
 #ifdef HAVE_DRAPE_CAPTURE
-        // A picture of the rest state for a person: the cloth and the pedestal.
-        // The pedestal: a cylinder (top cap and side) 1 mm below the cloth it carries.
-        const int seg = 64;
-        const double rad = 0.5 * setup.disc_diameter, top = -1e-3, bottom = -setup.pedestal_height;
-        cloth::Positions ped(2 * seg + 1, 3);
-        cloth::Triangles pf(3 * seg, 3);
-        for (int k = 0; k < seg; ++k) {
-            const double t = 2 * M_PI * k / seg;
-            ped.row(k) << rad * std::cos(t), rad * std::sin(t), top;
-            ped.row(seg + k) << rad * std::cos(t), rad * std::sin(t), bottom;
-        }
-        ped.row(2 * seg) << 0, 0, top;
-        for (int k = 0; k < seg; ++k) {
-            const int k1 = (k + 1) % seg;
-            pf.row(3 * k) << 2 * seg, k, k1;
-            pf.row(3 * k + 1) << k, seg + k, seg + k1;
-            pf.row(3 * k + 2) << k, seg + k1, k1;
-        }
-        char title[160];
-        std::snprintf(title, sizeof title, "%s  D = %.1f %%, %d nodes (%.0f/%.0f mm, grid %d)", preset.name.c_str(),
-                      r.metrics.drape_coefficient_percent, r.metrics.node_count, setup.sample_diameter * 1e3,
-                      setup.disc_diameter * 1e3, setup.grid);
-        capture::write_mesh_picture(*out + "/rest.png",
-                                    {{&r.x, &sys->mesh().F, cv::Scalar(72, 58, 176)}, {&ped, &pf, cv::Scalar(150, 150, 150)}},
-                                    title);
+        write_rest_picture(*out, r, setup, *sys, preset);
 #endif
     }
-    if (json) {
-        std::cout << dump_json(summary) << "\n";
-    } else {
-        std::printf("drape coefficient  %.1f %%\n", r.metrics.drape_coefficient_percent);
-        std::printf("nodes              %d\n", r.metrics.node_count);
-        std::printf("hem height         %.1f .. %.1f mm (below the pedestal top)\n", r.hem.min_z * 1e3, r.hem.max_z * 1e3);
-        std::printf("self-intersections %ld (self-collision %s)\n", summary["self_intersections"].get<long>(),
-                    preset.model.self_collision ? "on" : "off");
-        std::printf("solver             %s: %s, %ld steps, %ld force evaluations, %.2f s\n", to_string(ro.integrator).c_str(),
-                    to_string(r.status.outcome).c_str(), r.status.steps, r.status.force_evaluations, r.status.wall_seconds);
-        if (ro.integrator == cloth::Integrator::Static && setup.laying_load < 1)
-            std::printf("laying             first at rest under %s g (the preset's lab; --laying 1: the whole load at once)\n",
-                        format_value(setup.laying_load).c_str());
-        if (setup.fold_mode == 0 && setup.perturbation != cloth::kStartLift)
-            std::printf("start              flat, %s mm wavy at most (the preset's lab; --perturbation 1mm: the engine's default)\n",
-                        format_value(setup.perturbation * 1e3).c_str());
-        if (!r.status.message.empty()) std::printf("                   %s\n", r.status.message.c_str());
-        if (!sens.empty()) std::printf("sensitivity        D change for +10 %% of each parameter (exact, at this rest state):\n");
-        for (const auto& t : sens) {
-            const auto& sp = cloth::spec(t.param);
-            std::printf("  %-26s %10.4g %-7s  dD %+7.2f points   mean hem %+7.2f mm\n", std::string(sp.key).c_str(), t.value,
-                        std::string(sp.unit).c_str(), t.d_drape_coefficient_percent * 0.1 * t.value, t.d_hem_mean_z * 0.1 * t.value * 1e3);
-        }
-    }
+    if (json) std::cout << dump_json(summary) << "\n";
+    else print_simulation(r, setup, ro, summary, preset, sens);
     if (r.status.outcome == cloth::SolverStatus::Outcome::NotConverged && ro.integrator == cloth::Integrator::Static)
         std::fprintf(stderr, "drape simulate: not at rest within %ld Newton iterations per level (exit 4; the metrics are the last state's): "
                              "--max-iterations %ld to let it go on\n",

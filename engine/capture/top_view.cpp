@@ -293,54 +293,52 @@ void detail::set_hem_depth_error(TopView& tv, double dz)
     tv.dc_uncertainty_percent = chosen.uncertainty_percent;
 }
 
-void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, const record::ContourStack* stack, Measurement& out)
-{
-    TopView& tv = out.top;
-    const std::string image_name = rec.top_image();
-    const cv::Mat lab = to_lab(out.top_image);
-    const bool single = rec.single_camera();
-    const double Req = rec.R1; // equal-area radius: D = (A - disc) / (specimen - disc) for any shape
+namespace {
 
-    // ---- the camera ----
+/// The top camera: solved from a single photo's scale reference, or the record's
+/// calibration (its pose measured on the floor chessboards when asked).
+ViewGeometry top_view_geometry(const record::Record& rec, const MeasureOptions& opt, const cv::Mat& lab, Measurement& out)
+{
     ViewGeometry g;
-    if (single) {
+    if (rec.single_camera()) {
         const auto& tp = *rec.top_photo;
         // Nothing in the photo (one colour throughout): said at once, before
         // the disc search and GrabCut look for what is not there.
         if (const double spread = colour_spread(out.top_image); spread < kMinColourSpread)
             throw RefusalError({"no-cloth",
-                                "no cloth found: " + image_name + " is one uniform colour (colour spread " + fmt("%.2f", spread) +
+                                "no cloth found: " + rec.top_image() + " is one uniform colour (colour spread " + fmt("%.2f", spread) +
                                     " levels of 255): no drape, disc or background in it",
                                 "photograph the drape on its stand (a lens cap, a blank or overexposed file shows nothing)"});
         cv::Mat rough;
         if (!(tp.disc_centre_px && tp.disc_radius_px)) rough = rough_cloth_mask(out.top_image);
-        g = solve_view(rec, out.top_image, lab, rough);
-    } else {
-        const record::Camera& declared = rec.cameras.at("top");
-        g.camera = declared;
-        g.source_text = "full calibration (cameras.top, declared pose)";
-        if (opt.calibrate && !rec.boards.empty()) {
-            out.top_calibration = calibrate_camera(rec, "top", out.top_image);
-            for (const auto& w : out.top_calibration->warnings) out.warnings.push_back(w);
-            if (out.top_calibration->ok) {
-                g.camera = out.top_calibration->measured;
-                g.source_text = "full calibration (cameras.top), pose measured on " +
-                                std::to_string(out.top_calibration->boards_found.size()) + " floor chessboard(s)";
-            }
-        }
-        g.source = record::ScaleSource::Calibration;
-        g.camera_height = g.camera.centre().z();
-        g.camera_height_source = "calibration";
-        g.centre_px = g.camera.project({0, 0, 0});
-        g.centre_source = "calibration";
-        g.scale_px_per_m = (g.camera.project({rec.R2, 0, 0}) - g.centre_px).norm() / rec.R2;
+        return solve_view(rec, out.top_image, lab, rough);
     }
-    for (const auto& w : g.warnings) out.warnings.push_back("top view: " + w);
-    out.view = g;
-    const record::Camera& cam = g.camera;
-    const double H = g.camera_height;
+    const record::Camera& declared = rec.cameras.at("top");
+    g.camera = declared;
+    g.source_text = "full calibration (cameras.top, declared pose)";
+    if (opt.calibrate && !rec.boards.empty()) {
+        out.top_calibration = calibrate_camera(rec, "top", out.top_image);
+        for (const auto& w : out.top_calibration->warnings) out.warnings.push_back(w);
+        if (out.top_calibration->ok) {
+            g.camera = out.top_calibration->measured;
+            g.source_text = "full calibration (cameras.top), pose measured on " + std::to_string(out.top_calibration->boards_found.size()) +
+                            " floor chessboard(s)";
+        }
+    }
+    g.source = record::ScaleSource::Calibration;
+    g.camera_height = g.camera.centre().z();
+    g.camera_height_source = "calibration";
+    g.centre_px = g.camera.project({0, 0, 0});
+    g.centre_source = "calibration";
+    g.scale_px_per_m = (g.camera.project({rec.R2, 0, 0}) - g.centre_px).norm() / rec.R2;
+    return g;
+}
 
-    // ---- the perspective model ----
+/// The perspective model D is reported with (MeasureOptions::perspective), and why
+/// (tv.perspective_reason).
+std::string choose_perspective(const record::Record& rec, const MeasureOptions& opt, const ViewGeometry& g, TopView& tv)
+{
+    const bool single = rec.single_camera();
     std::string persp = opt.perspective;
     if (persp == "auto" && single) persp = rec.top_photo->perspective;
     if (persp == "calibration") {
@@ -365,11 +363,20 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
     } else {
         throw ParameterError("perspective '" + persp + "': expected none, disc-plane, hem, calibration or auto");
     }
-    tv.perspective = persp;
+    return persp;
+}
 
-    // ---- segmentation ----
+/// The cloth's probability per pixel and the region it may be in.
+struct Segmented {
+    cv::Mat prob, gate, lightness;
+    bool photo = false; ///< segmented as a photo (GrabCut, thresholds, a mask), not by the lab's fabric colour
+};
+
+/// The single photo's own threshold and mask (top_photo) unless the options give one.
+SegmentOverrides photo_overrides(const record::Record& rec, const MeasureOptions& opt)
+{
     SegmentOverrides ov = opt.overrides;
-    if (single && ov.threshold.empty() && ov.mask.empty()) {
+    if (rec.single_camera() && ov.threshold.empty() && ov.mask.empty()) {
         ov.threshold = rec.top_photo->threshold;
         if (!rec.top_photo->mask.empty()) {
             const auto path = rec.file(rec.top_photo->mask);
@@ -378,17 +385,24 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
             ov.mask_name = rec.top_photo->mask;
         }
     }
-    const bool photo_seg = (single && opt.segmentation != "lab") || opt.segmentation == "photo" || !ov.threshold.empty() ||
-                           !ov.mask.empty();
-    const bool round = rec.specimen.shape == record::Specimen::Shape::Round;
-    const bool angle_known = round || !rec.specimen.angle_from_photo;
-    double angle = rec.specimen.angle;
-    cv::Mat prob, gate, lightness;
+    return ov;
+}
+
+/// Segments the top photo (tv.region and the segmentation's description); false,
+/// with the reason in out.not_measured, when the lab's fabric colour cannot tell the
+/// cloth from the floor or the cloth does not cover the disc.
+bool segment_top(const record::Record& rec, const MeasureOptions& opt, const cv::Mat& lab, const record::Camera& cam, double angle,
+                 Measurement& out, Segmented& s)
+{
+    TopView& tv = out.top;
+    const std::string image_name = rec.top_image();
+    const SegmentOverrides ov = photo_overrides(rec, opt);
+    s.photo = (rec.single_camera() && opt.segmentation != "lab") || opt.segmentation == "photo" || !ov.threshold.empty() || !ov.mask.empty();
     const Eigen::Vector2d c0 = cam.project({0, 0, 0});
-    if (photo_seg) {
-        PhotoSegmentation seg = segment_photo(out.top_image, lab, rec, cam, ov, angle_known ? angle : kNaN);
-        prob = seg.prob;
-        gate = seg.gate;
+    if (s.photo) {
+        PhotoSegmentation seg = segment_photo(out.top_image, lab, rec, cam, ov, angle);
+        s.prob = seg.prob;
+        s.gate = seg.gate;
         tv.region = seg.region;
         tv.segmentation_method = seg.method;
         tv.photo_segmentation = true;
@@ -397,140 +411,313 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
         tv.model.contrast = seg.contrast;
         tv.model.chromatic = seg.lightness_weight < 1;
         for (const auto& w : seg.warnings) tv.warnings.push_back("top view: " + w);
-    } else {
-        tv.model = fabric_model(rec, cam, lab);
-        tv.segmentation_method = tv.model.chromatic ? "fabric colour on the disc vs floor ring, by chroma"
-                                                    : "fabric colour on the disc vs floor ring, by darkness";
-        if (tv.model.contrast < 8.0) {
-            out.not_measured.push_back("top view: no fabric distinguishable from the floor in " + image_name +
-                                       " (colour contrast " + fmt("%.1f", tv.model.contrast) + " Lab units < 8)");
-            return;
-        }
-        prob = fabric_probability(lab, tv.model);
-        const double reach_px = (cam.project({rec.specimen.max_reach() + 0.02, 0, 0}) - c0).norm();
-        gate = central_component(prob, c0, reach_px);
-        tv.region = (prob >= 0.5f) & gate;
-        // The fabric must at least cover the pedestal top; otherwise what sits on
-        // the pedestal is not the specimen (or the photo has none).
-        const double ped_px = (cam.project({rec.R2, 0, 0}) - c0).norm();
-        cv::Mat disc = cv::Mat::zeros(prob.size(), CV_8U);
-        cv::circle(disc, cv::Point(static_cast<int>(c0.x()), static_cast<int>(c0.y())), static_cast<int>(0.9 * ped_px), 255,
-                   cv::FILLED);
-        const double covered = static_cast<double>(cv::countNonZero(gate & disc)) / std::max(1, cv::countNonZero(disc));
-        if (covered < 0.9) {
-            out.not_measured.push_back("top view: the support disc in " + image_name + " is not covered by fabric (" +
-                                       fmt("%.0f", covered * 100) + " % of it): no specimen on the stand?");
-            return;
-        }
-        if (!tv.model.chromatic) cv::extractChannel(lab, lightness, 0);
+        return true;
     }
-    tv.region_image_fraction = static_cast<double>(cv::countNonZero(tv.region)) / static_cast<double>(tv.region.total());
+    tv.model = fabric_model(rec, cam, lab);
+    tv.segmentation_method = tv.model.chromatic ? "fabric colour on the disc vs floor ring, by chroma"
+                                                : "fabric colour on the disc vs floor ring, by darkness";
+    if (tv.model.contrast < 8.0) {
+        out.not_measured.push_back("top view: no fabric distinguishable from the floor in " + image_name + " (colour contrast " +
+                                   fmt("%.1f", tv.model.contrast) + " Lab units < 8)");
+        return false;
+    }
+    s.prob = fabric_probability(lab, tv.model);
+    const double reach_px = (cam.project({rec.specimen.max_reach() + 0.02, 0, 0}) - c0).norm();
+    s.gate = central_component(s.prob, c0, reach_px);
+    tv.region = (s.prob >= 0.5f) & s.gate;
+    // The fabric must at least cover the pedestal top; otherwise what sits on
+    // the pedestal is not the specimen (or the photo has none).
+    const double ped_px = (cam.project({rec.R2, 0, 0}) - c0).norm();
+    cv::Mat disc = cv::Mat::zeros(s.prob.size(), CV_8U);
+    cv::circle(disc, cv::Point(static_cast<int>(c0.x()), static_cast<int>(c0.y())), static_cast<int>(0.9 * ped_px), 255, cv::FILLED);
+    const double covered = static_cast<double>(cv::countNonZero(s.gate & disc)) / std::max(1, cv::countNonZero(disc));
+    if (covered < 0.9) {
+        out.not_measured.push_back("top view: the support disc in " + image_name + " is not covered by fabric (" +
+                                   fmt("%.0f", covered * 100) + " % of it): no specimen on the stand?");
+        return false;
+    }
+    if (!tv.model.chromatic) cv::extractChannel(lab, s.lightness, 0);
+    return true;
+}
 
-    // ---- the outline under every perspective model ----
-    const int rays = opt.rays;
-    auto reach_for = [&](double a, bool circle) {
-        record::Specimen sp = rec.specimen;
-        sp.angle = a;
-        const double rmax = sp.max_reach();
-        std::vector<double> v(static_cast<std::size_t>(rays));
-        for (int k = 0; k < rays; ++k) v[static_cast<std::size_t>(k)] = circle ? rmax : sp.reach(2 * M_PI * k / rays);
-        return v;
-    };
-    TraceSetup base;
-    base.R2 = rec.R2;
-    base.H = H;
+/// The outline under every perspective model: in the scale reference's plane, in
+/// the disc-top plane and back-projected onto the hem's height model.
+struct Traces {
+    TraceSetup base, ref_setup, disc_setup, hem_setup;
+    Trace ref, disc, hem;
+};
+
+/// The flat specimen's reach per ray at angle a (circle: its largest reach all round).
+std::vector<double> reach_for(const record::Record& rec, int rays, double a, bool circle)
+{
+    record::Specimen sp = rec.specimen;
+    sp.angle = a;
+    const double rmax = sp.max_reach();
+    std::vector<double> v(static_cast<std::size_t>(rays));
+    for (int k = 0; k < rays; ++k) v[static_cast<std::size_t>(k)] = circle ? rmax : sp.reach(2 * M_PI * k / rays);
+    return v;
+}
+
+Traces trace_models(const record::Record& rec, const MeasureOptions& opt, const ViewGeometry& g, const Segmented& s,
+                    const record::ContourStack* stack, TopView& tv)
+{
+    const record::Camera& cam = g.camera;
+    const bool round = rec.specimen.shape == record::Specimen::Shape::Round;
+    const bool angle_known = round || !rec.specimen.angle_from_photo;
+    double angle = rec.specimen.angle;
+    Traces tr;
+    tr.base.R2 = rec.R2;
+    tr.base.H = g.camera_height;
     if (!angle_known) {
-        TraceSetup t0 = base;
+        TraceSetup t0 = tr.base;
         t0.model = HeightModel::Plane;
-        t0.reach = reach_for(0, true);
-        angle = estimate_angle(rec.specimen, trace_outline(cam, prob, gate, t0, lightness).outline);
+        t0.reach = reach_for(rec, opt.rays, 0, true);
+        angle = estimate_angle(rec.specimen, trace_outline(cam, s.prob, s.gate, t0, s.lightness).outline);
     }
     tv.specimen_angle = angle;
-    base.reach = reach_for(angle, false);
+    tr.base.reach = reach_for(rec, opt.rays, angle, false);
     for (const auto& q : search_limit_px(rec, cam, angle_known ? angle : kNaN)) tv.limit_px.emplace_back(q.x, q.y);
 
-    TraceSetup t_ref = base, t_disc = base, t_hem = base;
-    t_ref.model = t_disc.model = HeightModel::Plane;
-    t_ref.z_plane = single ? g.reference_height : 0.0;
-    t_hem.model = HeightModel::Chord;
-    const Trace ref = trace_outline(cam, prob, gate, t_ref, lightness);
-    const Trace disc = t_ref.z_plane == 0.0 ? ref : trace_outline(cam, prob, gate, t_disc, lightness);
-    const Trace hem = trace_outline(cam, prob, gate, t_hem, lightness);
-    tv.height_model = HeightModel::Chord;
+    tr.ref_setup = tr.disc_setup = tr.hem_setup = tr.base;
+    tr.ref_setup.model = tr.disc_setup.model = HeightModel::Plane;
+    tr.ref_setup.z_plane = rec.single_camera() ? g.reference_height : 0.0;
+    tr.hem_setup.model = HeightModel::Chord;
+    tr.ref = trace_outline(cam, s.prob, s.gate, tr.ref_setup, s.lightness);
+    tr.disc = tr.ref_setup.z_plane == 0.0 ? tr.ref : trace_outline(cam, s.prob, s.gate, tr.disc_setup, s.lightness);
+    tr.hem = trace_outline(cam, s.prob, s.gate, tr.hem_setup, s.lightness);
     if (stack && !stack->profiles.empty() && round) {
-        TraceSetup tc = base;
+        TraceSetup tc = tr.base;
         tc.model = HeightModel::Contours;
         tc.stack = stack;
-        const Trace cont = trace_outline(cam, prob, gate, tc, lightness);
-        if (cont.outline.size() >= 8) tv.dc_contours_percent = dc_area(cont.outline, Req, rec.R2).first;
+        const Trace cont = trace_outline(cam, s.prob, s.gate, tc, s.lightness);
+        if (cont.outline.size() >= 8) tv.dc_contours_percent = dc_area(cont.outline, rec.R1, rec.R2).first;
     }
-    const Trace& best = persp == "hem" ? hem : persp == "disc-plane" ? disc : ref;
-    if (persp != "hem") tv.height_model = HeightModel::Plane;
+    return tr;
+}
 
-    // ---- what cannot be ----
-    auto refuse = [&](const std::string& check, const std::string& msg, const std::string& remedy) {
-        tv.outline_px = best.px;
-        tv.at_limit_px = best.at_limit_px;
-        tv.rays_at_limit = best.at_limit;
-        throw RefusalError({check, msg, remedy});
-    };
-    const std::string seg_remedy =
-        "look at the overlay (--overlay), then give a threshold (--threshold L<NN, L>NN, a>NN, ...) or a mask image "
-        "(--mask FILE.png: white = cloth, black = not, grey = let the segmentation decide)";
+const char* const kSegmentationRemedy =
+    "look at the overlay (--overlay), then give a threshold (--threshold L<NN, L>NN, a>NN, ...) or a mask image "
+    "(--mask FILE.png: white = cloth, black = not, grey = let the segmentation decide)";
+
+/// Refuses the photo, with the outline that was traced shown on the overlay.
+[[noreturn]] void refuse(TopView& tv, const Trace& best, const std::string& check, const std::string& msg, const std::string& remedy)
+{
+    tv.outline_px = best.px;
+    tv.at_limit_px = best.at_limit_px;
+    tv.rays_at_limit = best.at_limit;
+    throw RefusalError({check, msg, remedy});
+}
+
+/// What cannot be, before the outline is measured: a region that is the
+/// background, runs off the photo, has too few edges, reaches the search limit or
+/// lies beyond the flat specimen. Refuses (throws) on a single photo; false, with
+/// the reason in out.not_measured, where a calibrated record may go on without its
+/// top view.
+bool outline_possible(const record::Record& rec, int rays, const Traces& tr, const Trace& best, bool photo_seg, Measurement& out)
+{
+    TopView& tv = out.top;
+    const bool single = rec.single_camera();
+    const std::string seg_remedy = kSegmentationRemedy;
     if (tv.region_image_fraction > 0.6)
-        refuse("region-size",
+        refuse(tv, best, "region-size",
                "the region counted as cloth covers " + fmt("%.0f", 100 * tv.region_image_fraction) +
                    " % of the photo: the background was taken for cloth",
                seg_remedy);
     if (touches_border(tv.region) && photo_seg)
-        refuse("border", "the region counted as cloth touches the photo's border: the drape runs off the photo, or a "
-                         "shadow or the background joined it",
+        refuse(tv, best, "border",
+               "the region counted as cloth touches the photo's border: the drape runs off the photo, or a "
+               "shadow or the background joined it",
                "photograph the whole drape with a margin of background all round; otherwise " + seg_remedy);
     if (best.outline.size() < static_cast<std::size_t>(rays) * 9 / 10) {
         const std::string msg = "top view: fabric edge found on only " + std::to_string(best.outline.size()) + " of " +
                                 std::to_string(rays) + " rays";
-        if (single) refuse("edge-not-found", msg, seg_remedy);
+        if (single) refuse(tv, best, "edge-not-found", msg, seg_remedy);
         out.not_measured.push_back(msg);
-        return;
+        return false;
     }
     if (best.at_limit > std::max(3, rays / 50))
-        refuse("search-limit",
+        refuse(tv, best, "search-limit",
                "on " + std::to_string(best.at_limit) + " of " + std::to_string(rays) +
                    " rays the cloth reaches the search limit (the flat specimen's edge + 5 %, where no " + rec.specimen.describe() +
                    " specimen can hang): a shadow or the background is counted as cloth, or the scale or specimen size is wrong",
                "check --disc / --specimen and the scale (the overlay shows the limit as a yellow line); otherwise " + seg_remedy);
-    {
-        // A specimen cannot hang further out than its flat edge: where the
-        // outline in the disc-top plane (which, seen from above, is never
-        // further out than the hem really is) lies beyond it by more than 3 %
-        // + 3 mm (off-centring, stretch), the region is not the specimen.
-        int beyond = 0;
-        std::vector<Eigen::Vector2d> where;
-        for (std::size_t i = 0; i < disc.outline.size(); ++i) {
-            const Eigen::Vector2d& p = disc.outline[i];
-            double th = std::atan2(p.y(), p.x());
-            if (th < 0) th += 2 * M_PI;
-            const auto k = static_cast<std::size_t>(std::lround(th / (2 * M_PI) * rays)) % static_cast<std::size_t>(rays);
-            if (p.norm() > 1.03 * base.reach[k] + 0.003) {
-                ++beyond;
-                where.push_back(disc.px[i]);
-            }
-        }
-        if (beyond > rays / 20) {
-            tv.outline_px = best.px;
-            tv.at_limit_px = where;
-            tv.rays_at_limit = beyond;
-            throw RefusalError({"beyond-specimen",
-                                "on " + std::to_string(beyond) + " of " + std::to_string(rays) +
-                                    " rays the counted region lies beyond the flat specimen's edge (" + rec.specimen.describe() +
-                                    "), where no cloth can hang: the specimen or disc size is wrong, the scale is wrong, or "
-                                    "something else (a shadow, the background) is counted as cloth",
-                                "check --specimen, --disc and the scale (the overlay shows the flat specimen in grey); otherwise " +
-                                    seg_remedy});
+    // A specimen cannot hang further out than its flat edge: where the outline in
+    // the disc-top plane (which, seen from above, is never further out than the
+    // hem really is) lies beyond it by more than 3 % + 3 mm (off-centring,
+    // stretch), the region is not the specimen.
+    int beyond = 0;
+    std::vector<Eigen::Vector2d> where;
+    for (std::size_t i = 0; i < tr.disc.outline.size(); ++i) {
+        const Eigen::Vector2d& p = tr.disc.outline[i];
+        double th = std::atan2(p.y(), p.x());
+        if (th < 0) th += 2 * M_PI;
+        const auto k = static_cast<std::size_t>(std::lround(th / (2 * M_PI) * rays)) % static_cast<std::size_t>(rays);
+        if (p.norm() > 1.03 * tr.base.reach[k] + 0.003) {
+            ++beyond;
+            where.push_back(tr.disc.px[i]);
         }
     }
-    tv.dc_plane_percent = dc_area(disc.outline, Req, rec.R2).first;
-    tv.dc_chord_percent = dc_area(hem.outline, Req, rec.R2).first;
+    if (beyond > rays / 20) {
+        tv.outline_px = best.px;
+        tv.at_limit_px = where;
+        tv.rays_at_limit = beyond;
+        throw RefusalError({"beyond-specimen",
+                            "on " + std::to_string(beyond) + " of " + std::to_string(rays) +
+                                " rays the counted region lies beyond the flat specimen's edge (" + rec.specimen.describe() +
+                                "), where no cloth can hang: the specimen or disc size is wrong, the scale is wrong, or "
+                                "something else (a shadow, the background) is counted as cloth",
+                            "check --specimen, --disc and the scale (the overlay shows the flat specimen in grey); otherwise " +
+                                seg_remedy});
+    }
+    return true;
+}
+
+/// What cannot be, once measured: nothing hanging over the disc, D outside 0..100 %.
+bool drape_possible(const record::Record& rec, const record::Camera& cam, const Trace& best, Measurement& out)
+{
+    TopView& tv = out.top;
+    const Eigen::Vector2d c0 = cam.project({0, 0, 0});
+    double max_px = 0;
+    for (const auto& u : best.px) max_px = std::max(max_px, (u - c0).norm());
+    const double ped_px = (cam.project({rec.R2, 0, 0}) - c0).norm();
+    const std::string seg_remedy = kSegmentationRemedy;
+    if (max_px < ped_px + 3.0) {
+        // Only the pedestal top was found (in the image, nothing reaches past
+        // the disc's own edge): a specimen always hangs over the disc.
+        const std::string msg = "top view: nothing hangs over the support disc in " + rec.top_image() + " (outline within " +
+                                fmt("%.1f", max_px - ped_px) + " px of the disc edge): no specimen on the stand?";
+        if (rec.single_camera()) refuse(tv, best, "no-drape", msg, "check --disc (the disc's diameter) and the scale; " + seg_remedy);
+        out.not_measured.push_back(msg);
+        return false;
+    }
+    const double D = tv.metrics.drape_coefficient_percent;
+    if (!(D >= 0.0 && D <= 100.0))
+        refuse(tv, best, "dc-range",
+               "the drape coefficient would be " + fmt("%.1f", D) + " %, outside 0..100 %: the counted region is " +
+                   (D > 100 ? "larger than the flat specimen" : "smaller than the disc"),
+               "check --disc and --specimen (diameters, not radii) and the scale; otherwise " + seg_remedy);
+    return true;
+}
+
+/// One perspective model's D with its uncertainty terms. Remaining error: (1) edge
+/// placement, 0.5 px along the whole perimeter; (2) the scale reference (its own
+/// error, its height); (3) the camera height (moves every height-corrected
+/// radius); (4) the hem's height model: a height error dz scales every radius by
+/// dz / (H - z), so dD = 2 A dz / (H - z) / (specimen area - disc area).
+PerspectiveValue perspective_value(const record::Record& rec, const MeasureOptions& opt, const ViewGeometry& g, const Segmented& s,
+                                   const Traces& tr, const Trace& t, const std::string& model, bool uses_ref_height, bool uses_H,
+                                   TopView& tv)
+{
+    const int rays = opt.rays;
+    const double Req = rec.R1, H = g.camera_height, z_ref = tr.ref_setup.z_plane;
+    const double ring = rec.specimen.area() - M_PI * rec.R2 * rec.R2;
+    PerspectiveValue v;
+    v.model = model;
+    v.available = t.outline.size() >= static_cast<std::size_t>(rays) * 9 / 10;
+    if (!v.available) return v;
+    const auto m = cloth::drape_metrics(t.outline, Req, rec.R2, opt.metrics);
+    v.dc_percent = m.drape_coefficient_percent;
+    v.area_m2 = m.shadow_area_m2;
+    double zbar = 0;
+    for (double z : t.z) zbar += z;
+    zbar /= static_cast<double>(t.z.size());
+    const double px_m = (H - zbar) / g.camera.fx; // one pixel at the outline [m]
+    const double A = m.shadow_area_m2;
+    v.terms.push_back({"edge", 2 * M_PI * m.mean_radius_m * 0.5 * px_m / ring * 100.0, "0.5 px along the outline"});
+    if (rec.single_camera()) {
+        v.terms.push_back({"scale", 2 * A / ring * g.scale_sigma_rel * 100.0, "scale reference +-" + fmt("%.2f", 100 * g.scale_sigma_rel) + " %"});
+        if (uses_ref_height && g.reference_height_sigma > 0)
+            v.terms.push_back({"scale_reference_height", 2 * A / ring * g.reference_height_sigma / (H - z_ref) * 100.0,
+                               "reference height +-" + fmt("%.1f", 1e3 * g.reference_height_sigma) + " mm"});
+        if (uses_H && g.camera_height_sigma > 0) {
+            const double Hp = H + g.camera_height_sigma, Hm = std::max(H - g.camera_height_sigma, z_ref + 0.3 * (H - z_ref));
+            TraceSetup ts = model == "hem" ? tr.hem_setup : tr.disc_setup;
+            double d[2];
+            int i = 0;
+            for (double Hx : {Hp, Hm}) {
+                ts.H = Hx;
+                const Trace tx = trace_outline(camera_with_height(g, Hx), s.prob, s.gate, ts, s.lightness);
+                d[i++] = tx.outline.size() >= static_cast<std::size_t>(rays) / 2 ? dc_area(tx.outline, Req, rec.R2).first : v.dc_percent;
+            }
+            v.terms.push_back({"camera_height", 0.5 * std::abs(d[0] - d[1]),
+                               "camera height " + fmt("%.0f", 1e3 * H) + " +-" + fmt("%.0f", 1e3 * g.camera_height_sigma) + " mm (" +
+                                   (g.camera_height_known ? "known" : "assumed") + ")"});
+        }
+    }
+    if (model == "hem") {
+        tv.dc_per_metre_height = 2 * A / (H - zbar) / ring * 100.0;
+        v.terms.push_back({"hem_depth", tv.dc_per_metre_height * 0.010, "the hem's height model +-10 mm"});
+    }
+    double ss = 0;
+    for (const auto& term : v.terms) ss += term.points * term.points;
+    v.uncertainty_percent = std::sqrt(ss);
+    return v;
+}
+
+/// Every perspective model's D and uncertainty; the edge term of the chosen one.
+void set_perspective_values(const record::Record& rec, const MeasureOptions& opt, const ViewGeometry& g, const Segmented& s, const Traces& tr,
+                            TopView& tv)
+{
+    const bool single = rec.single_camera();
+    tv.uncorrected = perspective_value(rec, opt, g, s, tr, tr.ref, "none", false, false, tv);
+    tv.uncorrected.meaning = single ? "outline in the scale reference's plane (z = " + fmt("%.0f", 1e3 * tr.ref_setup.z_plane) +
+                                          " mm), no height correction: what a ruler on the photo gives"
+                                    : "outline in the disc-top plane z = 0, no height correction";
+    tv.disc_plane = tr.ref_setup.z_plane == 0.0 ? tv.uncorrected : perspective_value(rec, opt, g, s, tr, tr.disc, "disc-plane", true, true, tv);
+    tv.disc_plane.model = "disc-plane";
+    tv.disc_plane.meaning = "outline back-projected onto the disc-top plane: low by about hem depth / camera height "
+                            "(the hem hangs below the disc and looks smaller)";
+    tv.hem = perspective_value(rec, opt, g, s, tr, tr.hem, "hem", true, true, tv);
+    tv.hem.meaning = "the hem back-projected onto a straight inextensible fibre from the disc edge (the vertical projection, "
+                     "as a drapemeter's shadow)";
+    const double hem_edge = tv.hem.terms.empty() ? 0.0 : tv.hem.terms.front().points;
+    tv.dc_edge_term = hem_edge;
+    set_hem_depth_error(tv, 0.010);
+    if (tv.perspective == "hem" && tv.hem.available) tv.dc_edge_term = hem_edge;
+    else if (tv.perspective == "disc-plane") tv.dc_edge_term = tv.disc_plane.terms.front().points;
+    else tv.dc_edge_term = tv.uncorrected.terms.front().points;
+}
+
+/// What a person should know about a measured top view.
+void top_warnings(const record::Record& rec, const MeasureOptions& opt, const ViewGeometry& g, const Trace& best, bool photo_seg, TopView& tv)
+{
+    const int rays = opt.rays;
+    if (best.beyond > rays / 20)
+        tv.warnings.push_back("top view: on " + std::to_string(best.beyond) +
+                              " rays the fabric edge lies beyond the height model's hem (shadow or segmentation spill?)");
+    if (!photo_seg && !tv.model.chromatic && tv.model.contrast < 25)
+        tv.warnings.push_back("top view: grey fabric with low contrast to the floor (" + fmt("%.0f", tv.model.contrast) +
+                              " L* units); the edge may include the contact shadow");
+    if (rec.single_camera() && tv.perspective == "disc-plane" && tv.hem.available)
+        tv.warnings.push_back("top view: D is given in the disc-top plane (" + fmt("%.1f", tv.disc_plane.dc_percent) +
+                              " %); the hem model would give " + fmt("%.1f", tv.hem.dc_percent) + " +- " +
+                              fmt("%.1f", tv.hem.uncertainty_percent) + " % with the camera height " + g.camera_height_source);
+}
+
+} // namespace
+
+void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, const record::ContourStack* stack, Measurement& out)
+{
+    TopView& tv = out.top;
+    const cv::Mat lab = to_lab(out.top_image);
+    const double Req = rec.R1; // equal-area radius: D = (A - disc) / (specimen - disc) for any shape
+    const ViewGeometry g = top_view_geometry(rec, opt, lab, out);
+    for (const auto& w : g.warnings) out.warnings.push_back("top view: " + w);
+    out.view = g;
+    const record::Camera& cam = g.camera;
+    tv.perspective = choose_perspective(rec, opt, g, tv);
+    const bool round = rec.specimen.shape == record::Specimen::Shape::Round;
+    const bool angle_known = round || !rec.specimen.angle_from_photo;
+    Segmented s;
+    if (!segment_top(rec, opt, lab, cam, angle_known ? rec.specimen.angle : kNaN, out, s)) return;
+    tv.region_image_fraction = static_cast<double>(cv::countNonZero(tv.region)) / static_cast<double>(tv.region.total());
+    const Traces tr = trace_models(rec, opt, g, s, stack, tv);
+    const std::string& persp = tv.perspective;
+    const Trace& best = persp == "hem" ? tr.hem : persp == "disc-plane" ? tr.disc : tr.ref;
+    tv.height_model = persp == "hem" ? HeightModel::Chord : HeightModel::Plane;
+    if (!outline_possible(rec, opt.rays, tr, best, s.photo, out)) return;
+    tv.dc_plane_percent = dc_area(tr.disc.outline, Req, rec.R2).first;
+    tv.dc_chord_percent = dc_area(tr.hem.outline, Req, rec.R2).first;
     tv.outline = best.outline;
     tv.outline_z = best.z;
     tv.outline_arc = best.arc;
@@ -539,104 +726,9 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
     tv.rays_at_limit = best.at_limit;
     tv.at_limit_px = best.at_limit_px;
     tv.metrics = cloth::drape_metrics(tv.outline, Req, rec.R2, opt.metrics);
-    double max_px = 0;
-    for (const auto& u : best.px) max_px = std::max(max_px, (u - c0).norm());
-    const double ped_px = (cam.project({rec.R2, 0, 0}) - c0).norm();
-    if (max_px < ped_px + 3.0) {
-        // Only the pedestal top was found (in the image, nothing reaches past
-        // the disc's own edge): a specimen always hangs over the disc.
-        const std::string msg = "top view: nothing hangs over the support disc in " + image_name + " (outline within " +
-                                fmt("%.1f", max_px - ped_px) + " px of the disc edge): no specimen on the stand?";
-        if (single) refuse("no-drape", msg, "check --disc (the disc's diameter) and the scale; " + seg_remedy);
-        out.not_measured.push_back(msg);
-        return;
-    }
-    const double D = tv.metrics.drape_coefficient_percent;
-    if (!(D >= 0.0 && D <= 100.0))
-        refuse("dc-range",
-               "the drape coefficient would be " + fmt("%.1f", D) + " %, outside 0..100 %: the counted region is " +
-                   (D > 100 ? "larger than the flat specimen" : "smaller than the disc"),
-               "check --disc and --specimen (diameters, not radii) and the scale; otherwise " + seg_remedy);
-
-    // ---- uncertainty of each model ----
-    // Remaining error: (1) edge placement, 0.5 px along the whole perimeter;
-    // (2) the scale reference (its own error, its height); (3) the camera
-    // height (moves every height-corrected radius); (4) the hem's height model:
-    // a height error dz scales every radius by dz / (H - z), so
-    // dD = 2 A dz / (H - z) / (specimen area - disc area).
-    const double ring = rec.specimen.area() - M_PI * rec.R2 * rec.R2;
-    const double z_ref = t_ref.z_plane;
-    auto value = [&](const Trace& t, const std::string& model, bool uses_ref_height, bool uses_H) {
-        PerspectiveValue v;
-        v.model = model;
-        v.available = t.outline.size() >= static_cast<std::size_t>(rays) * 9 / 10;
-        if (!v.available) return v;
-        const auto m = cloth::drape_metrics(t.outline, Req, rec.R2, opt.metrics);
-        v.dc_percent = m.drape_coefficient_percent;
-        v.area_m2 = m.shadow_area_m2;
-        double zbar = 0;
-        for (double z : t.z) zbar += z;
-        zbar /= static_cast<double>(t.z.size());
-        const double px_m = (H - zbar) / cam.fx; // one pixel at the outline [m]
-        const double A = m.shadow_area_m2;
-        v.terms.push_back({"edge", 2 * M_PI * m.mean_radius_m * 0.5 * px_m / ring * 100.0, "0.5 px along the outline"});
-        if (single) {
-            v.terms.push_back({"scale", 2 * A / ring * g.scale_sigma_rel * 100.0,
-                               "scale reference +-" + fmt("%.2f", 100 * g.scale_sigma_rel) + " %"});
-            if (uses_ref_height && g.reference_height_sigma > 0)
-                v.terms.push_back({"scale_reference_height", 2 * A / ring * g.reference_height_sigma / (H - z_ref) * 100.0,
-                                   "reference height +-" + fmt("%.1f", 1e3 * g.reference_height_sigma) + " mm"});
-            if (uses_H && g.camera_height_sigma > 0) {
-                const double Hp = H + g.camera_height_sigma, Hm = std::max(H - g.camera_height_sigma, z_ref + 0.3 * (H - z_ref));
-                TraceSetup ts = model == "hem" ? t_hem : t_disc;
-                double d[2];
-                int i = 0;
-                for (double Hx : {Hp, Hm}) {
-                    ts.H = Hx;
-                    const Trace tx = trace_outline(camera_with_height(g, Hx), prob, gate, ts, lightness);
-                    d[i++] = tx.outline.size() >= static_cast<std::size_t>(rays) / 2 ? dc_area(tx.outline, Req, rec.R2).first : v.dc_percent;
-                }
-                v.terms.push_back({"camera_height", 0.5 * std::abs(d[0] - d[1]),
-                                   "camera height " + fmt("%.0f", 1e3 * H) + " +-" + fmt("%.0f", 1e3 * g.camera_height_sigma) + " mm (" +
-                                       (g.camera_height_known ? "known" : "assumed") + ")"});
-            }
-        }
-        if (model == "hem") {
-            tv.dc_per_metre_height = 2 * A / (H - zbar) / ring * 100.0;
-            v.terms.push_back({"hem_depth", tv.dc_per_metre_height * 0.010, "the hem's height model +-10 mm"});
-        }
-        double ss = 0;
-        for (const auto& term : v.terms) ss += term.points * term.points;
-        v.uncertainty_percent = std::sqrt(ss);
-        return v;
-    };
-    tv.uncorrected = value(ref, "none", false, false);
-    tv.uncorrected.meaning = single ? "outline in the scale reference's plane (z = " + fmt("%.0f", 1e3 * z_ref) +
-                                          " mm), no height correction: what a ruler on the photo gives"
-                                    : "outline in the disc-top plane z = 0, no height correction";
-    tv.disc_plane = t_ref.z_plane == 0.0 ? tv.uncorrected : value(disc, "disc-plane", true, true);
-    tv.disc_plane.model = "disc-plane";
-    tv.disc_plane.meaning = "outline back-projected onto the disc-top plane: low by about hem depth / camera height "
-                            "(the hem hangs below the disc and looks smaller)";
-    tv.hem = value(hem, "hem", true, true);
-    tv.hem.meaning = "the hem back-projected onto a straight inextensible fibre from the disc edge (the vertical projection, "
-                     "as a drapemeter's shadow)";
-    const double hem_edge = tv.hem.terms.empty() ? 0.0 : tv.hem.terms.front().points;
-    tv.dc_edge_term = hem_edge;
-    set_hem_depth_error(tv, 0.010);
-    if (persp == "hem" && tv.hem.available) tv.dc_edge_term = hem_edge;
-    else if (persp == "disc-plane") tv.dc_edge_term = tv.disc_plane.terms.front().points;
-    else tv.dc_edge_term = tv.uncorrected.terms.front().points;
-    if (best.beyond > rays / 20)
-        tv.warnings.push_back("top view: on " + std::to_string(best.beyond) +
-                              " rays the fabric edge lies beyond the height model's hem (shadow or segmentation spill?)");
-    if (!photo_seg && !tv.model.chromatic && tv.model.contrast < 25)
-        tv.warnings.push_back("top view: grey fabric with low contrast to the floor (" + fmt("%.0f", tv.model.contrast) +
-                              " L* units); the edge may include the contact shadow");
-    if (single && persp == "disc-plane" && tv.hem.available)
-        tv.warnings.push_back("top view: D is given in the disc-top plane (" + fmt("%.1f", tv.disc_plane.dc_percent) +
-                              " %); the hem model would give " + fmt("%.1f", tv.hem.dc_percent) + " +- " +
-                              fmt("%.1f", tv.hem.uncertainty_percent) + " % with the camera height " + g.camera_height_source);
+    if (!drape_possible(rec, cam, best, out)) return;
+    set_perspective_values(rec, opt, g, s, tr, tv);
+    top_warnings(rec, opt, g, best, s.photo, tv);
     tv.measured = true;
     out.measured.push_back("top view: drape coefficient, nodes, r(theta)");
 }

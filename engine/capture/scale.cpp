@@ -460,27 +460,29 @@ record::Camera camera_with_height(const ViewGeometry& g, double H)
     return camera_from_plane(g.camera.width, g.camera.height, f, g.camera.cx, g.camera.cy, g.plane_normal_cam, H, g.centre_px);
 }
 
-ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv::Mat& lab, const cv::Mat& rough_cloth)
-{
-    if (!rec.top_photo) throw ParameterError("solve_view: the record has no top_photo");
-    const record::TopPhoto& tp = *rec.top_photo;
-    ViewGeometry g;
-    g.single_camera = true;
-    g.source = tp.scale;
-    const int W = bgr.cols, Hh = bgr.rows;
-    const double cx = (W - 1) / 2.0, cy = (Hh - 1) / 2.0;
+namespace {
 
+/// The photo's size and principal point (its centre).
+struct Frame {
+    int W = 0, H = 0;
+    double cx = 0, cy = 0;
+};
+
+/// The disc rim (declared, or found around the cloth's rough centre) and the disc
+/// centre: the rim's, the declared one, or the cloth's centroid.
+void locate_disc(const record::Record& rec, const cv::Mat& lab, const cv::Mat& rough_cloth, const Frame& fr, ViewGeometry& g)
+{
+    const record::TopPhoto& tp = *rec.top_photo;
     // Where the cloth is, roughly, and how far it reaches from its centre.
-    Eigen::Vector2d guess(cx, cy);
+    Eigen::Vector2d guess(fr.cx, fr.cy);
     if (!rough_cloth.empty() && cv::countNonZero(rough_cloth) > 0) {
         const cv::Moments mo = cv::moments(rough_cloth, true);
         guess = {mo.m10 / mo.m00, mo.m01 / mo.m00};
     }
     if (tp.disc_centre_px) guess = *tp.disc_centre_px;
-
-    // The disc rim: declared, or found (needed for the disc scale; for the
-    // other sources it places the disc centre and, at a second height, gives
-    // the camera height).
+    // The disc rim: declared, or found (needed for the disc scale; for the other
+    // sources it places the disc centre and, at a second height, gives the camera
+    // height).
     if (tp.disc_centre_px && tp.disc_radius_px) {
         DiscRim d;
         d.centre_px = *tp.disc_centre_px;
@@ -490,7 +492,7 @@ ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv:
         d.edge = "declared in top_photo.disc_px";
         g.disc = d;
     } else {
-        double r_lo = 0.02 * std::min(W, Hh), r_hi = 0.45 * std::min(W, Hh);
+        double r_lo = 0.02 * std::min(fr.W, fr.H), r_hi = 0.45 * std::min(fr.W, fr.H);
         const double p10 = mask_radius_percentile(rough_cloth, guess, 0.10);
         const double p50 = mask_radius_percentile(rough_cloth, guess, 0.50);
         if (std::isfinite(p10) && p10 > 10) {
@@ -521,153 +523,176 @@ ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv:
         g.warnings.push_back("the disc centre is taken as the cloth's centroid (the rim was not found): the hem height "
                              "model is centred a little off where the disc is");
     }
+}
 
-    auto declared_height = [&]() -> std::optional<std::pair<double, double>> {
-        if (!tp.camera_height) return std::nullopt;
-        return std::pair{*tp.camera_height, tp.camera_height_sigma.value_or(std::max(0.01, 0.02 * *tp.camera_height))};
-    };
-    const double f_prior = prior_focal(W, Hh);
+/// The camera height the photo's record declares, with its sigma.
+std::optional<std::pair<double, double>> declared_height(const record::TopPhoto& tp)
+{
+    if (!tp.camera_height) return std::nullopt;
+    return std::pair{*tp.camera_height, tp.camera_height_sigma.value_or(std::max(0.01, 0.02 * *tp.camera_height))};
+}
 
-    if (tp.scale == record::ScaleSource::Disc || tp.scale == record::ScaleSource::PxPerMm) {
-        // A camera looking straight down (a tilt shows as an elliptical rim).
-        const Eigen::Vector3d up(0, 0, -1);
-        double s_ref = 0;
-        if (tp.scale == record::ScaleSource::Disc) {
-            g.reference_height = tp.reference_height;
-            g.reference_height_sigma = tp.reference_height_sigma.value_or(0.001);
-            s_ref = g.disc->radius_px / rec.R2;
-            const double fit = g.disc->rms_px / std::sqrt(std::max<std::size_t>(1, g.disc->points_px.size())) / g.disc->radius_px;
-            g.scale_sigma_rel = std::hypot(fit, tp.disc_edge_sigma / rec.R2);
-            g.source_text = "disc rim: " + fmt("%.1f", g.disc->radius_px) + " px radius = " + fmt("%.1f", 1e3 * rec.R2) + " mm" +
-                            (g.disc->declared ? " (declared)" : " (found on " + fmt("%.0f", 100 * g.disc->ray_fraction) + " % of the rays, " +
-                                                                    g.disc->edge + ", RMS " + fmt("%.2f", g.disc->rms_px) + " px)");
-        } else {
-            g.reference_height = tp.reference_height;
-            g.reference_height_sigma = tp.reference_height_sigma.value_or(0.002);
-            s_ref = *tp.px_per_mm * 1e3;
-            g.scale_sigma_rel = tp.px_per_mm_sigma_rel.value_or(0.005);
-            g.source_text = fmt("%.4g", *tp.px_per_mm) + " px/mm at z = " + fmt("%.0f", 1e3 * g.reference_height) + " mm (declared)";
-        }
-        g.scale_px_per_m = s_ref;
-        double f = 0, H = 0;
-        if (auto dh = declared_height()) {
-            H = dh->first;
-            g.camera_height_sigma = dh->second;
-            f = s_ref * (H - g.reference_height);
-            g.camera_height_source = "declared";
-        } else if (tp.focal_px) {
-            f = *tp.focal_px;
-            H = f / s_ref + g.reference_height;
-            g.camera_height_sigma = 0.02 * H;
-            g.camera_height_source = "from the declared focal length (" + fmt("%.0f", f) + " px, +-2 %)";
-        } else {
-            f = f_prior;
-            H = f / s_ref + g.reference_height;
-            g.camera_height_sigma = 0.3 * H;
-            g.camera_height_known = false;
-            g.camera_height_source = "assumed: a phone's 26 mm-equivalent lens (" + fmt("%.0f", f) +
-                                     " px), +-30 %; declare top_photo.camera_height_mm or focal_px";
-        }
-        if (!(H - g.reference_height > 0.05))
-            throw FileError("top_photo: the camera would be " + fmt("%.0f", 1e3 * (H - g.reference_height)) +
-                            " mm above the scale reference; check camera_height_mm / focal_px");
-        g.focal_px = f;
-        g.plane_normal_cam = up;
-        g.reference_distance = H - g.reference_height;
-        g.camera_height = H;
-        g.camera = camera_from_plane(W, Hh, f, cx, cy, up, H, g.centre_px);
-        return g;
+/// The scale from the disc rim or a declared px/mm: a camera looking straight
+/// down (a tilt shows as an elliptical rim), its height declared, from the
+/// declared focal length, or from a phone lens's prior.
+void level_camera(const record::Record& rec, const Frame& fr, ViewGeometry& g)
+{
+    const record::TopPhoto& tp = *rec.top_photo;
+    const Eigen::Vector3d up(0, 0, -1);
+    double s_ref = 0;
+    if (tp.scale == record::ScaleSource::Disc) {
+        g.reference_height = tp.reference_height;
+        g.reference_height_sigma = tp.reference_height_sigma.value_or(0.001);
+        s_ref = g.disc->radius_px / rec.R2;
+        const double fit = g.disc->rms_px / std::sqrt(std::max<std::size_t>(1, g.disc->points_px.size())) / g.disc->radius_px;
+        g.scale_sigma_rel = std::hypot(fit, tp.disc_edge_sigma / rec.R2);
+        g.source_text = "disc rim: " + fmt("%.1f", g.disc->radius_px) + " px radius = " + fmt("%.1f", 1e3 * rec.R2) + " mm" +
+                        (g.disc->declared ? " (declared)" : " (found on " + fmt("%.0f", 100 * g.disc->ray_fraction) + " % of the rays, " +
+                                                                g.disc->edge + ", RMS " + fmt("%.2f", g.disc->rms_px) + " px)");
+    } else {
+        g.reference_height = tp.reference_height;
+        g.reference_height_sigma = tp.reference_height_sigma.value_or(0.002);
+        s_ref = *tp.px_per_mm * 1e3;
+        g.scale_sigma_rel = tp.px_per_mm_sigma_rel.value_or(0.005);
+        g.source_text = fmt("%.4g", *tp.px_per_mm) + " px/mm at z = " + fmt("%.0f", 1e3 * g.reference_height) + " mm (declared)";
     }
+    g.scale_px_per_m = s_ref;
+    double f = 0, H = 0;
+    if (auto dh = declared_height(tp)) {
+        H = dh->first;
+        g.camera_height_sigma = dh->second;
+        f = s_ref * (H - g.reference_height);
+        g.camera_height_source = "declared";
+    } else if (tp.focal_px) {
+        f = *tp.focal_px;
+        H = f / s_ref + g.reference_height;
+        g.camera_height_sigma = 0.02 * H;
+        g.camera_height_source = "from the declared focal length (" + fmt("%.0f", f) + " px, +-2 %)";
+    } else {
+        f = prior_focal(fr.W, fr.H);
+        H = f / s_ref + g.reference_height;
+        g.camera_height_sigma = 0.3 * H;
+        g.camera_height_known = false;
+        g.camera_height_source = "assumed: a phone's 26 mm-equivalent lens (" + fmt("%.0f", f) +
+                                 " px), +-30 %; declare top_photo.camera_height_mm or focal_px";
+    }
+    if (!(H - g.reference_height > 0.05))
+        throw FileError("top_photo: the camera would be " + fmt("%.0f", 1e3 * (H - g.reference_height)) +
+                        " mm above the scale reference; check camera_height_mm / focal_px");
+    g.focal_px = f;
+    g.plane_normal_cam = up;
+    g.reference_distance = H - g.reference_height;
+    g.camera_height = H;
+    g.camera = camera_from_plane(fr.W, fr.H, f, fr.cx, fr.cy, up, H, g.centre_px);
+}
 
-    // Markers or a chessboard: a plane of known geometry at a declared height.
-    g.reference_height = tp.reference_height;
-    g.reference_height_sigma = tp.reference_height_sigma.value_or(0.001);
+/// The markers or the chessboard in the photo; refuses when they are not there.
+void find_reference(const cv::Mat& bgr, const record::TopPhoto& tp, ViewGeometry& g)
+{
     if (tp.scale == record::ScaleSource::Markers) {
         g.markers = find_markers(bgr, tp.marker_dictionary);
         if (g.markers.empty())
             throw RefusalError({"markers-not-found", "no " + tp.marker_dictionary + " marker found in the photo",
                                 "check the dictionary (top_photo.scale.dictionary / --marker-dict) and that the markers are "
                                 "sharp and whole, or use --scale disc / px-per-mm=N"});
-    } else {
-        cv::Mat grey;
-        cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
-        std::vector<cv::Point2f> corners;
-        const bool found = cv::findChessboardCorners(grey, cv::Size(tp.board_cols, tp.board_rows), corners,
-                                                     cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
-        if (!found)
-            throw RefusalError({"chessboard-not-found",
-                                "no chessboard of " + std::to_string(tp.board_cols) + " x " + std::to_string(tp.board_rows) +
-                                    " inner corners found in the photo",
-                                "check top_photo.scale.inner_corners (inner corners, not squares), or use another scale"});
-        cv::cornerSubPix(grey, corners, cv::Size(5, 5), cv::Size(-1, -1),
-                         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 40, 0.01));
-        for (const auto& p : corners) g.board_corners_px.emplace_back(p.x, p.y);
+        return;
     }
-    auto build = [&](double f) {
-        PlanePose pp = reference_plane(tp, g, f, cx, cy);
-        const double H = pp.distance + g.reference_height;
-        return std::pair{pp, camera_from_plane(W, Hh, f, cx, cy, pp.up_cam, H, g.centre_px)};
+    cv::Mat grey;
+    cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+    std::vector<cv::Point2f> corners;
+    const bool found = cv::findChessboardCorners(grey, cv::Size(tp.board_cols, tp.board_rows), corners,
+                                                 cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+    if (!found)
+        throw RefusalError({"chessboard-not-found",
+                            "no chessboard of " + std::to_string(tp.board_cols) + " x " + std::to_string(tp.board_rows) +
+                                " inner corners found in the photo",
+                            "check top_photo.scale.inner_corners (inner corners, not squares), or use another scale"});
+    cv::cornerSubPix(grey, corners, cv::Size(5, 5), cv::Size(-1, -1), cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 40, 0.01));
+    for (const auto& p : corners) g.board_corners_px.emplace_back(p.x, p.y);
+}
+
+/// The reference plane's pose for focal length f, and the camera it puts the disc under.
+std::pair<PlanePose, record::Camera> camera_at_focal(const record::TopPhoto& tp, const ViewGeometry& g, const Frame& fr, double f)
+{
+    PlanePose pp = reference_plane(tp, g, f, fr.cx, fr.cy);
+    const double H = pp.distance + g.reference_height;
+    return std::pair{pp, camera_from_plane(fr.W, fr.H, f, fr.cx, fr.cy, pp.up_cam, H, g.centre_px)};
+}
+
+/// Two heights: the reference plane and the disc rim. The focal length whose camera
+/// images the disc with the radius seen gives the camera height (a pinhole's scale
+/// changes as 1 / (H - z)); its sigma from the rim's edge. Nothing when no focal
+/// length fits (a warning says so).
+std::optional<double> focal_from_two_heights(const record::Record& rec, const Frame& fr, ViewGeometry& g)
+{
+    const record::TopPhoto& tp = *rec.top_photo;
+    const double f_prior = prior_focal(fr.W, fr.H);
+    auto rim_radius = [&](double fv) {
+        const record::Camera c = camera_at_focal(tp, g, fr, fv).second;
+        const Eigen::Vector2d c0 = c.project({0, 0, 0});
+        double s = 0;
+        for (int k = 0; k < 36; ++k) {
+            const double th = 2 * M_PI * k / 36;
+            s += (c.project({rec.R2 * std::cos(th), rec.R2 * std::sin(th), 0.0}) - c0).norm();
+        }
+        return s / 36;
     };
+    // The reference's distance grows in proportion to f: below f_min the camera
+    // would sit below the disc top.
+    const double per_f = camera_at_focal(tp, g, fr, f_prior).first.distance / f_prior;
+    const double f_min = g.reference_height < 0 ? 1.02 * -g.reference_height / per_f : 0.05 * f_prior;
+    auto solve = [&](double target) -> std::optional<double> {
+        double lo = std::max(0.05 * f_prior, f_min), hi = 20 * f_prior;
+        const double glo = rim_radius(lo) - target, ghi = rim_radius(hi) - target;
+        if (!(glo * ghi < 0)) return std::nullopt;
+        for (int it = 0; it < 60; ++it) {
+            const double mid = std::sqrt(lo * hi);
+            const double gm = rim_radius(mid) - target;
+            ((gm < 0) == (glo < 0) ? lo : hi) = mid;
+        }
+        return std::sqrt(lo * hi);
+    };
+    const double r = g.disc->radius_px;
+    const double dr = std::hypot(tp.disc_edge_sigma * r / rec.R2, 0.3);
+    const auto f0 = solve(r), fa = solve(r + dr), fb = solve(r - dr);
+    if (!f0) {
+        g.warnings.push_back("the disc rim's size does not fit any camera height with the reference's: lens prior used");
+        return std::nullopt;
+    }
+    const double H0 = camera_at_focal(tp, g, fr, *f0).first.distance + g.reference_height;
+    double sig = 0.3 * H0;
+    if (fa && fb) {
+        const double Ha = camera_at_focal(tp, g, fr, *fa).first.distance + g.reference_height;
+        const double Hb = camera_at_focal(tp, g, fr, *fb).first.distance + g.reference_height;
+        sig = std::hypot(0.5 * std::abs(Ha - Hb), g.reference_height_sigma * H0 / std::abs(g.reference_height));
+    }
+    g.camera_height_sigma = sig;
+    g.camera_height_source = "from two heights: the reference at z = " + fmt("%.0f", 1e3 * g.reference_height) + " mm and the disc rim at z = 0";
+    return f0;
+}
+
+/// The focal length with markers or a chessboard: declared, the one that puts the
+/// reference at the declared camera height, from two heights, or a phone lens's prior.
+double reference_focal(const record::Record& rec, const Frame& fr, ViewGeometry& g)
+{
+    const record::TopPhoto& tp = *rec.top_photo;
+    const double f_prior = prior_focal(fr.W, fr.H);
     double f = f_prior;
     if (tp.focal_px) {
         f = *tp.focal_px;
         g.camera_height_source = "from the reference's pose with the declared focal length (+-2 %)";
-    } else if (auto dh = declared_height()) {
+    } else if (auto dh = declared_height(tp)) {
         // Focal length such that the reference plane lies H - z_ref below the camera.
         double lo = 0.05 * f_prior, hi = 20 * f_prior;
         for (int it = 0; it < 60; ++it) {
             const double mid = std::sqrt(lo * hi);
-            const double Hm = build(mid).first.distance + g.reference_height;
+            const double Hm = camera_at_focal(tp, g, fr, mid).first.distance + g.reference_height;
             (Hm < dh->first ? lo : hi) = mid;
         }
         f = std::sqrt(lo * hi);
         g.camera_height_source = "declared";
     } else if (g.disc && std::abs(g.reference_height) >= 0.015) {
-        // Two heights: the reference plane and the disc rim. The focal length
-        // whose camera images the disc with the radius seen gives the camera
-        // height (a pinhole's scale changes as 1 / (H - z)).
-        auto rim_radius = [&](double fv) {
-            const record::Camera c = build(fv).second;
-            const Eigen::Vector2d c0 = c.project({0, 0, 0});
-            double s = 0;
-            for (int k = 0; k < 36; ++k) {
-                const double th = 2 * M_PI * k / 36;
-                s += (c.project({rec.R2 * std::cos(th), rec.R2 * std::sin(th), 0.0}) - c0).norm();
-            }
-            return s / 36;
-        };
-        // The reference's distance grows in proportion to f: below f_min the
-        // camera would sit below the disc top.
-        const double per_f = build(f_prior).first.distance / f_prior;
-        const double f_min = g.reference_height < 0 ? 1.02 * -g.reference_height / per_f : 0.05 * f_prior;
-        auto solve = [&](double target) -> std::optional<double> {
-            double lo = std::max(0.05 * f_prior, f_min), hi = 20 * f_prior;
-            const double glo = rim_radius(lo) - target, ghi = rim_radius(hi) - target;
-            if (!(glo * ghi < 0)) return std::nullopt;
-            for (int it = 0; it < 60; ++it) {
-                const double mid = std::sqrt(lo * hi);
-                const double gm = rim_radius(mid) - target;
-                ((gm < 0) == (glo < 0) ? lo : hi) = mid;
-            }
-            return std::sqrt(lo * hi);
-        };
-        const double r = g.disc->radius_px;
-        const double dr = std::hypot(tp.disc_edge_sigma * r / rec.R2, 0.3);
-        const auto f0 = solve(r), fa = solve(r + dr), fb = solve(r - dr);
-        if (f0) {
-            f = *f0;
-            const double H0 = build(f).first.distance + g.reference_height;
-            double sig = 0.3 * H0;
-            if (fa && fb) {
-                const double Ha = build(*fa).first.distance + g.reference_height, Hb = build(*fb).first.distance + g.reference_height;
-                sig = std::hypot(0.5 * std::abs(Ha - Hb), g.reference_height_sigma * H0 / std::abs(g.reference_height));
-            }
-            g.camera_height_sigma = sig;
-            g.camera_height_source = "from two heights: the reference at z = " + fmt("%.0f", 1e3 * g.reference_height) +
-                                     " mm and the disc rim at z = 0";
-        } else {
-            g.warnings.push_back("the disc rim's size does not fit any camera height with the reference's: lens prior used");
-        }
+        if (const auto f2 = focal_from_two_heights(rec, fr, g)) f = *f2;
     }
     if (g.camera_height_source.empty()) {
         g.camera_height_known = false;
@@ -675,14 +700,36 @@ ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv:
                                  " px), +-30 %; declare top_photo.camera_height_mm or focal_px, or put the markers at another "
                                  "height than the disc top";
     }
-    auto [pp, cam] = build(f);
+    return f;
+}
+
+} // namespace
+
+ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv::Mat& lab, const cv::Mat& rough_cloth)
+{
+    if (!rec.top_photo) throw ParameterError("solve_view: the record has no top_photo");
+    const record::TopPhoto& tp = *rec.top_photo;
+    ViewGeometry g;
+    g.single_camera = true;
+    g.source = tp.scale;
+    const Frame fr{bgr.cols, bgr.rows, (bgr.cols - 1) / 2.0, (bgr.rows - 1) / 2.0};
+    locate_disc(rec, lab, rough_cloth, fr, g);
+    if (tp.scale == record::ScaleSource::Disc || tp.scale == record::ScaleSource::PxPerMm) {
+        level_camera(rec, fr, g);
+        return g;
+    }
+    // Markers or a chessboard: a plane of known geometry at a declared height.
+    g.reference_height = tp.reference_height;
+    g.reference_height_sigma = tp.reference_height_sigma.value_or(0.001);
+    find_reference(bgr, tp, g);
+    const double f = reference_focal(rec, fr, g);
+    auto [pp, cam] = camera_at_focal(tp, g, fr, f);
     g.focal_px = f;
     g.plane_normal_cam = pp.up_cam;
     g.reference_distance = pp.distance;
     g.camera_height = pp.distance + g.reference_height;
-    if (g.camera_height_sigma == 0)
-        g.camera_height_sigma = g.camera_height_known ? 0.02 * g.camera_height : 0.3 * g.camera_height;
-    if (auto dh = declared_height()) g.camera_height_sigma = dh->second;
+    if (g.camera_height_sigma == 0) g.camera_height_sigma = g.camera_height_known ? 0.02 * g.camera_height : 0.3 * g.camera_height;
+    if (auto dh = declared_height(tp)) g.camera_height_sigma = dh->second;
     g.scale_px_per_m = pp.scale_px_per_m;
     g.scale_sigma_rel = pp.scale_sigma_rel;
     g.source_text = pp.text + " at z = " + fmt("%.0f", 1e3 * g.reference_height) + " mm";

@@ -445,23 +445,36 @@ int ply_type_size(std::string_view t)
     return 0;
 }
 
-/// A PLY file checked the way assimp reads it (fuzz_mesh's findings): the
-/// first line "ply" (NUL bytes after the word made assimp's reader loop
-/// forever); an end_header line within the first 64 KiB as assimp recognises
-/// it (a damaged one, or the word followed by a vertical tab, and assimp reads
-/// past the end of the file looking for it, forever); element counts that fit
-/// the file and the scene limits; property lines assimp can read, directly
-/// after their element; and in the rows, every list's length: assimp sizes
-/// the list by the number it reads before looking at the entries (an ASCII row
-/// "4444444444...4 7 6 5 4" made it ask for 3.8 GB), so a list must not claim
-/// more entries than its row (ASCII) or the rest of the file (binary) holds.
+/// A PLY property: a value, or a list (its length's type, then its entries').
+struct PlyProperty {
+    std::string name;
+    int size = 0;       // of a value, or of each list entry
+    int count_size = 0; // of a list's length (0: not a list)
+    bool count_signed = false, count_float = false;
+};
+
+/// A PLY element: its rows and their properties.
+struct PlyElement {
+    std::string name;
+    std::uintmax_t count = 0;
+    std::vector<PlyProperty> props;
+};
+
+/// What check_ply needs of a PLY header.
+struct PlyHeader {
+    bool ascii = false, big_endian = false;
+    std::vector<PlyElement> elements;
+};
+
+constexpr std::size_t kPlyHeadBytes = 64 * 1024;
+constexpr std::size_t kPlyRowBytes = 1 << 20;
+
+/// The PLY header up to end_header; nothing when assimp refuses the format line
+/// itself (it says why).
 template <class Check>
-void check_ply(const std::string& path, std::uintmax_t size, const Check& check_count)
+std::optional<PlyHeader> read_ply_header(const std::string& path, AssimpLines& lines, const Check& check_count)
 {
-    constexpr std::size_t kHeadBytes = 64 * 1024;
-    constexpr std::size_t kRowBytes = 1 << 20;
-    std::ifstream in(path, std::ios::binary);
-    AssimpLines lines(in.rdbuf());
+    constexpr std::size_t kHeadBytes = kPlyHeadBytes;
     std::string line;
     auto header_too_long = [&] {
         throw FileError(path + ": the PLY header has no end_header line in its first " + std::to_string(kHeadBytes) + " bytes");
@@ -471,23 +484,12 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
         throw FileError(path + ": a PLY file must start with the line 'ply', not '" + printable(line, 40) + "'");
     if (!lines.next(line, kHeadBytes, header_too_long)) header_too_long();
     const auto format = ply_words(line);
-    if (format.size() < 2 || format[0] != "format") return; // assimp refuses it ("Missing format specification")
-    const bool ascii = format[1] == "ascii";
-    if (!ascii && format[1].substr(0, 7) != "binary_") return; // assimp refuses it ("Unknown file format")
-    const bool big_endian = !ascii && format[1].size() > 7 && (format[1][7] == 'b' || format[1][7] == 'B');
-
-    struct Property {
-        std::string name;
-        int size = 0;       // of a value, or of each list entry
-        int count_size = 0; // of a list's length (0: not a list)
-        bool count_signed = false, count_float = false;
-    };
-    struct Element {
-        std::string name;
-        std::uintmax_t count = 0;
-        std::vector<Property> props;
-    };
-    std::vector<Element> elements;
+    if (format.size() < 2 || format[0] != "format") return std::nullopt; // assimp refuses it ("Missing format specification")
+    PlyHeader h;
+    h.ascii = format[1] == "ascii";
+    if (!h.ascii && format[1].substr(0, 7) != "binary_") return std::nullopt; // assimp refuses it ("Unknown file format")
+    h.big_endian = !h.ascii && format[1].size() > 7 && (format[1][7] == 'b' || format[1][7] == 'B');
+    std::vector<PlyElement>& elements = h.elements;
     bool in_element = false; // the previous line was an element or one of its properties
     for (;;) {
         if (lines.offset() > kHeadBytes || !lines.next(line, kHeadBytes, header_too_long)) header_too_long();
@@ -505,12 +507,12 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
         if (w[0] == "element") {
             if (w.size() != 3 || !std::all_of(w[2].begin(), w[2].end(), [](char c) { return c >= '0' && c <= '9'; }))
                 throw FileError(at_line() + "is not 'element NAME COUNT'");
-            Element e;
+            PlyElement e;
             e.name = std::string(w[1]);
             // assimp 5.2 sizes its vertex array by the first vertex element and
             // writes the rows of a second one past its end (a heap overflow
             // ASan caught at a later free: fuzz_mesh).
-            if (std::any_of(elements.begin(), elements.end(), [&](const Element& o) { return o.name == e.name; }))
+            if (std::any_of(elements.begin(), elements.end(), [&](const PlyElement& o) { return o.name == e.name; }))
                 throw FileError(at_line() + "declares element '" + printable(e.name, 40) + "' a second time");
             const std::string what = "element " + printable(e.name, 40);
             check_count(what, std::string(w[2]), 1, e.name == "face" ? kMaxTriangles : kMaxVertices);
@@ -521,7 +523,7 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
         }
         if (w[0] == "property") {
             if (!in_element) throw FileError(at_line() + "is a property line not directly after its element line (or its other properties)");
-            Property p;
+            PlyProperty p;
             if (w.size() == 5 && w[1] == "list") {
                 p.count_size = ply_type_size(w[2]);
                 p.size = ply_type_size(w[3]);
@@ -540,41 +542,72 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
         }
         in_element = false; // comment, obj_info and unknown lines: assimp skips them
     }
+    return h;
+}
 
-    if (ascii) {
-        // One row a line; the length of a list is a whole number, at most the
-        // words left on its line.
-        auto row_too_long = [&] { throw FileError(path + ": PLY line " + std::to_string(lines.line() + 1) + " is longer than " +
-                                                  std::to_string(kRowBytes) + " bytes: not a row of an ASCII PLY file"); };
-        for (const Element& e : elements) {
-            for (std::uintmax_t r = 0; r < e.count; ++r) {
-                if (!lines.next(line, kRowBytes, row_too_long))
-                    throw FileError(path + ": the file ends at row " + std::to_string(r) + " of the " + std::to_string(e.count) + " of element '" +
-                                    printable(e.name, 40) + "' its header declares: a cut file");
-                const auto w = ply_words(line);
-                std::size_t i = 0;
-                for (const Property& p : e.props) {
-                    if (i >= w.size()) break;
-                    if (p.count_size == 0) {
-                        ++i;
-                        continue;
-                    }
-                    const std::string_view n = w[i++];
-                    const std::size_t left = w.size() - i;
-                    const bool digits = !n.empty() && n.size() <= 9 && std::all_of(n.begin(), n.end(), [](char c) { return c >= '0' && c <= '9'; });
-                    if (!digits || std::stoul(std::string(n)) > left)
-                        throw FileError(at_line() + "(element '" + printable(e.name, 40) + "' row " + std::to_string(r) + "): the list '" +
-                                        printable(p.name, 40) + "' declares '" + printable(n, 20) + "' entries, and the line holds " +
-                                        std::to_string(left) + " more values");
-                    i += std::stoul(std::string(n));
+/// ASCII rows: one row a line; the length of a list is a whole number, at most
+/// the words left on its line.
+void check_ply_ascii_rows(const std::string& path, AssimpLines& lines, const std::vector<PlyElement>& elements)
+{
+    constexpr std::size_t kRowBytes = kPlyRowBytes;
+    std::string line;
+    auto at_line = [&] { return path + ": PLY line " + std::to_string(lines.line()) + ": '" + printable(line, 60) + "' "; };
+    auto row_too_long = [&] { throw FileError(path + ": PLY line " + std::to_string(lines.line() + 1) + " is longer than " +
+                                              std::to_string(kRowBytes) + " bytes: not a row of an ASCII PLY file"); };
+    for (const PlyElement& e : elements) {
+        for (std::uintmax_t r = 0; r < e.count; ++r) {
+            if (!lines.next(line, kRowBytes, row_too_long))
+                throw FileError(path + ": the file ends at row " + std::to_string(r) + " of the " + std::to_string(e.count) + " of element '" +
+                                printable(e.name, 40) + "' its header declares: a cut file");
+            const auto w = ply_words(line);
+            std::size_t i = 0;
+            for (const PlyProperty& p : e.props) {
+                if (i >= w.size()) break;
+                if (p.count_size == 0) {
+                    ++i;
+                    continue;
                 }
+                const std::string_view n = w[i++];
+                const std::size_t left = w.size() - i;
+                const bool digits = !n.empty() && n.size() <= 9 && std::all_of(n.begin(), n.end(), [](char c) { return c >= '0' && c <= '9'; });
+                if (!digits || std::stoul(std::string(n)) > left)
+                    throw FileError(at_line() + "(element '" + printable(e.name, 40) + "' row " + std::to_string(r) + "): the list '" +
+                                    printable(p.name, 40) + "' declares '" + printable(n, 20) + "' entries, and the line holds " +
+                                    std::to_string(left) + " more values");
+                i += std::stoul(std::string(n));
             }
         }
-        return;
     }
-    // Binary: the rows follow the end_header line's terminator byte.
-    std::uintmax_t at = lines.offset();
-    std::streambuf* sb = in.rdbuf();
+}
+
+/// The length a binary list's row declares: its count's bytes as the header types
+/// them (a negative signed count reads as -1).
+double ply_list_length(const unsigned char* bytes, const PlyProperty& p, bool big_endian)
+{
+    unsigned char b[8] = {};
+    std::copy(bytes, bytes + p.count_size, b);
+    if (big_endian) std::reverse(b, b + p.count_size);
+    std::uint64_t raw = 0;
+    for (int k = p.count_size; k-- > 0;) raw = raw << 8 | b[k];
+    if (p.count_float) {
+        if (p.count_size == 4) {
+            float f = 0;
+            const auto u = static_cast<std::uint32_t>(raw);
+            std::memcpy(&f, &u, 4);
+            return f;
+        }
+        double n = 0;
+        std::memcpy(&n, &raw, 8);
+        return n;
+    }
+    if (p.count_signed && (raw >> (8 * p.count_size - 1)) & 1) return -1;
+    return static_cast<double>(raw);
+}
+
+/// Binary rows: they follow the end_header line's terminator byte (at `at`); a
+/// list may not declare more entries than the rest of the file holds.
+void check_ply_binary_rows(const std::string& path, std::uintmax_t size, std::uintmax_t at, std::streambuf* sb, const PlyHeader& h)
+{
     std::array<char, 4096> scratch{};
     auto skip = [&](std::uintmax_t n) {
         while (n > 0) {
@@ -585,10 +618,10 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
         }
         return true;
     };
-    for (const Element& e : elements) {
+    for (const PlyElement& e : h.elements) {
         std::uintmax_t row_bytes = 0;
         bool lists = false;
-        for (const Property& p : e.props) {
+        for (const PlyProperty& p : e.props) {
             row_bytes += static_cast<std::uintmax_t>(p.count_size ? p.count_size : p.size);
             lists = lists || p.count_size;
         }
@@ -606,7 +639,7 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
             continue;
         }
         for (std::uintmax_t r = 0; r < e.count; ++r) {
-            for (const Property& p : e.props) {
+            for (const PlyProperty& p : e.props) {
                 if (p.count_size == 0) {
                     if (!skip(static_cast<std::uintmax_t>(p.size))) cut(r);
                     continue;
@@ -614,24 +647,7 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
                 unsigned char b[8] = {};
                 if (sb->sgetn(reinterpret_cast<char*>(b), p.count_size) != p.count_size) cut(r);
                 at += static_cast<std::uintmax_t>(p.count_size);
-                if (big_endian) std::reverse(b, b + p.count_size);
-                std::uint64_t raw = 0;
-                for (int k = p.count_size; k-- > 0;) raw = raw << 8 | b[k];
-                double n = 0;
-                if (p.count_float) {
-                    if (p.count_size == 4) {
-                        float f = 0;
-                        const auto u = static_cast<std::uint32_t>(raw);
-                        std::memcpy(&f, &u, 4);
-                        n = f;
-                    } else {
-                        std::memcpy(&n, &raw, 8);
-                    }
-                } else if (p.count_signed && (raw >> (8 * p.count_size - 1)) & 1) {
-                    n = -1;
-                } else {
-                    n = static_cast<double>(raw);
-                }
+                const double n = ply_list_length(b, p, h.big_endian);
                 const double fits = static_cast<double>(size - at) / p.size;
                 if (!(n >= 0 && n == std::floor(n) && n <= fits))
                     throw FileError(path + ": element '" + printable(e.name, 40) + "' row " + std::to_string(r) + " (byte " +
@@ -641,6 +657,27 @@ void check_ply(const std::string& path, std::uintmax_t size, const Check& check_
             }
         }
     }
+}
+
+/// A PLY file checked the way assimp reads it (fuzz_mesh's findings): the
+/// first line "ply" (NUL bytes after the word made assimp's reader loop
+/// forever); an end_header line within the first 64 KiB as assimp recognises
+/// it (a damaged one, or the word followed by a vertical tab, and assimp reads
+/// past the end of the file looking for it, forever); element counts that fit
+/// the file and the scene limits; property lines assimp can read, directly
+/// after their element; and in the rows, every list's length: assimp sizes
+/// the list by the number it reads before looking at the entries (an ASCII row
+/// "4444444444...4 7 6 5 4" made it ask for 3.8 GB), so a list must not claim
+/// more entries than its row (ASCII) or the rest of the file (binary) holds.
+template <class Check>
+void check_ply(const std::string& path, std::uintmax_t size, const Check& check_count)
+{
+    std::ifstream in(path, std::ios::binary);
+    AssimpLines lines(in.rdbuf());
+    const auto h = read_ply_header(path, lines, check_count);
+    if (!h) return;
+    if (h->ascii) check_ply_ascii_rows(path, lines, h->elements);
+    else check_ply_binary_rows(path, size, lines.offset(), in.rdbuf(), *h);
 }
 
 /// A PLY header checked before assimp reads the file (fuzz_mesh's findings):
@@ -770,20 +807,60 @@ std::optional<std::uintmax_t> whole_attribute(const std::string& tag, const std:
 /// comments, CDATA sections, processing instructions and declarations are
 /// skipped; inside <p> only digits, signs, spaces, tabs and line ends are
 /// taken, up to its end tag.
-void check_collada_indices(const std::string& path, const std::string& ext)
-{
-    if (ext != "dae") return;
-    std::ifstream in(path, std::ios::binary);
-    std::streambuf* sb = in.rdbuf();
-    constexpr int kEnd = std::char_traits<char>::eof();
-    std::uintmax_t line = 1;
-    auto next = [&]() {
-        const int c = sb->sbumpc();
-        if (c == '\n') ++line;
-        return c;
+/// check_collada_indices' one pass over a Collada file: its reader (lines counted,
+/// tags and values read without building a document) and what the checks keep
+/// between elements.
+class ColladaScan {
+public:
+    static constexpr int kEnd = std::char_traits<char>::eof();
+    ColladaScan(const std::string& path, std::streambuf* sb) : path_(path), sb_(sb) {}
+
+    /// Scans to the end of the file; throws FileError at the first damage.
+    void run()
+    {
+        for (int c = next(); c != kEnd; c = next()) {
+            if (c != '<') continue;
+            c = next();
+            if (c == '!' || c == '?') {
+                if (!skip_markup(c)) return;
+                continue;
+            }
+            if (!element(c)) return;
+        }
+    }
+
+private:
+    /// The rest of a start tag (quoted values may hold '>'); the text kept for
+    /// attributes is capped at 4 KiB; `self_closing`: it ends in "/>".
+    struct Tag {
+        std::string text;
+        bool self_closing = false;
     };
-    // Consumes up to and including `end`; false at the end of the file.
-    auto skip_past = [&](std::string_view end) {
+    /// The values of an element's text up to the next tag: how many (separated by
+    /// white space) and the sum of those that are whole numbers.
+    struct Values {
+        std::uintmax_t count = 0, sum = 0;
+    };
+    /// The <vertex_weights> we are in (line 0: none).
+    struct Weights {
+        std::uintmax_t line = 0, count = 0, inputs = 0, vcount_values = 0, vcount_sum = 0, v_values = 0;
+    };
+
+    static bool is_space(int c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+    static bool is_array(const std::string& n)
+    {
+        return n == "float_array" || n == "int_array" || n == "Name_array" || n == "bool_array" || n == "IDREF_array";
+    }
+
+    int next()
+    {
+        const int c = sb_->sbumpc();
+        if (c == '\n') ++line_;
+        return c;
+    }
+    /// Consumes up to and including `end`; false at the end of the file.
+    bool skip_past(std::string_view end)
+    {
         std::string last;
         for (int c; (c = next()) != kEnd;) {
             last.push_back(static_cast<char>(c));
@@ -791,16 +868,11 @@ void check_collada_indices(const std::string& path, const std::string& ext)
             if (last == end) return true;
         }
         return false;
-    };
-    auto is_space = [](int c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
-    // The rest of a start tag from `c` up to its '>' (quoted values may hold
-    // '>'); `c` is left on the '>' (kEnd at the end of the file). The text
-    // kept for attributes is capped at 4 KiB; `self_closing`: it ends in "/>".
-    struct Tag {
-        std::string text;
-        bool self_closing = false;
-    };
-    auto read_tag = [&](int& c) {
+    }
+    /// The rest of a start tag from `c` up to its '>'; `c` is left on the '>'
+    /// (kEnd at the end of the file).
+    Tag read_tag(int& c)
+    {
         Tag t;
         int quote = 0, before = 0;
         while (c != kEnd && (quote || c != '>')) {
@@ -812,13 +884,9 @@ void check_collada_indices(const std::string& path, const std::string& ext)
         }
         t.self_closing = before == '/';
         return t;
-    };
-    // The values of an element's text up to the next tag: how many (separated
-    // by white space) and the sum of those that are whole numbers.
-    struct Values {
-        std::uintmax_t count = 0, sum = 0;
-    };
-    auto read_values = [&](int& c) {
+    }
+    Values read_values(int& c)
+    {
         Values v;
         std::uintmax_t current = 0;
         bool in_value = false;
@@ -835,38 +903,20 @@ void check_collada_indices(const std::string& path, const std::string& ext)
         }
         if (in_value) v.sum += current;
         return v;
-    };
-    // Value arrays: <float_array count="N"> etc. must hold N values (a count
-    // of 0 before 24 values: assimp 5.2 kept an empty array, an accessor read
-    // it through a null pointer and `drape import` died of SIGSEGV), and every
-    // <accessor> must read inside the array it names.
-    std::map<std::string, std::uintmax_t> arrays;
-    auto is_array = [](const std::string& n) {
-        return n == "float_array" || n == "int_array" || n == "Name_array" || n == "bool_array" || n == "IDREF_array";
-    };
-    struct Weights {
-        std::uintmax_t line = 0, count = 0, inputs = 0, vcount_values = 0, vcount_sum = 0, v_values = 0;
-    } weights; // the <vertex_weights> we are in (line 0: none)
-    std::uintmax_t polylist = 0; // the line of the <polylist> we are in (0: none)
-    bool vcount = false;         // that polylist had its <vcount>
-    for (int c = next(); c != kEnd; c = next()) {
-        if (c != '<') continue;
+    }
+    /// Comments, CDATA sections, declarations (after "<!") and processing
+    /// instructions (after "<?"); false at the end of the file.
+    bool skip_markup(int c)
+    {
+        if (c == '?') return skip_past("?>");
         c = next();
-        if (c == '!') {
-            c = next();
-            if (c == '-' && next() == '-') {
-                if (!skip_past("-->")) return;
-            } else if (c == '[') {
-                if (!skip_past("]]>")) return;
-            } else if (c != '>' && !skip_past(">")) {
-                return;
-            }
-            continue;
-        }
-        if (c == '?') {
-            if (!skip_past("?>")) return;
-            continue;
-        }
+        if (c == '-' && next() == '-') return skip_past("-->");
+        if (c == '[') return skip_past("]]>");
+        return c == '>' || skip_past(">");
+    }
+    /// One element from its name's first character; false at the end of the file.
+    bool element(int c)
+    {
         // The element's name: <p>, and <polylist> with its <vcount> (a polylist
         // without one before its <p>: assimp read the count of each polygon
         // from an empty list, a null pointer, and `drape import` died of SIGSEGV).
@@ -878,103 +928,134 @@ void check_collada_indices(const std::string& path, const std::string& ext)
             c = next();
         }
         if (closing) {
-            if (name == "polylist") polylist = 0;
-            if (name == "vertex_weights" && weights.line) {
-                // Skin weights: one <vcount> value per vertex, and in <v> as
-                // many (joint, weight) groups as the <vcount> values add up to.
-                // Counts that disagree made assimp 5.2 read past its lists (SIGSEGV, fuzz_mesh).
-                const std::string at = path + ": line " + std::to_string(weights.line) + ": <vertex_weights count=\"" +
-                                       std::to_string(weights.count) + "\">";
-                if (weights.vcount_values != weights.count)
-                    throw FileError(at + " has " + std::to_string(weights.vcount_values) + " values in its <vcount> (one per vertex expected; a damaged file)");
-                if (weights.v_values != weights.vcount_sum * std::max<std::uintmax_t>(weights.inputs, 1))
-                    throw FileError(at + " has " + std::to_string(weights.v_values) + " values in its <v>, not " +
-                                    std::to_string(weights.vcount_sum) + " x " + std::to_string(weights.inputs) +
-                                    " (the <vcount> values times the inputs; a damaged file)");
-                weights = {};
-            }
-            continue;
+            close(name);
+            return true;
         }
-        if (weights.line && (name == "input" || name == "vcount" || name == "v")) {
-            if (name == "input") {
-                ++weights.inputs;
-                continue;
-            }
-            read_tag(c);
-            if (c == kEnd) return;
-            // The values up to the end tag (whole numbers; others are the <p> check's kind of damage).
-            const Values v = read_values(c);
-            if (name == "vcount") {
-                weights.vcount_values = v.count;
-                weights.vcount_sum = v.sum;
-            } else {
-                weights.v_values = v.count;
-            }
-            continue;
-        }
+        if (weights_.line && (name == "input" || name == "vcount" || name == "v")) return weights_child(name, c);
         if (name == "polylist") {
-            polylist = line;
-            vcount = false;
-            continue;
+            polylist_ = line_;
+            vcount_ = false;
+            return true;
         }
         if (name == "vertex_weights") {
             const Tag tag = read_tag(c);
-            if (c == kEnd) return;
-            if (tag.self_closing) continue;
-            weights = {};
-            weights.line = line;
-            weights.count = whole_attribute(tag.text, "count").value_or(0);
-            continue;
+            if (c == kEnd) return false;
+            if (tag.self_closing) return true;
+            weights_ = {};
+            weights_.line = line_;
+            weights_.count = whole_attribute(tag.text, "count").value_or(0);
+            return true;
         }
-        if (name == "vcount") vcount = true;
-        if (is_array(name) || name == "accessor") {
-            const Tag t = read_tag(c);
-            const std::string& tag = t.text;
-            if (c == kEnd) return;
-            const std::uintmax_t at = line;
-            const auto count = whole_attribute(tag, "count");
-            if (name == "accessor") {
-                // An accessor reads `count` groups of `stride` values from its
-                // array, starting at `offset`: they must be in the array.
-                std::string src = text_attribute(tag, "source");
-                if (!src.empty() && src[0] == '#') src.erase(0, 1);
-                const auto it = arrays.find(src);
-                const auto stride = whole_attribute(tag, "stride").value_or(1), offset = whole_attribute(tag, "offset").value_or(0);
-                if (count && it != arrays.end() && offset + *count * std::max<std::uintmax_t>(stride, 1) > it->second)
-                    throw FileError(path + ": line " + std::to_string(at) + ": an <accessor> reads " + std::to_string(*count) + " x " +
-                                    std::to_string(stride) + " values from offset " + std::to_string(offset) + " of '" +
-                                    printable(src, 60) + "', which holds " + std::to_string(it->second) + " (a damaged file)");
-                continue;
-            }
-            if (tag.empty() || t.self_closing) continue; // <float_array> without attributes, <float_array/>
-            // The values up to the end tag: as many as the count says.
-            const std::uintmax_t values = read_values(c).count;
-            if (!count || *count != values)
-                throw FileError(path + ": line " + std::to_string(at) + ": <" + name + "> declares count " +
-                                (count ? std::to_string(*count) : std::string("(none)")) + " but holds " + std::to_string(values) +
-                                " values (a damaged file)");
-            if (const std::string id = text_attribute(tag, "id"); !id.empty()) arrays[id] = values;
-            continue;
+        if (name == "vcount") vcount_ = true;
+        if (is_array(name) || name == "accessor") return array_or_accessor(name, c);
+        if (name != "p") return true;
+        return index_list(c);
+    }
+    void close(const std::string& name)
+    {
+        if (name == "polylist") polylist_ = 0;
+        if (name != "vertex_weights" || !weights_.line) return;
+        // Skin weights: one <vcount> value per vertex, and in <v> as many (joint,
+        // weight) groups as the <vcount> values add up to. Counts that disagree
+        // made assimp 5.2 read past its lists (SIGSEGV, fuzz_mesh).
+        const std::string at = path_ + ": line " + std::to_string(weights_.line) + ": <vertex_weights count=\"" +
+                               std::to_string(weights_.count) + "\">";
+        if (weights_.vcount_values != weights_.count)
+            throw FileError(at + " has " + std::to_string(weights_.vcount_values) + " values in its <vcount> (one per vertex expected; a damaged file)");
+        if (weights_.v_values != weights_.vcount_sum * std::max<std::uintmax_t>(weights_.inputs, 1))
+            throw FileError(at + " has " + std::to_string(weights_.v_values) + " values in its <v>, not " + std::to_string(weights_.vcount_sum) +
+                            " x " + std::to_string(weights_.inputs) + " (the <vcount> values times the inputs; a damaged file)");
+        weights_ = {};
+    }
+    bool weights_child(const std::string& name, int c)
+    {
+        if (name == "input") {
+            ++weights_.inputs;
+            return true;
         }
-        if (name != "p") continue;
-        if (polylist && !vcount)
-            throw FileError(path + ": line " + std::to_string(line) + ": the <polylist> opened on line " + std::to_string(polylist) +
+        read_tag(c);
+        if (c == kEnd) return false;
+        // The values up to the end tag (whole numbers; others are the <p> check's kind of damage).
+        const Values v = read_values(c);
+        if (name == "vcount") {
+            weights_.vcount_values = v.count;
+            weights_.vcount_sum = v.sum;
+        } else {
+            weights_.v_values = v.count;
+        }
+        return true;
+    }
+    /// Value arrays: <float_array count="N"> etc. must hold N values (a count of 0
+    /// before 24 values: assimp 5.2 kept an empty array, an accessor read it
+    /// through a null pointer and `drape import` died of SIGSEGV), and every
+    /// <accessor> must read inside the array it names.
+    bool array_or_accessor(const std::string& name, int c)
+    {
+        const Tag t = read_tag(c);
+        const std::string& tag = t.text;
+        if (c == kEnd) return false;
+        const std::uintmax_t at = line_;
+        const auto count = whole_attribute(tag, "count");
+        if (name == "accessor") {
+            // An accessor reads `count` groups of `stride` values from its array,
+            // starting at `offset`: they must be in the array.
+            std::string src = text_attribute(tag, "source");
+            if (!src.empty() && src[0] == '#') src.erase(0, 1);
+            const auto it = arrays_.find(src);
+            const auto stride = whole_attribute(tag, "stride").value_or(1), offset = whole_attribute(tag, "offset").value_or(0);
+            if (count && it != arrays_.end() && offset + *count * std::max<std::uintmax_t>(stride, 1) > it->second)
+                throw FileError(path_ + ": line " + std::to_string(at) + ": an <accessor> reads " + std::to_string(*count) + " x " +
+                                std::to_string(stride) + " values from offset " + std::to_string(offset) + " of '" + printable(src, 60) +
+                                "', which holds " + std::to_string(it->second) + " (a damaged file)");
+            return true;
+        }
+        if (tag.empty() || t.self_closing) return true; // <float_array> without attributes, <float_array/>
+        // The values up to the end tag: as many as the count says.
+        const std::uintmax_t values = read_values(c).count;
+        if (!count || *count != values)
+            throw FileError(path_ + ": line " + std::to_string(at) + ": <" + name + "> declares count " +
+                            (count ? std::to_string(*count) : std::string("(none)")) + " but holds " + std::to_string(values) +
+                            " values (a damaged file)");
+        if (const std::string id = text_attribute(tag, "id"); !id.empty()) arrays_[id] = values;
+        return true;
+    }
+    /// An index list <p>: whole numbers separated by white space up to its end tag.
+    bool index_list(int c)
+    {
+        if (polylist_ && !vcount_)
+            throw FileError(path_ + ": line " + std::to_string(line_) + ": the <polylist> opened on line " + std::to_string(polylist_) +
                             " has an index list <p> but no <vcount> before it (the number of corners of each polygon)");
         const bool empty = read_tag(c).self_closing;
-        if (c == kEnd) return;
-        if (empty) continue; // <p/>
-        const std::uintmax_t start = line;
+        if (c == kEnd) return false;
+        if (empty) return true; // <p/>
+        const std::uintmax_t start = line_;
         for (c = next(); c != kEnd; c = next()) {
             if ((c >= '0' && c <= '9') || c == '+' || c == '-' || is_space(c)) continue;
-            if (c == '<' && sb->sgetc() == '/') break;
+            if (c == '<' && sb_->sgetc() == '/') return true;
             std::string word(1, static_cast<char>(c));
-            for (int d = sb->sgetc(); d != kEnd && !is_space(d) && d != '<' && word.size() < 20; d = sb->sgetc())
-                word.push_back(static_cast<char>(sb->sbumpc()));
-            throw FileError(path + ": line " + std::to_string(line) + ": the index list <p> (opened on line " + std::to_string(start) +
+            for (int d = sb_->sgetc(); d != kEnd && !is_space(d) && d != '<' && word.size() < 20; d = sb_->sgetc())
+                word.push_back(static_cast<char>(sb_->sbumpc()));
+            throw FileError(path_ + ": line " + std::to_string(line_) + ": the index list <p> (opened on line " + std::to_string(start) +
                             ") holds '" + printable(word, 20) +
                             "', not a whole number: Collada indices are whole numbers separated by spaces (a damaged file)");
         }
+        return false;
     }
+
+    const std::string& path_;
+    std::streambuf* sb_;
+    std::uintmax_t line_ = 1;
+    std::map<std::string, std::uintmax_t> arrays_;
+    Weights weights_;
+    std::uintmax_t polylist_ = 0; ///< the line of the <polylist> we are in (0: none)
+    bool vcount_ = false;         ///< that polylist had its <vcount>
+};
+
+void check_collada_indices(const std::string& path, const std::string& ext)
+{
+    if (ext != "dae") return;
+    std::ifstream in(path, std::ios::binary);
+    ColladaScan(path, in.rdbuf()).run();
 }
 
 } // namespace

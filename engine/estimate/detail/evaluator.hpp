@@ -3,7 +3,7 @@
 // record times every perturbation seed, from flat or warm from the best point's
 // rest states), turns them into whitened residuals, keeps the best point, and
 // measures the drape-to-drape spread of every residual term. Internal to the
-// estimate layer (fit.cpp, stages.cpp, uncertainty.cpp).
+// estimate layer (fit.cpp and its stage files fit_*.cpp, stages.cpp, uncertainty.cpp).
 #include "engine/cloth/drape.hpp"
 #include "engine/estimate/effects.hpp"
 #include "engine/estimate/fit_types.hpp"

@@ -55,7 +55,8 @@ bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Ei
 /// other fitted parameters go when the bendings are held at another value. Returns
 /// that direction (1 at the bending coordinates) and, in `curvature`, |J dir|^2 over
 /// the rows: the chi2's rise per (decade of bending)^2 along it. Other coordinates
-/// the rows do not see stay (0). Used by the calibration from flat (fit.cpp).
+/// the rows do not see stay (0). Used by the calibration from flat
+/// (fit_calibration_folds.cpp).
 Eigen::VectorXd profile_direction(const Eigen::MatrixXd& J, const std::vector<char>& rows, const std::vector<int>& bend, double& curvature);
 
 /// Mirror check: D and the node count do not change when warp and weft swap;

@@ -1,0 +1,73 @@
+// A fit of several runs (the grid refinement's, the bending tie's): each run's
+// progress continues the ones before it, their work is added and their traces
+// joined in the order they ran.
+#include "engine/estimate/detail/pipeline.hpp"
+
+#include <utility>
+
+namespace drape::estimate::detail {
+
+std::function<void(const FitProgress&)> continued_progress(const FitOptions& options, std::string prefix, const FitResult& before, bool search)
+{
+    if (!options.progress) return nullptr;
+    const int evals = before.evaluations;
+    const long sims = before.simulations;
+    const double secs = before.wall_seconds;
+    return [&options, prefix = std::move(prefix), evals, sims, secs, search](const FitProgress& p) {
+        FitProgress q = p;
+        q.search = search && p.search;
+        q.stage = prefix + p.stage;
+        q.evaluation += evals;
+        q.planned += evals;
+        q.simulations += sims;
+        q.elapsed_s += secs;
+        options.progress(q);
+    };
+}
+
+void add_work(FitResult& kept, const FitResult& other)
+{
+    const double sim_seconds = kept.seconds_per_simulation * kept.simulations + other.seconds_per_simulation * other.simulations;
+    kept.wall_seconds += other.wall_seconds;
+    kept.evaluations += other.evaluations;
+    kept.simulations += other.simulations;
+    kept.factorisations += other.factorisations;
+    kept.back_substitutions += other.back_substitutions;
+    kept.jacobian_jumps += other.jacobian_jumps;
+    kept.jacobians += other.jacobians;
+    kept.seconds_per_simulation = kept.simulations ? sim_seconds / kept.simulations : 0.0;
+}
+
+FitResult combine_runs(const FitResult& first, const FitResult& second, bool keep_second, const std::string& prefix)
+{
+    FitResult kept = keep_second ? second : first;
+    kept.options.progress = nullptr;
+    add_work(kept, keep_second ? first : second);
+    std::vector<FitTraceEntry> t = first.trace;
+    const int offset = t.empty() ? 0 : t.back().evaluation;
+    const double t_off = t.empty() ? 0.0 : t.back().elapsed_s;
+    for (auto e : second.trace) {
+        e.evaluation += offset;
+        e.elapsed_s += t_off;
+        e.stage = prefix + e.stage;
+        t.push_back(std::move(e));
+    }
+    kept.trace = std::move(t);
+    kept.cancelled = kept.cancelled || second.cancelled; // a cancelled second fit keeps the first, but the run was stopped
+    return kept;
+}
+
+void record_work(FitResult& out, const Evaluator& ev, Clock::time_point t0)
+{
+    out.evaluations = ev.evaluations();
+    out.simulations = ev.simulations();
+    out.factorisations = ev.factorisations();
+    out.back_substitutions = ev.back_substitutions();
+    out.jacobian_jumps = ev.jacobian_jumps();
+    out.jacobians = ev.jacobians();
+    out.trace = ev.trace();
+    out.seconds_per_simulation = ev.simulations() ? ev.sim_seconds() / ev.simulations() : 0.0;
+    out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+} // namespace drape::estimate::detail

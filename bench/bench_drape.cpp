@@ -254,8 +254,8 @@ int late_shift_table(const std::vector<int>& grids, const std::vector<int>& seed
     return 0;
 }
 
-int main(int argc, char** argv)
-{
+/// The command line.
+struct BenchArgs {
     double rk4_limit = 900, tol = 1e-6;
     bool quick = false, static_only = false, starters = false, plain = false, starters_option = false, late_shift = false;
     std::vector<int> seeds = {1};
@@ -264,48 +264,53 @@ int main(int argc, char** argv)
     std::vector<int> grids = {41, 61, 81, 101};
     DrapeMesh mesh = DrapeMesh::Grid;
     std::vector<std::string> extra;
+};
+
+/// Reads the command line into `a`; 0, or 2 after a usage message.
+int parse_args(int argc, char** argv, BenchArgs& a)
+{
     for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--starters")) starters = true;
-        else if (!std::strcmp(argv[i], "--late-shift")) late_shift = true;
+        if (!std::strcmp(argv[i], "--starters")) a.starters = true;
+        else if (!std::strcmp(argv[i], "--late-shift")) a.late_shift = true;
         else if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) {
-            seeds_given = true;
-            if (!parse_ints(argv[++i], 0, 1000000, seeds)) {
+            a.seeds_given = true;
+            if (!parse_ints(argv[++i], 0, 1000000, a.seeds)) {
                 std::fprintf(stderr, "bench_drape: --seeds: '%s' is not a list of seeds in [0, 1000000]\n", argv[i]);
                 return 2;
             }
         }
-        else if (!std::strcmp(argv[i], "--plain")) plain = true;
+        else if (!std::strcmp(argv[i], "--plain")) a.plain = true;
         else if (!std::strcmp(argv[i], "--laying") && i + 1 < argc) {
-            starters_option = true;
-            laying = std::atof(argv[++i]);
-            if (!(laying > 0 && laying <= 1)) {
+            a.starters_option = true;
+            a.laying = std::atof(argv[++i]);
+            if (!(a.laying > 0 && a.laying <= 1)) {
                 std::fprintf(stderr, "bench_drape: --laying: '%s' is not a fraction of gravity in (0, 1]\n", argv[i]);
                 return 2;
             }
         }
         else if (!std::strcmp(argv[i], "--mesh") && i + 1 < argc) {
-            starters_option = true;
+            a.starters_option = true;
             try {
-                mesh = drape_mesh_from_string(argv[++i]);
+                a.mesh = drape_mesh_from_string(argv[++i]);
             } catch (const std::exception& e) {
                 std::fprintf(stderr, "bench_drape: --%s\n", e.what());
                 return 2;
             }
         } else if (!std::strcmp(argv[i], "--preset") && i + 1 < argc) {
-            starters_option = true;
-            extra.emplace_back(argv[++i]);
+            a.starters_option = true;
+            a.extra.emplace_back(argv[++i]);
         }
         else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) {
-            starters_option = true;
-            grids_given = true;
-            if (!parse_ints(argv[++i], 5, 401, grids)) {
+            a.starters_option = true;
+            a.grids_given = true;
+            if (!parse_ints(argv[++i], 5, 401, a.grids)) {
                 std::fprintf(stderr, "bench_drape: --grids: '%s' is not a list of grids in [5, 401]\n", argv[i]);
                 return 2;
             }
-        } else if (!std::strcmp(argv[i], "--quick")) quick = true;
-        else if (!std::strcmp(argv[i], "--static-only")) static_only = true;
-        else if (!std::strcmp(argv[i], "--rk4-wall-limit") && i + 1 < argc) rk4_limit = std::atof(argv[++i]);
-        else if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc) tol = std::atof(argv[++i]);
+        } else if (!std::strcmp(argv[i], "--quick")) a.quick = true;
+        else if (!std::strcmp(argv[i], "--static-only")) a.static_only = true;
+        else if (!std::strcmp(argv[i], "--rk4-wall-limit") && i + 1 < argc) a.rk4_limit = std::atof(argv[++i]);
+        else if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc) a.tol = std::atof(argv[++i]);
         else {
             std::fprintf(stderr, "usage: bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]\n"
                                  "       bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F] [--mesh grid|rings] [--preset FILE]...\n"
@@ -313,43 +318,15 @@ int main(int argc, char** argv)
             return 2;
         }
     }
-    if (late_shift) {
-        if (!grids_given) grids = {41, 61};
-        if (grids.empty() || seeds.empty()) {
-            std::fprintf(stderr, "bench_drape: --%s: no %s\n", grids.empty() ? "grids" : "seeds", grids.empty() ? "grid" : "seed");
-            return 2;
-        }
-        if (starters || plain || laying > 0 || mesh != DrapeMesh::Grid || quick || static_only || rk4_limit != 900 || tol != 1e-6) {
-            std::fprintf(stderr, "bench_drape: --late-shift goes with --grids, --seeds and --preset only\n");
-            return 2;
-        }
-        try {
-            return late_shift_table(grids, seeds, extra);
-        } catch (const std::exception& e) {
-            std::fprintf(stderr, "bench_drape: %s\n", e.what());
-            return 1;
-        }
-    }
-    if (seeds_given) {
-        std::fprintf(stderr, "bench_drape: --seeds goes with --late-shift\n");
-        return 2;
-    }
-    if (starters) {
-        if (grids.empty()) {
-            std::fprintf(stderr, "bench_drape: --grids: no grid\n");
-            return 2;
-        }
-        try {
-            return starters_table(grids, plain, laying, mesh, extra);
-        } catch (const std::exception& e) {
-            std::fprintf(stderr, "bench_drape: %s\n", e.what());
-            return 1;
-        }
-    }
-    if (plain || starters_option) {
-        std::fprintf(stderr, "bench_drape: --grids, --plain, --laying, --mesh and --preset go with --starters\n");
-        return 2;
-    }
+    return 0;
+}
+
+/// The solver table: the seed's set-up, the cotton starter and a mid-weight fabric
+/// at grid 100, static cold and warm, and RK4.
+int solver_table(const BenchArgs& a)
+{
+    const double rk4_limit = a.rk4_limit, tol = a.tol;
+    const bool quick = a.quick, static_only = a.static_only;
     std::printf("tolerance: relative force residual %.0e; RK4 stops at %.0f s wall if not at rest\n\n", tol, rk4_limit);
     std::printf("| case                               | vertices | wall [s] | iters/steps | force evals | residual | D [%%] | nodes | peak [MB] | status | load avg |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
@@ -451,4 +428,55 @@ int main(int argc, char** argv)
                     std::strcmp(rk.status, "converged") ? "; RK4 not at rest: a lower bound" : "");
     }
     return 0;
+}
+
+int main(int argc, char** argv)
+{
+    BenchArgs a;
+    if (const int rc = parse_args(argc, argv, a)) return rc;
+    const bool late_shift = a.late_shift, starters = a.starters, plain = a.plain, starters_option = a.starters_option, seeds_given = a.seeds_given;
+    const bool quick = a.quick, static_only = a.static_only;
+    const double rk4_limit = a.rk4_limit, tol = a.tol, laying = a.laying;
+    const DrapeMesh mesh = a.mesh;
+    std::vector<int> grids = a.grids;
+    const std::vector<int>& seeds = a.seeds;
+    const std::vector<std::string>& extra = a.extra;
+    if (late_shift) {
+        if (!a.grids_given) grids = {41, 61};
+        if (grids.empty() || seeds.empty()) {
+            std::fprintf(stderr, "bench_drape: --%s: no %s\n", grids.empty() ? "grids" : "seeds", grids.empty() ? "grid" : "seed");
+            return 2;
+        }
+        if (starters || plain || laying > 0 || mesh != DrapeMesh::Grid || quick || static_only || rk4_limit != 900 || tol != 1e-6) {
+            std::fprintf(stderr, "bench_drape: --late-shift goes with --grids, --seeds and --preset only\n");
+            return 2;
+        }
+        try {
+            return late_shift_table(grids, seeds, extra);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "bench_drape: %s\n", e.what());
+            return 1;
+        }
+    }
+    if (seeds_given) {
+        std::fprintf(stderr, "bench_drape: --seeds goes with --late-shift\n");
+        return 2;
+    }
+    if (starters) {
+        if (grids.empty()) {
+            std::fprintf(stderr, "bench_drape: --grids: no grid\n");
+            return 2;
+        }
+        try {
+            return starters_table(grids, plain, laying, mesh, extra);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "bench_drape: %s\n", e.what());
+            return 1;
+        }
+    }
+    if (plain || starters_option) {
+        std::fprintf(stderr, "bench_drape: --grids, --plain, --laying, --mesh and --preset go with --starters\n");
+        return 2;
+    }
+    return solver_table(a);
 }

@@ -103,6 +103,35 @@ void MainWindow::buildUi()
         if (m_garment->itemData(i).toString() == QLatin1String("garment") && m_garmentFile.isEmpty()) chooseGarmentFile();
     });
 
+    addLibraryBrowser(panel, form);
+    m_fabricA = new QComboBox(panel);
+    m_fabricA->setObjectName(QStringLiteral("fabricA"));
+    form->addRow(tr("Fabric"), m_fabricA);
+
+    m_compare = new QCheckBox(tr("Compare with a second fabric"), panel);
+    m_compare->setObjectName(QStringLiteral("compare"));
+    form->addRow(m_compare);
+    m_fabricB = new QComboBox(panel);
+    m_fabricB->setObjectName(QStringLiteral("fabricB"));
+    m_fabricB->setEnabled(false);
+    form->addRow(tr("Second fabric"), m_fabricB);
+
+    addActions(panel, form);
+    m_split = new QSplitter(Qt::Horizontal, central);
+    m_viewA = new FittingView(m_split);
+    m_viewB = new FittingView(m_split);
+    m_viewB->setClothColor(QColor(0x2f, 0x6f, 0xb0));
+    m_viewB->hide();
+    h->addWidget(panel);
+    h->addWidget(m_split, 1);
+    setCentralWidget(central);
+
+    connectControls();
+    resize(1180, 760);
+}
+
+void MainWindow::addLibraryBrowser(QWidget* panel, QFormLayout* form)
+{
     // The library browser: search, weight, drape coefficient; a click picks the fabric.
     m_search = new QLineEdit(panel);
     m_search->setObjectName(QStringLiteral("fabricSearch"));
@@ -132,19 +161,10 @@ void MainWindow::buildUi()
             m_fabricA->setCurrentIndex(i);
         }
     });
+}
 
-    m_fabricA = new QComboBox(panel);
-    m_fabricA->setObjectName(QStringLiteral("fabricA"));
-    form->addRow(tr("Fabric"), m_fabricA);
-
-    m_compare = new QCheckBox(tr("Compare with a second fabric"), panel);
-    m_compare->setObjectName(QStringLiteral("compare"));
-    form->addRow(m_compare);
-    m_fabricB = new QComboBox(panel);
-    m_fabricB->setObjectName(QStringLiteral("fabricB"));
-    m_fabricB->setEnabled(false);
-    form->addRow(tr("Second fabric"), m_fabricB);
-
+void MainWindow::addActions(QWidget* panel, QFormLayout* form)
+{
     m_fit = new QPushButton(tr("Fit a fabric from a record…"), panel);
     m_fit->setObjectName(QStringLiteral("fit"));
     m_fit->setToolTip(tr("Fits the fabric parameters to a drape-test record folder (meta.json + contours.csv) "
@@ -183,16 +203,10 @@ void MainWindow::buildUi()
     auto* help = new QLabel(tr("Drag to orbit, wheel to zoom."), panel);
     help->setStyleSheet(QStringLiteral("color: gray"));
     form->addRow(help);
+}
 
-    m_split = new QSplitter(Qt::Horizontal, central);
-    m_viewA = new FittingView(m_split);
-    m_viewB = new FittingView(m_split);
-    m_viewB->setClothColor(QColor(0x2f, 0x6f, 0xb0));
-    m_viewB->hide();
-    h->addWidget(panel);
-    h->addWidget(m_split, 1);
-    setCentralWidget(central);
-
+void MainWindow::connectControls()
+{
     connect(m_compare, &QCheckBox::toggled, this, [this](bool on) {
         m_fabricB->setEnabled(on);
         m_viewB->setVisible(on);
@@ -241,7 +255,6 @@ void MainWindow::buildUi()
         }
         m_status->setText(msg);
     });
-    resize(1180, 760);
 }
 
 bool MainWindow::loadMannequin(const QString& path, QString* error)

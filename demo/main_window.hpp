@@ -17,6 +17,7 @@
 
 class QCheckBox;
 class QComboBox;
+class QFormLayout;
 class QLabel;
 class QLineEdit;
 class QProgressBar;
@@ -101,6 +102,12 @@ signals:
 
 private:
     void buildUi();
+    /// The library browser: the search field and the list (weight, D, source).
+    void addLibraryBrowser(QWidget* panel, QFormLayout* form);
+    /// Fit, its predictions, Drape / Cancel, the progress, the screenshot and the status.
+    void addActions(QWidget* panel, QFormLayout* form);
+    /// The controls' and the views' signals.
+    void connectControls();
     void reloadFabrics(const QString& select = {});
     void filterBrowser(const QString& text);
     void chooseGarmentFile();

@@ -23,6 +23,143 @@ void trace_factor(const SpMat& A, Cholmod& llt, bool reused)
                  reused ? ", analysis reused" : "");
 }
 
+/// A start where two parts of the cloth touch (or one passes through the other: a
+/// garment file made that way) has no finite barrier energy to descend from: true,
+/// with st saying so.
+bool touches_itself(const ClothSystem& s, SolverStatus& st)
+{
+    if (!s.self_contact_on()) return false;
+    const double close = 1e-3 * s.model().self_contact_distance;
+    for (const auto& p : s.self_contact_pairs(s.x)) {
+        std::array<Eigen::Vector3d, 4> y;
+        for (std::size_t k = 0; k < 4; ++k) y[k] = s.x.row(p.v[k]).transpose();
+        if (!(pair_squared_distance(p.kind, y) > close * close)) {
+            st.outcome = SolverStatus::Outcome::Diverged;
+            st.message = "the cloth touches or passes through itself at the start (vertices " + std::to_string(p.v[0]) + ", " +
+                         std::to_string(p.v[1]) + ", " + std::to_string(p.v[2]) + ", " + std::to_string(p.v[3]) +
+                         "); give it a start without self-intersections, or turn self-collision off";
+            return true;
+        }
+    }
+    return false;
+}
+
+/// RestOptions::checkpoint, as the loop would end here with opt.residual = checkpoint_residual.
+void checkpoint(const ClothSystem& s, const RestOptions& opt, const SolverStatus& st, long f0, Clock::time_point t0)
+{
+    SolverStatus at = st;
+    at.outcome = SolverStatus::Outcome::Converged;
+    at.max_speed = 0;
+    at.force_evaluations = s.force_evaluations - f0;
+    at.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    opt.checkpoint(s.x, at);
+}
+
+/// How far h may shrink on the exact Hessian before the projected one: the
+/// caller's floor, or near rest kLateShiftPseudoTime (a saddle's negative
+/// curvature, not the fold branch's choice; RestOptions::late_shift_residual);
+/// 0: none.
+double exact_shift_floor(const RestOptions& opt, double residual)
+{
+    if (opt.shift_before_projection > 0) return opt.shift_before_projection;
+    if (opt.shift_before_projection == 0 && opt.late_shift_residual > 0 && residual < opt.late_shift_residual) return kLateShiftPseudoTime;
+    return 0;
+}
+
+/// What the line search compares against: the energy at the start, the Newton
+/// step's slope, its proximal term's M/h^2 norm, and the energy scale for rounding.
+struct StepEnergy {
+    double e0, slope, mdx, e_scale;
+};
+
+/// Backtracking from alpha (halved up to 40 times) until the proximal energy falls
+/// enough (Armijo), or, near rest where the predicted decrease is below the energy
+/// sum's rounding, the force residual does; trial, alpha and e_trial are the last
+/// tried. False: no step was accepted.
+bool line_search(ClothSystem& s, const Positions& f, const Eigen::Map<const Positions>& D, const StepEnergy& k, Positions& trial,
+                 double& alpha, double& e_trial, SolveProfile& prof, bool profiling)
+{
+    const double e_round = 1e-12 * (std::abs(k.e0) + k.e_scale);
+    for (int ls = 0; ls < 40; ++ls) {
+        ProfileScope ls_timer(profiling ? &prof.line_search : nullptr);
+        ++prof.line_search_trials;
+        trial = s.x + alpha * D;
+        e_trial = s.potential_energy(trial);
+        const double phi = e_trial + 0.5 * alpha * alpha * k.mdx;
+        if (phi <= k.e0 + 1e-4 * alpha * k.slope) return true;
+        if (-alpha * k.slope < e_round) {
+            Positions ft;
+            s.conservative_forces(trial, ft);
+            mask_pinned(s, ft);
+            if (flat(ft).norm() < flat(f).norm()) return true;
+        }
+        alpha *= 0.5;
+    }
+    return false;
+}
+
+/// --trace: one line per accepted step, with the worst vertex.
+void trace_iteration(ClothSystem& s, const SolverStatus& st, const Positions& f, double h, double alpha, double e0, bool exact)
+{
+    const auto& mass = s.model().mass;
+    int imax = 0;
+    f.rowwise().norm().maxCoeff(&imax);
+    std::fprintf(stderr, "it %ld res %.3e h %.3g alpha %.3g E %.9g  worst v%d r=%.4f z=%.5f |f|/mg=%.3g %s, contacts %d vertex %zu edge\n",
+                 st.steps, st.residual, h, alpha, e0, imax, std::hypot(s.x(imax, 0), s.x(imax, 1)), s.x(imax, 2),
+                 f.row(imax).norm() / (mass(imax) * 9.81), exact ? "exact" : "projected", s.vertex_contact_count(s.x),
+                 s.edges_in_contact(s.x).size());
+}
+
+/// Whether the solve ends before this iteration's step: at rest, out of Newton
+/// iterations, or cancelled (st says which). The cancel flag is read every
+/// iteration, the progress callback at most five times a second (a terminal or a
+/// log needs no more).
+bool ends_here(const ClothSystem& s, const RestOptions& opt, SolverStatus& st, long f0, Clock::time_point t0, Clock::time_point& last_report)
+{
+    if (st.residual < opt.residual) {
+        st.outcome = SolverStatus::Outcome::Converged;
+        return true;
+    }
+    if (st.steps >= opt.max_newton) {
+        st.outcome = SolverStatus::Outcome::NotConverged;
+        st.message = "residual " + std::to_string(st.residual) + " after " + std::to_string(st.steps) + " Newton iterations";
+        return true;
+    }
+    st.force_evaluations = s.force_evaluations - f0;
+    const auto now = Clock::now();
+    st.wall_seconds = std::chrono::duration<double>(now - t0).count();
+    const bool report = st.steps == 0 || now - last_report > std::chrono::milliseconds(200);
+    if (report) last_report = now;
+    if ((opt.cancel && opt.cancel->load()) || (report && opt.progress && !opt.progress(st))) {
+        st.outcome = SolverStatus::Outcome::Cancelled;
+        return true;
+    }
+    return false;
+}
+
+/// The assembled Hessian factorised: its pattern analysed on the first iteration
+/// or when self-contact coupled new vertices (an analysis of the same pattern is
+/// reused across solves), then the numeric factorisation; check llt.info().
+Cholmod& factorize(const HessianAssembler& H, std::unique_ptr<Cholmod>& llt_p, int& analysed_revision, bool trace, SolveProfile& prof,
+                   bool profiling)
+{
+    if (!llt_p || H.revision() != analysed_revision) {
+        analysed_revision = H.revision();
+        bool reused = false;
+        {
+            ProfileScope timer(profiling ? &prof.analyse : nullptr);
+            llt_p = take_analysed(H.matrix(), reused);
+        }
+        if (trace) trace_factor(H.matrix(), *llt_p, reused);
+    }
+    Cholmod& llt = *llt_p;
+    {
+        ProfileScope timer(profiling ? &prof.factorize : nullptr);
+        llt.factorize(H.matrix());
+    }
+    return llt;
+}
+
 /// Static solver: the rest state as a minimum of the potential energy, found by
 /// Newton's method regularised with a proximal mass term M/h^2 (a fully damped
 /// implicit step of pseudo-time h). h grows while full Newton steps are
@@ -78,20 +215,7 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
     // A start where two parts of the cloth touch (or one passes through the
     // other: a garment file made that way) has no finite barrier energy to
     // descend from; say so instead of stepping on infinities.
-    if (s.self_contact_on()) {
-        const double close = 1e-3 * s.model().self_contact_distance;
-        for (const auto& p : s.self_contact_pairs(s.x)) {
-            std::array<Eigen::Vector3d, 4> y;
-            for (std::size_t k = 0; k < 4; ++k) y[k] = s.x.row(p.v[k]).transpose();
-            if (!(pair_squared_distance(p.kind, y) > close * close)) {
-                st.outcome = SolverStatus::Outcome::Diverged;
-                st.message = "the cloth touches or passes through itself at the start (vertices " + std::to_string(p.v[0]) + ", " +
-                             std::to_string(p.v[1]) + ", " + std::to_string(p.v[2]) + ", " + std::to_string(p.v[3]) +
-                             "); give it a start without self-intersections, or turn self-collision off";
-                return st;
-            }
-        }
-    }
+    if (touches_itself(s, st)) return st;
     while (true) {
         if (frictional) {
             s.update_static_friction(friction, s.x);
@@ -107,35 +231,10 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
             break;
         }
         if (opt.checkpoint && !checkpointed && st.residual < opt.checkpoint_residual) {
-            // As the loop would end here with opt.residual = checkpoint_residual.
             checkpointed = true;
-            SolverStatus at = st;
-            at.outcome = SolverStatus::Outcome::Converged;
-            at.max_speed = 0;
-            at.force_evaluations = s.force_evaluations - f0;
-            at.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-            opt.checkpoint(s.x, at);
+            checkpoint(s, opt, st, f0, t0);
         }
-        if (st.residual < opt.residual) {
-            st.outcome = SolverStatus::Outcome::Converged;
-            break;
-        }
-        if (st.steps >= opt.max_newton) {
-            st.outcome = SolverStatus::Outcome::NotConverged;
-            st.message = "residual " + std::to_string(st.residual) + " after " + std::to_string(st.steps) + " Newton iterations";
-            break;
-        }
-        st.force_evaluations = s.force_evaluations - f0;
-        const auto now = Clock::now();
-        st.wall_seconds = std::chrono::duration<double>(now - t0).count();
-        // The cancel flag is read every iteration, the progress callback at most
-        // five times a second (a terminal or a log needs no more).
-        const bool report = st.steps == 0 || now - last_report > std::chrono::milliseconds(200);
-        if (report) last_report = now;
-        if ((opt.cancel && opt.cancel->load()) || (report && opt.progress && !opt.progress(st))) {
-            st.outcome = SolverStatus::Outcome::Cancelled;
-            break;
-        }
+        if (ends_here(s, opt, st, f0, t0, last_report)) break;
         const Eigen::VectorXd md = mass / (h * h);
         // The exact Hessian (compressed springs' negative stiffness, the contact
         // normal's turning) whenever it is positive definite: it halves the
@@ -143,30 +242,13 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
         // iterations after a failed factorisation.
         const bool exact = exact_ok > 0;
         H.assemble(s.x, md, 0.0, exact ? HessianAssembler::Projection::None : HessianAssembler::Projection::All);
-        if (!llt_p || H.revision() != analysed_revision) {
-            // First iteration, or self-contact coupled new vertices: analyse the pattern.
-            analysed_revision = H.revision();
-            bool reused = false;
-            {
-                ProfileScope timer(profiling ? &prof.analyse : nullptr);
-                llt_p = take_analysed(H.matrix(), reused);
-            }
-            if (opt.trace) trace_factor(H.matrix(), *llt_p, reused);
-        }
-        Cholmod& llt = *llt_p;
-        {
-            ProfileScope timer(profiling ? &prof.factorize : nullptr);
-            llt.factorize(H.matrix());
-        }
+        Cholmod& llt = factorize(H, llt_p, analysed_revision, opt.trace, prof, profiling);
         ++st.steps;
         if (llt.info() != Eigen::Success) ++prof.failed_factorizations;
         // How far h may shrink on the exact Hessian before the projected one: the
         // caller's floor, or near rest kLateShiftPseudoTime (a saddle's negative
         // curvature, not the fold branch's choice; RestOptions::late_shift_residual).
-        double shift_floor = 0;
-        if (opt.shift_before_projection > 0) shift_floor = opt.shift_before_projection;
-        else if (opt.shift_before_projection == 0 && opt.late_shift_residual > 0 && st.residual < opt.late_shift_residual)
-            shift_floor = kLateShiftPseudoTime;
+        const double shift_floor = exact_shift_floor(opt, st.residual);
         if (llt.info() != Eigen::Success && exact && shift_floor > 0 && h > shift_floor) {
             // A larger proximal shift M / h^2 on the exact Hessian first
             // (RestOptions::shift_before_projection, late_shift_residual).
@@ -207,31 +289,7 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
         // the cloth can pass through each other (the barrier is infinite at touching).
         const double alpha_full = s.self_contact_step_bound(s.x, D);
         double alpha = alpha_full;
-        bool accepted = false;
-        // Near rest the predicted energy decrease falls below the rounding error
-        // of the energy sum; there the step is judged by the force residual instead.
-        const double e_round = 1e-12 * (std::abs(e0) + e_scale);
-        for (int ls = 0; ls < 40; ++ls) {
-            ProfileScope ls_timer(profiling ? &prof.line_search : nullptr);
-            ++prof.line_search_trials;
-            trial = s.x + alpha * D;
-            e_trial = s.potential_energy(trial);
-            const double phi = e_trial + 0.5 * alpha * alpha * mdx;
-            if (phi <= e0 + 1e-4 * alpha * slope) {
-                accepted = true;
-                break;
-            }
-            if (-alpha * slope < e_round) {
-                Positions ft;
-                s.conservative_forces(trial, ft);
-                mask_pinned(s, ft);
-                if (flat(ft).norm() < flat(f).norm()) {
-                    accepted = true;
-                    break;
-                }
-            }
-            alpha *= 0.5;
-        }
+        const bool accepted = line_search(s, f, D, {e0, slope, mdx, e_scale}, trial, alpha, e_trial, prof, profiling);
         if (!accepted) {
             h *= 0.25;
             if (h < h_min) {
@@ -243,15 +301,7 @@ SolverStatus run_proximal(ClothSystem& s, const RestOptions& opt)
         }
         s.x = trial;
         e_x = e_trial;
-        if (opt.trace)
-        {
-            int imax = 0;
-            f.rowwise().norm().maxCoeff(&imax);
-            std::fprintf(stderr, "it %ld res %.3e h %.3g alpha %.3g E %.9g  worst v%d r=%.4f z=%.5f |f|/mg=%.3g %s, contacts %d vertex %zu edge\n",
-                         st.steps, st.residual, h, alpha, e0, imax, std::hypot(s.x(imax, 0), s.x(imax, 1)), s.x(imax, 2),
-                         f.row(imax).norm() / (mass(imax) * 9.81), exact ? "exact" : "projected", s.vertex_contact_count(s.x),
-                         s.edges_in_contact(s.x).size());
-        }
+        if (opt.trace) trace_iteration(s, st, f, h, alpha, e0, exact);
         // A step the line search took whole (as far as the self-contact filter
         // let it go) lets the pseudo-time grow.
         if (alpha == alpha_full) h = std::min(h * 2.0, h_max);

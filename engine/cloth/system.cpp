@@ -822,60 +822,65 @@ HessianAssembler::Block HessianAssembler::block(int i, int j) const
     return bl;
 }
 
-void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, Projection projection)
+namespace {
+
+/// The stiffness of an axial element (a spring, a membrane fibre) of current
+/// vector u: E''(l) along it, E'(l) / l across it (negative in compression: the
+/// projected form drops it), and its dashpot along it. false: zero length.
+template <class Element>
+bool axial_stiffness(Vec3 u, const Element& element, bool project, double damping_scale, Eigen::Matrix3d& K)
 {
-    const bool project_springs = projection == Projection::All, project_contacts = project_springs;
-    // Self-contact pairs couple vertices the mesh does not: grow the pattern
-    // first (outside the timer: the search is timed as self-contact).
-    const auto& self_pairs = m_s.self_contact_pairs(X);
-    {
-        std::vector<std::pair<int, int>> missing;
-        for (const auto& p : self_pairs)
-            for (int a = 0; a < 4; ++a)
-                for (int b = a + 1; b < 4; ++b) {
-                    const int i = std::min(p.v[static_cast<std::size_t>(a)], p.v[static_cast<std::size_t>(b)]);
-                    const int j = std::max(p.v[static_cast<std::size_t>(a)], p.v[static_cast<std::size_t>(b)]);
-                    if (!has_block(i, j)) missing.emplace_back(i, j);
-                }
-        if (!missing.empty()) {
-            m_extra.insert(m_extra.end(), missing.begin(), missing.end());
-            std::sort(m_extra.begin(), m_extra.end());
-            m_extra.erase(std::unique(m_extra.begin(), m_extra.end()), m_extra.end());
-            build_pattern();
-            ++m_revision;
-        }
-    }
-    ProfileScope timer(m_s.profile ? &m_s.profile->assemble : nullptr);
-    const auto& m = m_s.model();
+    const double l = u.norm();
+    if (l <= 1e-300) return false;
+    u /= l;
+    const Eigen::Matrix3d nn = u * u.transpose();
+    double es, de, d2e;
+    element.law(l, es, de, d2e);
+    double t = de / l;
+    if (project && t < 0) t = 0;
+    K = d2e * nn + t * (Eigen::Matrix3d::Identity() - nn);
+    if (damping_scale != 0) K += damping_scale * element.d * nn;
+    return true;
+}
+
+} // namespace
+
+void HessianAssembler::add_diag(const Block& bl, const Eigen::Matrix3d& K)
+{
     double* val = m_H.valuePtr();
-    std::fill(val, val + m_H.nonZeros(), 0.0);
-    // Adds the symmetric 3x3 matrix K (scaled by sign) to block (i, j); for a
-    // diagonal block only the upper triangle is stored.
-    auto add_diag = [&](const Block& bl, const Eigen::Matrix3d& K) {
-        for (int b = 0; b < 3; ++b)
-            for (int a = 0; a <= b; ++a) val[bl.col[b] + a] += K(a, b);
-    };
-    auto add_off = [&](const Block& bl, const Eigen::Matrix3d& K) {
-        for (int b = 0; b < 3; ++b)
-            for (int a = 0; a < 3; ++a) val[bl.col[b] + a] += K(a, b);
-    };
+    for (int b = 0; b < 3; ++b)
+        for (int a = 0; a <= b; ++a) val[bl.col[b] + a] += K(a, b);
+}
+
+void HessianAssembler::add_off(const Block& bl, const Eigen::Matrix3d& K)
+{
+    double* val = m_H.valuePtr();
+    for (int b = 0; b < 3; ++b)
+        for (int a = 0; a < 3; ++a) val[bl.col[b] + a] += K(a, b);
+}
+
+void HessianAssembler::grow_pattern(const std::vector<ProximityPair>& self_pairs)
+{
+    std::vector<std::pair<int, int>> missing;
+    for (const auto& p : self_pairs)
+        for (int a = 0; a < 4; ++a)
+            for (int b = a + 1; b < 4; ++b) {
+                const int i = std::min(p.v[static_cast<std::size_t>(a)], p.v[static_cast<std::size_t>(b)]);
+                const int j = std::max(p.v[static_cast<std::size_t>(a)], p.v[static_cast<std::size_t>(b)]);
+                if (!has_block(i, j)) missing.emplace_back(i, j);
+            }
+    if (missing.empty()) return;
+    m_extra.insert(m_extra.end(), missing.begin(), missing.end());
+    std::sort(m_extra.begin(), m_extra.end());
+    m_extra.erase(std::unique(m_extra.begin(), m_extra.end()), m_extra.end());
+    build_pattern();
+    ++m_revision;
+}
+
+void HessianAssembler::add_springs(const Positions& X, double damping_scale, bool project_springs)
+{
+    const auto& m = m_s.model();
     const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-    // The stiffness of an axial element (a spring, a membrane fibre) of current
-    // vector u: E''(l) along it, E'(l) / l across it (negative in compression: the
-    // projected form drops it), and its dashpot along it. false: zero length.
-    auto axial = [&](Vec3 u, const auto& element, Eigen::Matrix3d& K) {
-        const double l = u.norm();
-        if (l <= 1e-300) return false;
-        u /= l;
-        const Eigen::Matrix3d nn = u * u.transpose();
-        double es, de, d2e;
-        element.law(l, es, de, d2e);
-        double t = de / l;
-        if (project_springs && t < 0) t = 0;
-        K = d2e * nn + t * (I - nn);
-        if (damping_scale != 0) K += damping_scale * element.d * nn;
-        return true;
-    };
     for (std::size_t s = 0; s < m.springs.size(); ++s) {
         const auto& sp = m.springs[s];
         if (sp.arc >= 0) {
@@ -907,22 +912,33 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
             continue;
         }
         Eigen::Matrix3d K;
-        if (!axial(X.row(sp.i) - X.row(sp.j), sp, K)) continue;
+        if (!axial_stiffness(X.row(sp.i) - X.row(sp.j), sp, project_springs, damping_scale, K)) continue;
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.i)], K);
         add_diag(m_diag_blocks[static_cast<std::size_t>(sp.j)], K);
         add_off(m_spring_blocks[s], -K);
     }
+}
+
+void HessianAssembler::add_fibers(const Positions& X, double damping_scale, bool project_springs)
+{
+    const auto& m = m_s.model();
     for (std::size_t s = 0; s < m.fibers.size(); ++s) {
         // As a spring's, in the fibre's vector d = sum w_a x_a; vertex blocks w_a w_b K.
         const auto& fb = m.fibers[s];
         Eigen::Matrix3d K;
-        if (!axial(fb.vec(X), fb, K)) continue;
+        if (!axial_stiffness(fb.vec(X), fb, project_springs, damping_scale, K)) continue;
         for (int p = 0; p < 3; ++p) add_diag(m_diag_blocks[static_cast<std::size_t>(fb.v[p])], fb.w[p] * fb.w[p] * K);
         std::size_t b = 3 * s;
         // Off-diagonal blocks are stored once, (min, max); K is symmetric.
         for (int p = 0; p < 3; ++p)
             for (int q = p + 1; q < 3; ++q, ++b) add_off(m_fiber_blocks[b], fb.w[p] * fb.w[q] * K);
     }
+}
+
+void HessianAssembler::add_bends(const Positions& X, double damping_scale)
+{
+    const auto& m = m_s.model();
+    const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
     const double beta = m.bend_stiffening, rho2 = m.bend_softening, peak2 = m.bend_peak;
     for (std::size_t s = 0; s < m.bends.size(); ++s) {
         const auto& b = m.bends[s];
@@ -940,14 +956,22 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         for (int p = 0; p < b.n; ++p)
             for (int q = p + 1; q < b.n; ++q, ++t) add_off(m_bend_blocks[t], b.w[p] * b.w[q] * Kd);
     }
+}
+
+void HessianAssembler::add_diagonal(const Eigen::VectorXd& extra_diag, double damping_scale)
+{
+    const auto& m = m_s.model();
     const int n = m_s.vertex_count();
     for (int i = 0; i < n; ++i) {
         double d = extra_diag.size() ? extra_diag(i) : 0.0;
         if (damping_scale != 0) d += damping_scale * m.air_damping * m.mass(i);
-        if (d != 0) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], d * I);
+        if (d != 0) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], d * Eigen::Matrix3d::Identity());
     }
-    for (std::size_t ai = 0; ai < m.anchors.size(); ++ai) {
-        const auto& a = m.anchors[ai];
+}
+
+void HessianAssembler::add_anchors()
+{
+    for (const auto& a : m_s.model().anchors) {
         Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
         P(0, 0) = P(1, 1) = a.k;
         for (int i = 0; i < a.n; ++i) {
@@ -960,6 +984,11 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
             }
         }
     }
+}
+
+void HessianAssembler::add_contacts(const Positions& X, bool project_contacts)
+{
+    const auto& m = m_s.model();
     for_each_contact(m_s, X, [&](int i, double phi, const Vec3& nrm, const Collider& c) {
         Eigen::Matrix3d K = nrm * nrm.transpose();
         // Exact: the normal turns as the point moves (curved collider surfaces);
@@ -979,6 +1008,10 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
         add_diag(m_diag_blocks[static_cast<std::size_t>(ed[1])], K.block<3, 3>(3, 3));
         add_off(m_edge_blocks[static_cast<std::size_t>(c.edge)], K.block<3, 3>(0, 3));
     });
+}
+
+void HessianAssembler::add_self_contacts(const std::vector<ProximityPair>& self_pairs, const Positions& X, bool project_contacts)
+{
     for (const auto& p : self_pairs) {
         Mat12 K;
         m_s.self_contact_pair_energy(p, X, nullptr, &K);
@@ -996,25 +1029,50 @@ void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra
                 else add_off(block(j, i), Kab.transpose());
             }
     }
+}
+
+void HessianAssembler::pin_rows()
+{
+    const auto& m = m_s.model();
+    bool any_pinned = false;
+    for (char p : m.pinned) any_pinned |= p != 0;
+    if (!any_pinned) return;
+    double* val = m_H.valuePtr();
+    const int* outer = m_H.outerIndexPtr();
+    const int* inner = m_H.innerIndexPtr();
+    for (int col = 0; col < 3 * m_s.vertex_count(); ++col) {
+        const bool pc = m.pinned[static_cast<std::size_t>(col / 3)] != 0;
+        for (int k = outer[col]; k < outer[col + 1]; ++k) {
+            const int row = inner[k];
+            if (pc || m.pinned[static_cast<std::size_t>(row / 3)]) val[k] = row == col ? 1.0 : 0.0;
+        }
+    }
+}
+
+void HessianAssembler::assemble(const Positions& X, const Eigen::VectorXd& extra_diag, double damping_scale, Projection projection)
+{
+    const bool project = projection == Projection::All;
+    // Self-contact pairs couple vertices the mesh does not: grow the pattern
+    // first (outside the timer: the search is timed as self-contact).
+    const auto& self_pairs = m_s.self_contact_pairs(X);
+    grow_pattern(self_pairs);
+    ProfileScope timer(m_s.profile ? &m_s.profile->assemble : nullptr);
+    double* val = m_H.valuePtr();
+    std::fill(val, val + m_H.nonZeros(), 0.0);
+    add_springs(X, damping_scale, project);
+    add_fibers(X, damping_scale, project);
+    add_bends(X, damping_scale);
+    add_diagonal(extra_diag, damping_scale);
+    add_anchors();
+    add_contacts(X, project);
+    add_self_contacts(self_pairs, X, project);
     if (m_s.static_friction)
-        for (int i = 0; i < n; ++i) {
+        for (int i = 0; i < m_s.vertex_count(); ++i) {
             Eigen::Matrix3d K;
             if (m_s.static_friction_term(i, X, nullptr, &K) != 0) add_diag(m_diag_blocks[static_cast<std::size_t>(i)], K);
         }
     // Pinned vertices: identity rows and columns (their update is zero).
-    bool any_pinned = false;
-    for (char p : m.pinned) any_pinned |= p != 0;
-    if (any_pinned) {
-        const int* outer = m_H.outerIndexPtr();
-        const int* inner = m_H.innerIndexPtr();
-        for (int col = 0; col < 3 * n; ++col) {
-            const bool pc = m.pinned[static_cast<std::size_t>(col / 3)] != 0;
-            for (int k = outer[col]; k < outer[col + 1]; ++k) {
-                const int row = inner[k];
-                if (pc || m.pinned[static_cast<std::size_t>(row / 3)]) val[k] = row == col ? 1.0 : 0.0;
-            }
-        }
-    }
+    pin_rows();
 }
 
 } // namespace drape::cloth

@@ -184,6 +184,22 @@ private:
     Block block(int i, int j) const; ///< i <= j
     bool has_block(int i, int j) const; ///< i <= j
     void build_pattern();
+    /// Adds self-contact pairs' vertex couplings the pattern lacks (a new revision).
+    void grow_pattern(const std::vector<ProximityPair>& self_pairs);
+    /// Adds the symmetric 3x3 K to a diagonal block (its upper triangle only) or
+    /// to an off-diagonal block.
+    void add_diag(const Block& bl, const Eigen::Matrix3d& K);
+    void add_off(const Block& bl, const Eigen::Matrix3d& K);
+    // The terms of assemble, in its order.
+    void add_springs(const Positions& X, double damping_scale, bool project_springs);
+    void add_fibers(const Positions& X, double damping_scale, bool project_springs);
+    void add_bends(const Positions& X, double damping_scale);
+    void add_diagonal(const Eigen::VectorXd& extra_diag, double damping_scale);
+    void add_anchors();
+    void add_contacts(const Positions& X, bool project_contacts);
+    void add_self_contacts(const std::vector<ProximityPair>& self_pairs, const Positions& X, bool project_contacts);
+    /// Pinned vertices: identity rows and columns.
+    void pin_rows();
     int m_revision = 0;
     std::vector<std::pair<int, int>> m_extra; ///< coupled by self-contact (i < j)
     const ClothSystem& m_s;

@@ -78,6 +78,28 @@ struct FlatCalibrator {
     /// than 1 off): true when a step was kept; false: the reason says why not.
     /// (fit_calibration_folds.cpp)
     bool step_fold_count();
+    /// The contours' profile through the optimum: per decade of the bendings, where
+    /// the other fitted coordinates follow (those a bound stops held there).
+    struct FoldProfile {
+        double sign = 1;           ///< -1: softer bendings (too few folds), +1: stiffer
+        Eigen::VectorXd dir;       ///< the coordinates' move per decade of the bendings
+        double unit = 0;           ///< the linearised contours' curvature along dir
+        double sigma_t = 0;        ///< the profile's sigma [decades of bending]
+        std::vector<int> held;     ///< coordinates held at a bound (or the held shear)
+        bool shear_held = false;   ///< the shear is held at the typical value
+        int limit_var = -1;        ///< the coordinate that shortened the last step (profile_step)
+        bool limit_by_cap = false; ///< ... by its cap, not the box
+        std::string why_not;       ///< no step along it, and why
+    };
+    FoldProfile fold_profile() const;
+    /// The step of k sigma of the profile, shortened where a coordinate would leave
+    /// the box or move more than k decades (k tenths of a linear range).
+    double profile_step(FoldProfile& fp, double k) const;
+    /// Sets fp.why_not when no other coordinate follows the bendings or the first
+    /// step is nothing.
+    void check_profile_steps(FoldProfile& fp) const;
+    /// "shear_N_m moves 29.7 decades": how fast coordinate i follows the bendings.
+    std::string follower_rate(const FoldProfile& fp, int i, const char* verb) const;
     /// The fold count's step found on the fit grid's drapes (`cand`: its point, D
     /// error, score and sigmas of the profile): one bending scale step for D on the
     /// same drapes, then the finer grid's drape; true when kept (keep), false: the

@@ -8,7 +8,7 @@
 //   build/bin/bench_drape [--quick] [--static-only] [--rk4-wall-limit S] [--tolerance R]
 //   build/bin/bench_drape --starters [--grids 41,61,81,101] [--plain] [--laying F] [--mesh grid|rings] [--preset FILE]...
 //
-// --starters (issue 14): D, folds, wall time and Newton iterations of every
+// --starters: D, folds, wall time and Newton iterations of every
 // starter fabric draped from flat (300 / 150 mm, seed 1, its own model options;
 // --plain: without the crest-corrected bending stencils) at each grid, one
 // drape at a time, with the spread of D and of the fold count over the grids;
@@ -392,7 +392,7 @@ int solver_table(const BenchArgs& a)
         std::printf("\n");
     }
     if (quick) return 0;
-    // 2. Issue 13's case: the cotton starter's parameters (data/library/cotton-plain-weave.json) with the plain stencils (as issue 13 measured it)
+    // 2. The cotton starter's parameters (data/library/cotton-plain-weave.json) with the plain stencils
     // on a 300 mm specimen over a 150 mm disc, grid 100.
     {
         DrapeSetup setup;

@@ -1,6 +1,6 @@
 // bench_fit: full fits of drape-test records, the sensitivity fit (Levenberg-
 // Marquardt on the exact rest-state sensitivities, `drape fit`'s default) and
-// the derivative-free NLopt fit before it, in the same run (issue 15's table).
+// the derivative-free NLopt fit before it, in the same run.
 // Per record and method: wall time, drapes, Hessian factorisations and
 // back-substitutions of the sensitivities, evaluations, chi2, the D and node
 // errors as fitted and of the preset draped from flat (random start, as `drape

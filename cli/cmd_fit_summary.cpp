@@ -214,7 +214,7 @@ void label_rows(std::ostringstream& md, const std::vector<std::string>& labels, 
                 ++have_cold;
                 both_cold += cold_ok ? 1 : 0;
             }
-            // Issue 15's done-when: as fitted, and from flat on the fit's grid and the finer one.
+            // Both as fitted, and from flat on the fit's grid and the finer one.
             if (std::isfinite(e.d_cold) && std::isfinite(e.d_fine)) {
                 ++have_fine;
                 all_ok += (fitted_ok && cold_ok && e.fine_at_rest && std::abs(e.d_fine - e.d_meas) <= 2.0 && std::abs(e.n_fine - e.n_meas) <= 1.0) ? 1 : 0;
@@ -263,7 +263,7 @@ void plot_dc_error(const std::filesystem::path& out, const std::vector<std::stri
     pl.line({0.0, 0.0}, {0.4, static_cast<double>(ids.size()) + 0.6}, {0, 0, 0}, "", 1);
     std::string ls;
     for (const auto& l : labels) ls += (ls.empty() ? "" : ", ") + l;
-    pl.set_caption("dashed: +-2 points (issue 4's target). Fits: " + ls);
+    pl.set_caption("dashed: +-2 points. Fits: " + ls);
     pl.save((out / "dc_error.png").string());
 }
 

@@ -1,5 +1,5 @@
 #pragma once
-// Sensitivity of a rest state to the fabric's parameters (issue 15): at rest the
+// Sensitivity of a rest state to the fabric's parameters: at rest the
 // net force f(x, p) = 0, so along a change of a parameter p the rest state moves
 // by dx/dp = H^-1 df/dp, with H = -df/dx the Hessian of the potential energy that
 // the static solver factorises anyway. One factorisation and one back-substitution

@@ -1,6 +1,6 @@
 #pragma once
 // Candidate effects the model may lack, and the tests that decide whether the
-// residual of a fit shows one (issue 20). Each candidate's signature over every
+// residual of a fit shows one. Each candidate's signature over every
 // fitted residual term is computed by the engine at the fitted preset - switch
 // the effect on by a small known amount at the fit's own rest states (exact
 // rest-state sensitivities for a parameter, a warm re-solve for a switch, a

@@ -63,7 +63,7 @@ std::string to_string(FoldBranch b);
 
 /// How the fit searches after the scan of a common bending.
 enum class FitMethod {
-    /// Levenberg-Marquardt on the exact rest-state sensitivities (issue 15): a
+    /// Levenberg-Marquardt on the exact rest-state sensitivities: a
     /// handful of warm drapes, each linearised by one factorisation of its
     /// Hessian; the intervals come from the same exact Jacobian.
     Sensitivity,
@@ -76,7 +76,7 @@ FitMethod parse_fit_method(const std::string& name); ///< "lm" | "nlopt"; Parame
 FoldBranch parse_fold_branch(const std::string& name); ///< "measured" | "random" | "mixed"; ParameterError otherwise
 
 /// Warp and weft bending: fitted apart, tied (one bending, isotropic), or apart
-/// and then tested (issue 15): when the free fit's warp/weft ratio is beyond the
+/// and then tested: when the free fit's warp/weft ratio is beyond the
 /// typical range of woven fabrics (kTypicalBendingAnisotropy) but its own 95 %
 /// interval of the ratio holds 1 (the data do not separate the two), the fit is
 /// repeated with the two tied (on the free fit's final sigmas), and the tied
@@ -89,7 +89,7 @@ std::string to_string(BendingTie t);
 BendingTie parse_bending_tie(const std::string& name); ///< "auto" | "free" | "tied"; ParameterError otherwise
 
 /// Woven fabrics differ between warp and weft bending typically by less than a
-/// factor of 3-4 (issue 15; the starters' own ratios are 1.17-1.29). A fitted
+/// factor of 3-4 (the starters' own ratios are 1.17-1.29). A fitted
 /// ratio beyond this factor must be separated by the data, else BendingTie::Auto
 /// tests the two tied.
 inline constexpr double kTypicalBendingAnisotropy = 3.0;
@@ -215,7 +215,7 @@ struct FitOptions {
     int random_start_seeds = 2;
     /// The preset also draped from flat (the first of the random-start seeds, for
     /// every record) on this finer grid, reported as `cold_fine_*`: whether the preset
-    /// carries over to a CAD's finer mesh (issue 14/15). 0 = off (the library's
+    /// carries over to a CAD's finer mesh. 0 = off (the library's
     /// default; `drape fit` checks at 61 unless --flat-grid).
     int flat_check_grid = 0;
     /// The preset as a CAD drapes it: when the preset's drapes from flat (the
@@ -256,7 +256,7 @@ struct FitOptions {
     /// stack's axis line, offset + depth x tilt (MeasuredDrape::untilt_contours).
     bool untilt_contours = false;
     /// Engine options of every simulation. edge_contact = false reproduces the
-    /// vertex-only contact of the seed (and of Drapekit before issue 7), whose
+    /// vertex-only contact of the seed (and of Drapekit before edge contact), whose
     /// coarse elements cut the pedestal rim. The library's default is the
     /// engine's (plain bending stencils, what the unit tests' synthetic records
     /// and the blind suite at grid 25 are made with); `drape fit`, bench_fit and

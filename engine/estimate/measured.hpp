@@ -47,14 +47,14 @@ struct MeasuredDrape {
     double photo_drape_coefficient_percent = std::numeric_limits<double>::quiet_NaN(); ///< D from the top photo [%]
     std::vector<std::string> notes;  ///< what the capture layer said (warnings, what it could not measure)
     std::vector<MeasuredContour> contours; ///< closed cuts, increasing depth
-    /// Measurement-model component "profiler axis" (issue 7): when set, the contour
+    /// Measurement-model component "profiler axis": when set, the contour
     /// stacks of the record and of every simulation are re-centred on their own
     /// axis (the mean area centroid of the closed cuts) before features are taken,
     /// so an offset of the profiler's (or the specimen's) axis from the pedestal
     /// axis is estimated instead of read as fold shape. Off by default: a centred
     /// stack keeps its harmonic 1, which is information about the drape.
     bool recentre_contours = false;
-    /// Measurement-model component "profiler axis tilted" (issue 20): as
+    /// Measurement-model component "profiler axis tilted": as
     /// recentre_contours, with an axis that moves linearly with depth - the cuts'
     /// centroids fitted by offset + depth x tilt (least squares; needs two closed
     /// cuts, else the mean) and each cut moved by its line's point. For a profiler

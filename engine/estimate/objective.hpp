@@ -14,8 +14,8 @@ namespace drape::estimate {
 /// Model variants selectable with `drape fit --model`.
 ///  - baseline: the seed paper's model (linear springs, frictionless disc);
 ///    fits bend_warp, bend_weft and shear.
-///  - stiffening: baseline + stiffening bending (bend_stiffening_radius_m, issue 7).
-///  - softening: baseline + yielding bending (bend_softening_radius_m, issue 7).
+///  - stiffening: baseline + stiffening bending (bend_stiffening_radius_m).
+///  - softening: baseline + yielding bending (bend_softening_radius_m).
 ///  - full: stiffening + the tensile stiffnesses warp and weft.
 ///  - buckling: baseline + the membrane's compression limit (buckling_length_m).
 ///  - peaking: baseline + bending whose moment peaks at a radius and falls beyond

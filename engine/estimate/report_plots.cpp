@@ -274,7 +274,7 @@ void parameter_plot(const FitResult& fr, const std::string& path)
     pl.save(path);
 }
 
-/// The candidate effects (issue 20): each one's sqrt(delta chi2) - its |z| for
+/// The candidate effects: each one's sqrt(delta chi2) - its |z| for
 /// one parameter - as a bar from 0, against the 3-sigma levels of one and two
 /// parameters; red beyond noise, grey within, the named one green, the
 /// untestable ones listed with why.

@@ -1,5 +1,5 @@
 #pragma once
-// Residual analysis of a fit (issue 7): is what the model leaves over larger
+// Residual analysis of a fit: is what the model leaves over larger
 // than the measurement noise, where is it structured (harmonics, depths,
 // channels), and which missing effects is that structure consistent with.
 #include "engine/estimate/effects.hpp"
@@ -42,7 +42,7 @@ struct ResidualAnalysis {
     /// Which test put the residual beyond noise (e.g. "harmonic 3: chi2 18.1 over 5 terms").
     std::vector<std::string> exceeds_because;
     /// The candidate effects tested against the residual with engine-made
-    /// signatures (effects.hpp, issue 20), in library order; empty when not run.
+    /// signatures (effects.hpp), in library order; empty when not run.
     std::vector<EffectCandidate> candidates;
     /// The effect the refit names (name_effect), or empty.
     std::string named_effect;

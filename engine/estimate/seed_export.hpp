@@ -1,6 +1,6 @@
 #pragma once
 // Export of a continuum preset to the seed paper's 19 grid constants for a
-// given grid (issue 4: "export to the seed's 19-parameter format for a given
+// given grid ("export to the seed's 19-parameter format for a given
 // grid").
 //
 // Mass, structural (stretch), shear springs and dampers follow exactly from the

@@ -178,7 +178,7 @@ DeferredEffects defer_after_search(std::shared_ptr<GridRunState> state, const Fi
 
 // ---- effect tests (fit_effects.cpp, docs/decisions/0006-effect-tests.md) ---
 
-/// The candidate effects against the residual at the optimum (issue 20):
+/// The candidate effects against the residual at the optimum:
 /// engine-made signatures, matched filter and likelihood ratio of the refit with
 /// each effect freed, the best parameter effect verified by a drape, the named
 /// effect or where the residual is unexplained. J: the whitened Jacobian of the

@@ -350,7 +350,7 @@ int run(const std::vector<std::string>& argv)
     Progress progress("fit", quiet);
     if (!quiet)
         fo.progress = [&progress](const estimate::FitProgress& p) {
-            if (p.stage == "done") return; // progress.finish below says it, with the total time
+            if (p.stage_id == estimate::Stage::Done) return; // progress.finish below says it, with the total time
             // No percentage and no time left: the search's evaluations are bounded
             // above (`planned`) but usually far fewer, and the drapes after it (from
             // flat, the effect tests, the calibration) took as long as the search on

@@ -249,7 +249,7 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     m_best_x = x;
 }
 
-double Evaluator::objective_from(const Eigen::VectorXd& x, const std::vector<std::vector<cloth::Positions>>& states, const std::string& stage)
+double Evaluator::objective_from(const Eigen::VectorXd& x, const std::vector<std::vector<cloth::Positions>>& states, Stage stage)
 {
     const std::size_t S = static_cast<std::size_t>(std::max(1, m_opt.seeds_per_evaluation));
     bool fits = states.size() == m_recs.size();
@@ -287,7 +287,7 @@ void Evaluator::set_best(const Evaluation& e, const Eigen::VectorXd& x)
     m_have_states = true;
 }
 
-double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::string& stage)
+double Evaluator::objective(const Eigen::VectorXd& x, Start from, Stage stage)
 {
     Evaluation e = evaluate(x, from);
     // A drape that did not come to rest is no drape of the model: its features
@@ -303,13 +303,13 @@ double Evaluator::objective(const Eigen::VectorXd& x, Start from, const std::str
 
 double Evaluator::elapsed_s() const { return std::chrono::duration<double>(Clock::now() - m_t0).count(); }
 
-void Evaluator::report(const std::string& stage)
+void Evaluator::report(Stage stage)
 {
     if (m_evaluations > m_traced) {
         m_traced = m_evaluations;
         FitTraceEntry t;
         t.evaluation = m_evaluations;
-        t.stage = stage;
+        t.stage = to_string(stage);
         t.chi2 = m_last.chi2;
         t.best_chi2 = m_best.chi2;
         t.coords.assign(m_last_x.data(), m_last_x.data() + m_last_x.size());
@@ -319,13 +319,14 @@ void Evaluator::report(const std::string& stage)
     progress(stage, false);
 }
 
-void Evaluator::announce(const std::string& stage) { progress(stage, true); }
+void Evaluator::announce(Stage stage) { progress(stage, true); }
 
-void Evaluator::progress(const std::string& stage, bool starting)
+void Evaluator::progress(Stage stage, bool starting)
 {
     if (!m_opt.progress) return;
     FitProgress p;
-    p.stage = stage;
+    p.stage = to_string(stage);
+    p.stage_id = stage;
     p.starting = starting;
     p.evaluation = m_evaluations;
     p.planned = m_planned;

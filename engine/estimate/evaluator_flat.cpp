@@ -29,7 +29,7 @@ DrapeFeatures Evaluator::drape_cold(int r, const cloth::FabricParams& p, std::ui
     return drape_features(sim, rec);
 }
 
-void Evaluator::draw_from_flat(const Eigen::VectorXd& x, const std::string& stage, FlatDraw which)
+void Evaluator::draw_from_flat(const Eigen::VectorXd& x, Stage stage, FlatDraw which)
 {
     announce(stage);
     draw_flat(x, which);

@@ -310,12 +310,12 @@ void Evaluator::resolved_column(int i, const Eigen::VectorXd& x, const Evaluatio
     if (x[i] + h > v.upper) h = -h;
     xp[i] = x[i] + h;
     Evaluation ep = evaluate(xp, Start::Best);
-    report("jacobian");
+    report(Stage::Jacobian);
     if (e.at_rest() && !ep.at_rest() && x[i] - h >= v.lower && x[i] - h <= v.upper) {
         h = -h;
         xp[i] = x[i] + h;
         ep = evaluate(xp, Start::Best);
-        report("jacobian");
+        report(Stage::Jacobian);
     }
     if (e.at_rest() && !ep.at_rest()) return;
     for (std::size_t k = 0; k < m_first_term.back() && k < e.terms.size() && k < ep.terms.size(); ++k)

@@ -46,7 +46,7 @@ FitOptions drape_fit_defaults()
 std::string fit_progress_line(const FitProgress& p)
 {
     char buf[320];
-    if (p.stage == "done") {
+    if (p.stage_id == Stage::Done) {
         std::snprintf(buf, sizeof buf, "done: %d evaluations, chi2 %.1f, %ld simulations", p.evaluation, p.best_chi2, p.simulations);
         return buf;
     }
@@ -55,21 +55,15 @@ std::string fit_progress_line(const FitProgress& p)
                       p.planned, p.best_chi2, p.simulations);
         return buf;
     }
-    // The stages after the search, by name without a run's prefix ("tie ", "refine ").
-    static const std::pair<const char*, const char*> what[] = {
-        {"from flat, fold count", "a calibration step along the contours' profile, from flat"},
-        {"from flat, calibrated", "the calibrated preset from flat"},
-        {"from flat", "the preset from flat on the fit's grid and the finer one"},
-        {"effects", "the candidate effects"},
-        {"preset as saved", "the preset as saved, on the fit's branch"},
-    };
+    // The stages after the search: what they draw.
     const char* text = "after the search";
-    for (const auto& [stage, t] : what) {
-        const std::size_t at = p.stage.rfind(stage);
-        if (at != std::string::npos && at + std::strlen(stage) == p.stage.size()) {
-            text = t;
-            break;
-        }
+    switch (p.stage_id) {
+    case Stage::FromFlatFoldCount: text = "a calibration step along the contours' profile, from flat"; break;
+    case Stage::FromFlatCalibrated: text = "the calibrated preset from flat"; break;
+    case Stage::FromFlat: text = "the preset from flat on the fit's grid and the finer one"; break;
+    case Stage::Effects: text = "the candidate effects"; break;
+    case Stage::PresetAsSaved: text = "the preset as saved, on the fit's branch"; break;
+    default: break;
     }
     std::snprintf(buf, sizeof buf, "%s%s: %ld simulations, best chi2 %.1f; %s", p.stage.c_str(), p.starting ? "" : " (done)", p.simulations,
                   p.best_chi2, text);
@@ -170,8 +164,8 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
         // along, while cold drapes at the same parameters can rest elsewhere (the
         // isotropic synthetic record of tst_est_fit, grid 25: chi2 40.2 cold at the
         // free optimum against 11.7 warm, so the tie "cost" 21 from cold drapes).
-        if (options.start) ev.objective(x, Start::Cold, "start");
-        if (options.start && warm) ev.objective_from(x, *warm, "start");
+        if (options.start) ev.objective(x, Start::Cold, Stage::Start);
+        if (options.start && warm) ev.objective_from(x, *warm, Stage::Start);
         if (have_dc && !bend_vars.empty() && options.scan_evaluations > 0)
             scan_bending(ev, vars, bend_vars, options.scan_evaluations, x, box, lm);
     } catch (const CancelledFit&) {
@@ -179,14 +173,14 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     }
     const Start global_start = options.warm_global ? Start::Best : Start::Cold;
     const Start local_start = options.warm_local ? Start::Best : Start::Cold;
-    if (!cancelled && global > 0) cancelled = run_stage(nlopt::GN_CRS2_LM, ev, vars, x, global, global_start, "global", options.seed, box);
+    if (!cancelled && global > 0) cancelled = run_stage(nlopt::GN_CRS2_LM, ev, vars, x, global, global_start, Stage::Global, options.seed, box);
     if (lm) {
         // Within the scan's fold branch the objective is smooth: Levenberg-Marquardt
         // on the exact sensitivities, warm from the best rest states, in the whole
         // fit range (the scan's box only steered the derivative-free search).
-        if (!cancelled) cancelled = levenberg_marquardt(ev, vars, x, {}, local, "local", local_start);
+        if (!cancelled) cancelled = levenberg_marquardt(ev, vars, x, {}, local, Stage::Local, local_start);
     } else if (!cancelled) {
-        cancelled = run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, local_start, "local", options.seed + 1);
+        cancelled = run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, local_start, Stage::Local, options.seed + 1);
     }
     if (!cancelled) cancelled = mirror_check(ev, vars, bend_vars, x, local / 2, local_start, options.seed + 2, lm);
     if (!cancelled && lm)
@@ -197,7 +191,7 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
             // caller's choice of the run it keeps (a tied or refined refit may
             // replace this one): deferred below.
             ev.calibrate_spread(ev.best_x(), options.spread_seeds);
-            ev.report("spread");
+            ev.report(Stage::Spread);
         } catch (const CancelledFit&) {
             cancelled = true;
         }
@@ -266,7 +260,8 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
     FitResult out = fit_runs(records, options);
     if (options.progress) {
         FitProgress p;
-        p.stage = "done";
+        p.stage = to_string(Stage::Done);
+        p.stage_id = Stage::Done;
         p.search = false;
         p.evaluation = p.planned = out.evaluations;
         p.best_chi2 = out.chi2;

@@ -224,7 +224,7 @@ void FlatCalibrator::scale_for_d()
         Eigen::VectorXd xs;
         if (!scaled(x, ln_s, xs)) break;
         const double scale = bend_scale(xs);
-        ev.draw_from_flat(xs, "from flat, calibrated");
+        ev.draw_from_flat(xs, Stage::FromFlatCalibrated);
         ++c.steps;
         double e = 0, folds = 0;
         if (measure(e, folds, nullptr) != n_used) break;
@@ -360,7 +360,7 @@ void FlatCalibrator::drape_preset_as_saved()
     char buf[700];
     c.chi2_preset = std::numeric_limits<double>::quiet_NaN();
     Evaluation pe;
-    ev.announce("preset as saved");
+    ev.announce(Stage::PresetAsSaved);
     try {
         pe = ev.evaluate_params(kept.params, Start::Best);
     } catch (const CancelledFit&) {
@@ -373,7 +373,7 @@ void FlatCalibrator::drape_preset_as_saved()
         c.reason += "; its drapes as the fit drapes them were cancelled";
         throw;
     }
-    ev.report("preset as saved");
+    ev.report(Stage::PresetAsSaved);
     double dsum = 0, nsum = 0;
     int nd_p = 0, nn_p = 0;
     for (std::size_t r = 0; r < R && r < pe.features.size(); ++r) {

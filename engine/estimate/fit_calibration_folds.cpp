@@ -151,7 +151,7 @@ bool FlatCalibrator::step_fold_count()
         const double sigmas = std::abs(t) / fp.sigma_t; // k, or less where the box shortened it
         reached = sigmas;
         reach_limit = fp.limit_var >= 0 && fp.limit_by_cap ? fp.limit_var : -1;
-        ev.draw_from_flat(xs, "from flat, fold count", Evaluator::FlatDraw::FitGrid);
+        ev.draw_from_flat(xs, Stage::FromFlatFoldCount, Evaluator::FlatDraw::FitGrid);
         ++c.steps;
         double e = 0, folds = 0;
         if (measure(e, folds, nullptr) != n_used) break;
@@ -208,7 +208,7 @@ bool FlatCalibrator::confirm_fold_step(Eigen::VectorXd cand, double cand_e, doub
     if (std::abs(cand_e) > c.tolerance && slope_ok) {
         Eigen::VectorXd xs;
         if (scaled(cand, std::clamp(-cand_e / slope, -max_step, max_step), xs)) {
-            ev.draw_from_flat(xs, "from flat, calibrated", Evaluator::FlatDraw::FitGrid);
+            ev.draw_from_flat(xs, Stage::FromFlatCalibrated, Evaluator::FlatDraw::FitGrid);
             ++c.steps;
             double e = 0, folds = 0;
             if (measure(e, folds, nullptr) == n_used) {
@@ -219,7 +219,7 @@ bool FlatCalibrator::confirm_fold_step(Eigen::VectorXd cand, double cand_e, doub
     }
     // The finer grid's drape for the preset that is kept (the fit grid's drapes
     // of the candidate are the evaluator's kept ones, its coarse level theirs).
-    ev.draw_from_flat(cand, "from flat, calibrated");
+    ev.draw_from_flat(cand, Stage::FromFlatCalibrated);
     double e = 0, folds = 0;
     bool fine_rested = true;
     for (std::size_t r = 0; r < R && finer; ++r)

@@ -16,7 +16,7 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
                   Eigen::MatrixXd J, FitResult& out)
 {
     const int n = static_cast<int>(vars.size());
-    ev.announce("effects"); // (the Jacobian below, when the fit took none, is theirs)
+    ev.announce(Stage::Effects); // (the Jacobian below, when the fit took none, is theirs)
     if (J.rows() != static_cast<Eigen::Index>(best.terms.size())) J = ev.jacobian(x, best);
     std::vector<EffectSignature> sigs;
     try {
@@ -73,7 +73,7 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
             p[q] = std::clamp(p[q] * std::exp(effect_weight(*sig.spec, j) * a), cloth::spec(q).lower, cloth::spec(q).upper);
         }
         const Evaluation v = ev.evaluate_params(p, Start::Best);
-        ev.report("effects");
+        ev.report(Stage::Effects);
         if (v.at_rest()) // a drape not at rest verifies nothing
             cands[static_cast<std::size_t>(top)].verified_delta_chi2 = (best.chi2 - v.chi2) / s2; // on the scale of the test
     }

@@ -65,7 +65,7 @@ void run_after_search(GridRunState& state, const AfterSearch& a, FitResult& kept
     state.options.progress = continued_progress(caller, prefix, before, false);
     try {
         if (a.from_flat) {
-            e.draw_from_flat(a.x, "from flat");
+            e.draw_from_flat(a.x, Stage::FromFlat);
             for (std::size_t r = 0; r < kept.records.size(); ++r) set_from_flat(kept.records[r], e, r);
         }
         if (a.effects) test_effects(e, a.vars, a.x, a.best, a.J_opt, kept);

@@ -44,7 +44,7 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
         scratch.dof = fit_dof(fitted.terms, n + measurement_params);
         scratch.correlation = Eigen::MatrixXd::Zero(n, n);
         const Eigen::MatrixXd J = ev.jacobian(x, fitted);
-        ev.report("shear");
+        ev.report(Stage::Shear);
         const double half = 1.96 * sigmas_from_jacobian(J, scratch)[static_cast<std::size_t>(is)];
         h.assessed = true;
         h.fitted_N_m = v.to_value(x[is]);
@@ -71,7 +71,7 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
         Eigen::VectorXd xh = x;
         xh[is] = target;
         const Evaluation eh = ev.evaluate(xh, Start::Best);
-        ev.report("shear");
+        ev.report(Stage::Shear);
         if (!eh.at_rest()) {
             std::snprintf(buf, sizeof buf,
                           "shear %.4g N/m (95 %%: %.4g..%.4g) is not constrained by the data, but the drapes at the typical %.4g N/m did not "
@@ -84,7 +84,7 @@ bool hold_unseen_shear(Evaluator& ev, const std::vector<FitVariable>& vars, cons
         Box box;
         for (const auto& w : vars) box.push_back({w.lower, w.upper});
         box[static_cast<std::size_t>(is)] = {target, target};
-        const bool cancelled = levenberg_marquardt(ev, vars, xh, box, budget, "shear", from);
+        const bool cancelled = levenberg_marquardt(ev, vars, xh, box, budget, Stage::Shear, from);
         h.held_chi2 = ev.best().chi2;
         h.delta_chi2 = (h.held_chi2 - h.fitted_chi2) / std::max(1.0, fitted.chi2 / scratch.dof);
         if (cancelled) {

@@ -6,6 +6,28 @@
 
 namespace drape::estimate {
 
+const char* to_string(Stage s)
+{
+    switch (s) {
+    case Stage::Start: return "start";
+    case Stage::Scan: return "scan";
+    case Stage::Global: return "global";
+    case Stage::Local: return "local";
+    case Stage::Mirror: return "mirror";
+    case Stage::Jacobian: return "jacobian";
+    case Stage::Shear: return "shear";
+    case Stage::Spread: return "spread";
+    case Stage::Uncertainty: return "uncertainty";
+    case Stage::FromFlat: return "from flat";
+    case Stage::FromFlatFoldCount: return "from flat, fold count";
+    case Stage::FromFlatCalibrated: return "from flat, calibrated";
+    case Stage::Effects: return "effects";
+    case Stage::PresetAsSaved: return "preset as saved";
+    case Stage::Done: return "done";
+    }
+    return "?";
+}
+
 std::string to_string(FoldBranch b) { return b == FoldBranch::Measured ? "measured" : b == FoldBranch::Mixed ? "mixed" : "random"; }
 
 FoldBranch parse_fold_branch(const std::string& name)

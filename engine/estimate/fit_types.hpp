@@ -21,8 +21,33 @@
 
 namespace drape::estimate {
 
+/// The stages of a fit, in the order they run (docs/estimate.md "Stages in order").
+enum class Stage {
+    Start,              ///< the start point's evaluation
+    Scan,               ///< a common bending's root on D
+    Global,             ///< CRS2 (--method nlopt)
+    Local,              ///< Levenberg-Marquardt, or BOBYQA
+    Mirror,             ///< the warp/weft-swapped point
+    Jacobian,           ///< re-solves of a Jacobian's columns the sensitivities do not serve
+    Shear,              ///< the shear hold's refit
+    Spread,             ///< extra seeds at the optimum
+    Uncertainty,        ///< the intervals' Jacobian
+    FromFlat,           ///< the kept result's drapes from flat
+    FromFlatFoldCount,  ///< a fold-count step of the flat calibration, from flat
+    FromFlatCalibrated, ///< a D step of the flat calibration, from flat
+    Effects,            ///< the candidate effects' tests
+    PresetAsSaved,      ///< the saved preset draped as the fit drapes
+    Done,               ///< the fit's last report
+};
+
+/// A stage's name in the progress line, the trace and report.json ("from flat, fold count").
+const char* to_string(Stage s);
+
 struct FitProgress {
-    std::string stage;      ///< "scan" | "global" | "local" | "mirror" | "spread" | "uncertainty" | "done"
+    /// The stage's name, after a later run's prefix ("tie ", "refine ") when it runs
+    /// on behalf of the first: "scan", "tie local", "from flat, calibrated", "done".
+    std::string stage;
+    Stage stage_id = Stage::Start; ///< the stage itself, without the prefix
     int evaluation = 0;     ///< objective evaluations so far (all stages)
     int planned = 0;        ///< upper bound on evaluations of the whole fit
     double best_chi2 = 0;   ///< best sum of squared whitened residuals so far

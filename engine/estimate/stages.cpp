@@ -17,7 +17,7 @@ namespace {
 struct NloptContext {
     Evaluator* ev;
     Start from;
-    std::string stage;
+    Stage stage;
     bool cancelled = false;
     std::exception_ptr error; ///< a simulation's error, rethrown after the stage
     nlopt::opt* opt = nullptr;
@@ -44,7 +44,7 @@ double nlopt_objective(const std::vector<double>& x, std::vector<double>& grad, 
 } // namespace
 
 bool run_stage(nlopt::algorithm alg, Evaluator& ev, const std::vector<FitVariable>& vars, Eigen::VectorXd& x, int maxeval,
-               Start from, const std::string& stage, std::uint64_t seed, const Box& box)
+               Start from, Stage stage, std::uint64_t seed, const Box& box)
 {
     const unsigned n = static_cast<unsigned>(vars.size());
     nlopt::opt opt(alg, n);
@@ -94,7 +94,7 @@ void scan_bending(Evaluator& ev, const std::vector<FitVariable>& vars, const std
     auto dc_error = [&](double c) { // mean simulated - measured D [points]
         for (int i : bend_vars) x[i] = c;
         // The fit's start is often the scan's first point: its cold drapes are the last evaluation.
-        if (!(used == 0 && ev.last_x().size() == x.size() && ev.last_x() == x)) ev.objective(x, Start::Cold, "scan");
+        if (!(used == 0 && ev.last_x().size() == x.size() && ev.last_x() == x)) ev.objective(x, Start::Cold, Stage::Scan);
         ++used;
         double err = 0;
         int cnt = 0;
@@ -173,7 +173,7 @@ void scan_bending(Evaluator& ev, const std::vector<FitVariable>& vars, const std
 }
 
 bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Eigen::VectorXd& x, const Box& box, int budget,
-                         const std::string& stage, Start from)
+                         Stage stage, Start from)
 {
     const int n = static_cast<int>(vars.size());
     std::vector<double> lo(static_cast<std::size_t>(n)), hi(static_cast<std::size_t>(n));
@@ -291,11 +291,11 @@ bool mirror_check(Evaluator& ev, const std::vector<FitVariable>& vars, const std
     if (std::abs(xs[bend_vars[0]] - xs[bend_vars[1]]) <= 0.05) return false;
     try {
         const double before = ev.best().chi2;
-        ev.objective(xs, from, "mirror");
+        ev.objective(xs, from, Stage::Mirror);
         if (ev.best().chi2 < before) { // the mirrored point became the best (at rest)
             x = xs;
-            if (lm) return levenberg_marquardt(ev, vars, x, {}, local, "local", from);
-            return run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, from, "local", seed);
+            if (lm) return levenberg_marquardt(ev, vars, x, {}, local, Stage::Local, from);
+            return run_stage(nlopt::LN_BOBYQA, ev, vars, x, local, from, Stage::Local, seed);
         }
     } catch (const CancelledFit&) {
         return true;

@@ -26,9 +26,9 @@ std::vector<double> coordinate_sigmas(Evaluator& ev, const std::vector<FitVariab
         xp[i] = std::min(x[i] + h, v.upper);
         xm[i] = std::max(x[i] - h, v.lower);
         const Evaluation ep = ev.evaluate(xp, Start::Best);
-        ev.report("uncertainty");
+        ev.report(Stage::Uncertainty);
         const Evaluation em = ev.evaluate(xm, Start::Best);
-        ev.report("uncertainty");
+        ev.report(Stage::Uncertainty);
         // Only drapes at rest are drapes of the model: a side that did not come to
         // rest is replaced by the optimum itself (a one-sided difference); with
         // neither side at rest the column stays 0 and the parameter reads as not

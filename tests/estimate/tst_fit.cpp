@@ -101,7 +101,7 @@ private slots:
             QVERIFY2(line.find("the preset from flat on the fit's grid") != std::string::npos && line.find(" simulations") != std::string::npos, line.c_str());
             QVERIFY(fit_progress_line(seen[first_after - 1]).find("evaluation") != std::string::npos);
             bool effects = false;
-            for (const auto& fp : seen) effects = effects || (fp.stage == "effects" && fp.starting);
+            for (const auto& fp : seen) effects = effects || (fp.stage_id == estimate::Stage::Effects && fp.starting);
             QVERIFY(effects);
         }
         // The fit's cold drapes start on the record's measured fold branch; the
@@ -588,7 +588,7 @@ private slots:
         o.cancel = &cancel;
         int calls = 0;
         o.progress = [&](const FitProgress& p) {
-            QVERIFY(p.evaluation <= p.planned || p.stage == "done");
+            QVERIFY(p.evaluation <= p.planned || p.stage_id == estimate::Stage::Done);
             if (++calls == 3) cancel = true;
         };
         const FitResult r = fit_fabric({rec}, o);
@@ -625,7 +625,7 @@ private slots:
             if (stages.empty() || stages.back() != p.stage) stages.push_back(p.stage);
             monotone = monotone && p.evaluation >= last_eval && p.evaluation <= p.planned;
             last_eval = p.evaluation;
-            dones += p.stage == "done";
+            dones += p.stage_id == estimate::Stage::Done;
         };
         const FitResult r = fit_fabric({rec}, o);
         QVERIFY(monotone);

@@ -106,7 +106,7 @@ private slots:
         base[Param::Shear] = 30;
         Evaluator ev(recs, o, vars, base); // holds references to recs and o
         const Eigen::VectorXd x = coords_of(vars, base);
-        ev.objective(x, Start::Cold, "test");
+        ev.objective(x, Start::Cold, Stage::Start);
         QVERIFY(ev.best().sims.front().front().status.converged());
         const Eigen::MatrixXd J = ev.jacobian(x, ev.best());
         QCOMPARE(J.rows(), static_cast<Eigen::Index>(ev.best().terms.size()));
@@ -142,13 +142,13 @@ private slots:
         const Eigen::VectorXd x = coords_of(vars, p);
         Evaluator ev(recs, o, vars, p);
         QVERIFY(ev.branch_of(0) != 0); // the fit grid's drapes from flat are drawn here, not by the spread
-        ev.draw_from_flat(x, "test", Evaluator::FlatDraw::FitGrid);
+        ev.draw_from_flat(x, Stage::FromFlat, Evaluator::FlatDraw::FitGrid);
         QCOMPARE(ev.simulations(), 2L);
         QVERIFY(!ev.cold_fine(0));
-        ev.draw_from_flat(x, "test");
+        ev.draw_from_flat(x, Stage::FromFlat);
         QCOMPARE(ev.simulations(), 3L); // the finer one only
         Evaluator fresh(recs, o, vars, p);
-        fresh.draw_from_flat(x, "test");
+        fresh.draw_from_flat(x, Stage::FromFlat);
         QCOMPARE(fresh.simulations(), 3L);
         auto same = [&](const Evaluator& a) {
             QVERIFY(a.cold_fine(0) && fresh.cold_fine(0));
@@ -161,11 +161,11 @@ private slots:
         same(ev);
         Eigen::VectorXd y = x;
         y[0] += 0.1;
-        ev.draw_from_flat(y, "test", Evaluator::FlatDraw::FitGrid);
+        ev.draw_from_flat(y, Stage::FromFlat, Evaluator::FlatDraw::FitGrid);
         QCOMPARE(ev.simulations(), 5L);
         QVERIFY(!ev.cold_fine(0)); // another point's
         QVERIFY(ev.cold_features()[0].drape_coefficient_percent != fresh.cold_features()[0].drape_coefficient_percent);
-        ev.draw_from_flat(x, "test"); // back: every drape kept
+        ev.draw_from_flat(x, Stage::FromFlat); // back: every drape kept
         QCOMPARE(ev.simulations(), 5L);
         same(ev);
     }
@@ -185,8 +185,8 @@ private slots:
         const auto vars = fit_variables(o.model);
         const Eigen::VectorXd x = coords_of(vars, p);
         Evaluator ev(recs, o, vars, p);
-        ev.draw_from_flat(x, "test", Evaluator::FlatDraw::FitGrid);
-        ev.draw_from_flat(x, "test");
+        ev.draw_from_flat(x, Stage::FromFlat, Evaluator::FlatDraw::FitGrid);
+        ev.draw_from_flat(x, Stage::FromFlat);
         QCOMPARE(ev.simulations(), 2L);
         QCOMPARE(ev.flat_levels_reused(), 1L);
         QVERIFY(ev.cold_fine(0) && ev.cold_fine(0)->at_rest);
@@ -249,7 +249,7 @@ private slots:
         Eigen::VectorXd x(static_cast<Eigen::Index>(vars.size()));
         for (std::size_t i = 0; i < vars.size(); ++i)
             x[static_cast<Eigen::Index>(i)] = vars[i].to_coord(std::max(base[vars[i].params.front()], 1e-300)); // as the fit stores a start
-        ev.objective(x, Start::Cold, "test");
+        ev.objective(x, Start::Cold, Stage::Start);
         QVERIFY(ev.best().at_rest());
         const Eigen::MatrixXd J = ev.jacobian(x, ev.best());
         const double h = 0.2 * (vars.back().upper - vars.back().lower);
@@ -291,11 +291,11 @@ private slots:
             return x;
         };
         const Eigen::VectorXd far = coords(4e-5), near = coords(1e-5);
-        ev.objective(far, Start::Cold, "test");
+        ev.objective(far, Start::Cold, Stage::Start);
         QVERIFY(ev.best().at_rest());
         const double chi2_far = ev.best().chi2;
         // Near the truth from the far point's rest state: cut off, not at rest.
-        const double returned = ev.objective(near, Start::Best, "test");
+        const double returned = ev.objective(near, Start::Best, Stage::Start);
         const double chi2_warm = ev.last().chi2;
         QVERIFY(!ev.last().at_rest());
         qInfo("chi2 at rest far from the truth %.1f, cut-off warm re-solve near it %.1f", chi2_far, chi2_warm);
@@ -304,7 +304,7 @@ private slots:
         QVERIFY(ev.best_x() == far);
         QVERIFY(returned >= chi2_far); // nor offered to an optimizer as an improvement
         // The same point from flat comes to rest and is taken.
-        const double chi2_cold = ev.objective(near, Start::Cold, "test");
+        const double chi2_cold = ev.objective(near, Start::Cold, Stage::Start);
         QVERIFY(ev.last().at_rest());
         QVERIFY(chi2_cold < chi2_far);
         QCOMPARE(ev.best().chi2, chi2_cold);
@@ -315,7 +315,7 @@ private slots:
         FitOptions few = o;
         few.rest.max_newton = 2;
         Evaluator cut(recs, few, vars, truth);
-        cut.objective(far, Start::Cold, "test");
+        cut.objective(far, Start::Cold, Stage::Start);
         QVERIFY(!cut.last().at_rest());
         QVERIFY(cut.best_x() == far);
         QCOMPARE(cut.best().chi2, cut.last().chi2);
@@ -338,7 +338,7 @@ private slots:
             FitOptions oi = o;
             oi.warm_max_newton = warm_max_newton;
             Evaluator ev(recs, oi, vars, truth);
-            ev.objective(x, Start::Cold, "test");
+            ev.objective(x, Start::Cold, Stage::Start);
             [&] { QVERIFY(ev.best().at_rest()); }();
             FitResult out;
             out.chi2 = ev.best().chi2;

@@ -90,7 +90,7 @@ public:
     /// fewer simulations.
     /// The drapes are announced and reported as `stage` (FitOptions::progress, the trace).
     enum class FlatDraw { All, FitGrid };
-    void draw_from_flat(const Eigen::VectorXd& x, const std::string& stage, FlatDraw which = FlatDraw::All);
+    void draw_from_flat(const Eigen::VectorXd& x, Stage stage, FlatDraw which = FlatDraw::All);
     /// Parameter points whose drapes from flat draw_from_flat keeps.
     static constexpr std::size_t kFlatMemoPoints = 6;
     /// Finer drapes from flat that started from a kept continuation level.
@@ -99,19 +99,19 @@ public:
     /// states. An evaluation with a drape not at rest never replaces a best point
     /// at rest, and returns no less than the best chi2 then (the optimizers do not
     /// centre on it).
-    double objective(const Eigen::VectorXd& x, Start from, const std::string& stage);
+    double objective(const Eigen::VectorXd& x, Start from, Stage stage);
     /// objective() with every drape re-solved from `states` ([record][seed], on
     /// this evaluator's grid and seeds: a tied refit continues the free fit's
     /// drapes) instead of the best point's; they stay the warm starts only if the
     /// evaluation becomes the best point. Throws ParameterError when the layout
     /// does not match the records and seeds.
-    double objective_from(const Eigen::VectorXd& x, const std::vector<std::vector<cloth::Positions>>& states, const std::string& stage);
+    double objective_from(const Eigen::VectorXd& x, const std::vector<std::vector<cloth::Positions>>& states, Stage stage);
     /// Calls FitOptions::progress with the state so far.
     /// Also appends the evaluation to the trace (once per evaluation).
-    void report(const std::string& stage);
+    void report(Stage stage);
     /// Calls FitOptions::progress for a stage that starts now (FitProgress::starting),
     /// without touching the trace: the drapes after the search take seconds each.
-    void announce(const std::string& stage);
+    void announce(Stage stage);
 
     /// Jacobian of the whitened residual terms of `e` (the evaluation at x, whose
     /// rest states it linearises) with respect to the search coordinates: rows in
@@ -223,7 +223,7 @@ private:
     /// One effect's signature columns from those features, on the rows it reaches.
     void signature_columns(EffectSignature& sig, const Evaluation& e, const FeatureTable& off, const FeatureTable& on) const;
 
-    void progress(const std::string& stage, bool starting);
+    void progress(Stage stage, bool starting);
     void draw_flat(const Eigen::VectorXd& x, FlatDraw which); ///< draw_from_flat's drapes
     /// One cold drape of record r at p (seed, on the branch or not), measured.
     /// Touches no member (the spread's drapes run on several threads).

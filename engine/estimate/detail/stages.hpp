@@ -21,7 +21,7 @@ using Box = std::vector<std::pair<double, double>>;
 /// inside the objective is rethrown here, not swallowed; returns true when the
 /// fit was cancelled.
 bool run_stage(nlopt::algorithm alg, Evaluator& ev, const std::vector<FitVariable>& vars, Eigen::VectorXd& x, int maxeval,
-               Start from, const std::string& stage, std::uint64_t seed, const Box& box = {});
+               Start from, Stage stage, std::uint64_t seed, const Box& box = {});
 
 /// Stage 0, "scan": D grows monotonically with bending stiffness, so a root
 /// search on a common bending (warp = weft) for the measured D finds the right
@@ -47,7 +47,7 @@ void scan_bending(Evaluator& ev, const std::vector<FitVariable>& vars, const std
 /// x at the best point; returns true when cancelled. `from`: where the trial
 /// drapes start (Start::Best, warm, by default; Cold with --cold-local).
 bool levenberg_marquardt(Evaluator& ev, const std::vector<FitVariable>& vars, Eigen::VectorXd& x, const Box& box, int budget,
-                         const std::string& stage, Start from = Start::Best);
+                         Stage stage, Start from = Start::Best);
 
 /// The profile of the bendings in a linearised chi2 |w + J dx|^2 (only the rows
 /// where `rows` is set): for a step of every bending coordinate (`bend`) by one

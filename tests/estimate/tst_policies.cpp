@@ -1,0 +1,185 @@
+// The fit's policies alone, on small synthetic results (no drape): the warp/weft
+// ratio's interval and the two-set-up rule of the bending tie
+// (docs/decisions/0010-bending-tie.md, 0029-priors-from-real-fabrics.md), the held
+// shear's row (0024-shear-hold.md), and how the runs of one fit add their work and
+// join their traces (fit_runs.cpp).
+#include "engine/estimate/detail/pipeline.hpp"
+#include "engine/estimate/fit.hpp"
+#include "engine/estimate/objective.hpp"
+
+#include <QTest>
+
+#include <cmath>
+#include <limits>
+
+using namespace drape;
+using namespace drape::estimate;
+using namespace drape::estimate::detail;
+using cloth::Param;
+
+namespace {
+
+/// A free baseline fit at log10 bendings (warp, weft), its covariance diagonal in
+/// decades^2 (the bendings' off-diagonal c_wf).
+FitResult free_fit(double log_warp, double log_weft, double var, double c_wf = 0.0)
+{
+    FitResult r;
+    r.variables = fit_variables(ModelVariant::Baseline);
+    const int n = static_cast<int>(r.variables.size());
+    r.best_coords = Eigen::VectorXd::Zero(n);
+    r.covariance = Eigen::MatrixXd::Identity(n, n) * var;
+    const int w = sole_variable(r.variables, Param::BendWarp), f = sole_variable(r.variables, Param::BendWeft);
+    r.best_coords[w] = log_warp;
+    r.best_coords[f] = log_weft;
+    r.covariance(w, f) = r.covariance(f, w) = c_wf;
+    for (Param q : {Param::BendWarp, Param::BendWeft}) {
+        ParamEstimate e;
+        e.id = q;
+        e.role = "fitted";
+        e.sigma_coord = std::sqrt(var);
+        r.estimates.push_back(e);
+    }
+    return r;
+}
+
+} // namespace
+
+class TestPolicies : public QObject {
+    Q_OBJECT
+private slots:
+    void ratioAndItsInterval()
+    {
+        // warp / weft = 10^0.6 = 3.98; the difference's variance 0.01 + 0.01 - 2 * 0.005 = 0.01.
+        FitResult r = free_fit(-4.4, -5.0, 0.01, 0.005);
+        assess_anisotropy(r);
+        const auto& a = r.anisotropy;
+        QVERIFY(a.assessed);
+        QVERIFY(std::abs(a.ratio - std::pow(10.0, 0.6)) < 1e-12);
+        QVERIFY(std::abs(a.ratio_lower95 - std::pow(10.0, 0.6 - 1.96 * 0.1)) < 1e-12);
+        QVERIFY(std::abs(a.ratio_upper95 - std::pow(10.0, 0.6 + 1.96 * 0.1)) < 1e-12);
+        QVERIFY(a.separated);
+        // The same ratio with a wide interval: not separated from 1.
+        FitResult wide = free_fit(-4.4, -5.0, 0.2);
+        assess_anisotropy(wide);
+        QVERIFY(!wide.anisotropy.separated);
+    }
+
+    void aBendingTheDataDoNotSeeIsNotSeparated()
+    {
+        FitResult r = free_fit(-4.0, -5.0, 1e-4);
+        r.estimates.front().sigma_coord = std::numeric_limits<double>::infinity();
+        assess_anisotropy(r);
+        QVERIFY(r.anisotropy.assessed);
+        QVERIFY(!r.anisotropy.separated);
+        QCOMPARE(r.anisotropy.ratio_lower95, 0.0);
+        QVERIFY(std::isinf(r.anisotropy.ratio_upper95));
+    }
+
+    void aTiedFitIsNotAssessed()
+    {
+        FitResult r;
+        r.variables = fit_variables(ModelVariant::Baseline, true);
+        r.best_coords = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(r.variables.size()));
+        assess_anisotropy(r);
+        QVERIFY(!r.anisotropy.assessed);
+    }
+
+    void aRatioBeyondTheTypicalNeedsTwoSetups()
+    {
+        const FitOptions o = drape_fit_defaults();
+        QCOMPARE(o.typical_bending_anisotropy, 3.0);
+        // 10:1, separated: one set-up confirming it is not enough; two are.
+        FitResult r = free_fit(-4.0, -5.0, 1e-3);
+        assess_anisotropy(r);
+        QVERIFY(r.anisotropy.separated);
+        r.anisotropy.setups = 1;
+        r.anisotropy.setups_confirming = 1;
+        QVERIFY(!anisotropy_stands(r, o));
+        r.anisotropy.setups = 2;
+        r.anisotropy.setups_confirming = 2;
+        QVERIFY(anisotropy_stands(r, o));
+        QVERIFY2(r.anisotropy.reason.find("2 of the records' 2") != std::string::npos, r.anisotropy.reason.c_str());
+        // Within the typical factor the fitted ratio stands, separated or not.
+        FitResult typical = free_fit(-4.7, -5.0, 1.0);
+        assess_anisotropy(typical);
+        QVERIFY(!typical.anisotropy.separated);
+        QVERIFY(anisotropy_stands(typical, o));
+        QVERIFY(typical.anisotropy.reason.find("kept as fitted") != std::string::npos);
+        // Beyond it and not separated: the tie decides, even with two set-ups.
+        FitResult unseparated = free_fit(-4.0, -5.0, 1.0);
+        assess_anisotropy(unseparated);
+        unseparated.anisotropy.setups_confirming = 2;
+        QVERIFY(!anisotropy_stands(unseparated, o));
+    }
+
+    void theHeldShearSaysSo()
+    {
+        FitResult r;
+        ParamEstimate e;
+        e.id = Param::Shear;
+        e.role = "fitted";
+        r.estimates.push_back(e);
+        mark_held_shear(r); // not held: nothing changes
+        QCOMPARE(r.estimates.front().role, std::string("fitted"));
+        r.shear_hold.held = true;
+        r.shear_hold.held_N_m = 56.2;
+        r.shear_hold.lower95_N_m = 1.0;
+        r.shear_hold.upper95_N_m = 900.0;
+        r.shear_hold.at_bound = true;
+        mark_held_shear(r);
+        const ParamEstimate& h = r.estimates.front();
+        QCOMPARE(h.role, std::string("held"));
+        QVERIFY(!h.constrained);
+        QVERIFY2(h.note.find("56.2 N/m") != std::string::npos && h.note.find("at a fit bound") != std::string::npos, h.note.c_str());
+    }
+
+    void runsAddTheirWorkAndJoinTheirTraces()
+    {
+        FitResult first, second;
+        first.evaluations = 10;
+        first.simulations = 40;
+        first.seconds_per_simulation = 1.0;
+        first.wall_seconds = 50;
+        first.factorisations = 7;
+        first.trace = {{1, "scan", 5, 5, {}, 2.0}, {10, "local", 3, 3, {}, 50.0}};
+        second.evaluations = 4;
+        second.simulations = 10;
+        second.seconds_per_simulation = 2.0;
+        second.wall_seconds = 30;
+        second.factorisations = 3;
+        second.trace = {{1, "local", 4, 4, {}, 5.0}, {4, "mirror", 2, 2, {}, 30.0}};
+        second.cancelled = true;
+        const FitResult kept = combine_runs(first, second, true, "tie ");
+        QCOMPARE(kept.evaluations, 14);
+        QCOMPARE(kept.simulations, 50L);
+        QCOMPARE(kept.factorisations, 10L);
+        QCOMPARE(kept.wall_seconds, 80.0);
+        // Seconds per simulation weighted by the simulations: (40 * 1 + 10 * 2) / 50.
+        QVERIFY(std::abs(kept.seconds_per_simulation - 1.2) < 1e-12);
+        QCOMPARE(int(kept.trace.size()), 4);
+        QCOMPARE(kept.trace[2].evaluation, 11);
+        QCOMPARE(kept.trace[2].stage, std::string("tie local"));
+        QCOMPARE(kept.trace[3].elapsed_s, 80.0);
+        QVERIFY(kept.cancelled); // the run was stopped, whichever result is kept
+        // Keeping the first: its own numbers, the second's work added.
+        const FitResult first_kept = combine_runs(first, second, false, "tie ");
+        QCOMPARE(first_kept.evaluations, 14);
+        QCOMPARE(first_kept.trace.front().stage, std::string("scan"));
+    }
+
+    void stageNames()
+    {
+        QCOMPARE(std::string(to_string(Stage::FromFlatFoldCount)), std::string("from flat, fold count"));
+        QCOMPARE(std::string(to_string(Stage::Done)), std::string("done"));
+        FitProgress p;
+        p.stage = "tie from flat";
+        p.stage_id = Stage::FromFlat;
+        p.search = false;
+        p.starting = true;
+        const std::string line = fit_progress_line(p);
+        QVERIFY2(line.find("tie from flat:") == 0 && line.find("the preset from flat") != std::string::npos, line.c_str());
+    }
+};
+
+QTEST_APPLESS_MAIN(TestPolicies)
+#include "tst_policies.moc"

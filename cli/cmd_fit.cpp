@@ -326,7 +326,7 @@ void print_fit_text(const Args& a, const estimate::FitResult& r, const std::vect
                     "fit with a finer --grid for a preset that carries over to other grids\n",
                     r.options.grid);
     std::printf("%d evaluations, %ld simulations (final grid %d), %.2f s per simulation, %.1f s in all%s\n", r.evaluations,
-                r.simulations, r.options.grid, r.seconds_per_simulation, r.wall_seconds,
+                r.simulations, r.options.grid, r.seconds_per_simulation(), r.wall_seconds,
                 r.cancelled ? " (CANCELLED: best point so far)" : "");
     std::printf("preset written to %s\n", out.c_str());
     if (!files.empty()) std::printf("report: %zu files in %s\n", files.size(), a.get("--report")->c_str());

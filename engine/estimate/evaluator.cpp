@@ -319,6 +319,20 @@ void Evaluator::report(Stage stage)
     progress(stage, false);
 }
 
+WorkCounters Evaluator::work() const
+{
+    WorkCounters w;
+    w.evaluations = m_evaluations;
+    w.simulations = m_simulations;
+    w.factorisations = m_factorisations;
+    w.back_substitutions = m_back_substitutions;
+    w.jacobian_jumps = m_jacobian_jumps;
+    w.jacobians = m_jacobians;
+    w.simulation_seconds = m_sim_seconds;
+    w.wall_seconds = elapsed_s();
+    return w;
+}
+
 void Evaluator::announce(Stage stage) { progress(stage, true); }
 
 void Evaluator::progress(Stage stage, bool starting)

@@ -51,17 +51,12 @@ struct AfterSearch {
 void run_after_search(GridRunState& state, const AfterSearch& a, FitResult& kept, const FitOptions& caller, const std::string& prefix)
 {
     Evaluator& e = *state.ev;
-    const int evals0 = e.evaluations();
-    const long sims0 = e.simulations(), fact0 = e.factorisations(), back0 = e.back_substitutions(), jumps0 = e.jacobian_jumps();
-    const int jac0 = e.jacobians();
-    const double sim_s0 = e.sim_seconds(), elapsed0 = e.elapsed_s();
+    const WorkCounters work0 = e.work();
     const std::size_t trace0 = e.trace().size();
     // Progress and trace continue the kept result's counts and time (this
     // run's evaluator may be behind it: a run after it was not kept).
     FitResult before;
-    before.evaluations = kept.evaluations - evals0;
-    before.simulations = kept.simulations - sims0;
-    before.wall_seconds = kept.wall_seconds - elapsed0;
+    static_cast<WorkCounters&>(before) = kept - work0;
     state.options.progress = continued_progress(caller, prefix, before, false);
     try {
         if (a.from_flat) {
@@ -81,16 +76,7 @@ void run_after_search(GridRunState& state, const AfterSearch& a, FitResult& kept
         t.stage = prefix + t.stage;
         kept.trace.push_back(std::move(t));
     }
-    FitResult tests;
-    tests.evaluations = e.evaluations() - evals0;
-    tests.simulations = e.simulations() - sims0;
-    tests.factorisations = e.factorisations() - fact0;
-    tests.back_substitutions = e.back_substitutions() - back0;
-    tests.jacobian_jumps = e.jacobian_jumps() - jumps0;
-    tests.jacobians = e.jacobians() - jac0;
-    tests.wall_seconds = e.elapsed_s() - elapsed0;
-    tests.seconds_per_simulation = tests.simulations ? (e.sim_seconds() - sim_s0) / tests.simulations : 0.0;
-    add_work(kept, tests);
+    kept += e.work() - work0;
 }
 
 } // namespace

@@ -66,7 +66,7 @@ void add_search(json& fit, const FitResult& r)
         trace.push_back({{"evaluation", t.evaluation}, {"stage", t.stage}, {"chi2", t.chi2}, {"best_chi2", t.best_chi2},
                          {"coords", t.coords}, {"elapsed_s", t.elapsed_s}});
     fit["trace"] = trace;
-    fit["seconds_per_simulation"] = r.seconds_per_simulation;
+    fit["seconds_per_simulation"] = r.seconds_per_simulation();
     fit["wall_seconds"] = r.wall_seconds;
     fit["cancelled"] = r.cancelled;
     if (r.refinement.from_grid > 0)

@@ -25,24 +25,12 @@ std::function<void(const FitProgress&)> continued_progress(const FitOptions& opt
     };
 }
 
-void add_work(FitResult& kept, const FitResult& other)
-{
-    const double sim_seconds = kept.seconds_per_simulation * kept.simulations + other.seconds_per_simulation * other.simulations;
-    kept.wall_seconds += other.wall_seconds;
-    kept.evaluations += other.evaluations;
-    kept.simulations += other.simulations;
-    kept.factorisations += other.factorisations;
-    kept.back_substitutions += other.back_substitutions;
-    kept.jacobian_jumps += other.jacobian_jumps;
-    kept.jacobians += other.jacobians;
-    kept.seconds_per_simulation = kept.simulations ? sim_seconds / kept.simulations : 0.0;
-}
 
 FitResult combine_runs(const FitResult& first, const FitResult& second, bool keep_second, const std::string& prefix)
 {
     FitResult kept = keep_second ? second : first;
     kept.options.progress = nullptr;
-    add_work(kept, keep_second ? first : second);
+    kept += static_cast<const WorkCounters&>(keep_second ? first : second);
     std::vector<FitTraceEntry> t = first.trace;
     const int offset = t.empty() ? 0 : t.back().evaluation;
     const double t_off = t.empty() ? 0.0 : t.back().elapsed_s;
@@ -59,14 +47,8 @@ FitResult combine_runs(const FitResult& first, const FitResult& second, bool kee
 
 void record_work(FitResult& out, const Evaluator& ev, Clock::time_point t0)
 {
-    out.evaluations = ev.evaluations();
-    out.simulations = ev.simulations();
-    out.factorisations = ev.factorisations();
-    out.back_substitutions = ev.back_substitutions();
-    out.jacobian_jumps = ev.jacobian_jumps();
-    out.jacobians = ev.jacobians();
+    static_cast<WorkCounters&>(out) = ev.work();
     out.trace = ev.trace();
-    out.seconds_per_simulation = ev.simulations() ? ev.sim_seconds() / ev.simulations() : 0.0;
     out.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
 }
 

@@ -354,7 +354,51 @@ struct FitTraceEntry {
     double elapsed_s = 0;
 };
 
-struct FitResult {
+/// The work a fit, one of its runs or one of its stages did. Runs add up (+); what
+/// a stage did is the difference of the evaluator's counts after and before it (-).
+struct WorkCounters {
+    int evaluations = 0;
+    long simulations = 0;
+    long factorisations = 0;      ///< Hessians factorised for sensitivities (one per drape linearised)
+    long back_substitutions = 0;  ///< sensitivity solves (one per parameter per factorisation)
+    /// Jacobian entries left at 0 because their feature jumped between the
+    /// difference's points (slopes at the step and at half of it disagree:
+    /// a selection that switched - an outermost crossing, a closing cut).
+    long jacobian_jumps = 0;
+    int jacobians = 0;            ///< Jacobians taken (scan slopes, Levenberg-Marquardt steps, intervals, effect tests)
+    double simulation_seconds = 0; ///< summed over the simulations (each thread's counted)
+    double wall_seconds = 0;
+    double seconds_per_simulation() const { return simulations ? simulation_seconds / simulations : 0.0; }
+    WorkCounters& operator+=(const WorkCounters& o)
+    {
+        evaluations += o.evaluations;
+        simulations += o.simulations;
+        factorisations += o.factorisations;
+        back_substitutions += o.back_substitutions;
+        jacobian_jumps += o.jacobian_jumps;
+        jacobians += o.jacobians;
+        simulation_seconds += o.simulation_seconds;
+        wall_seconds += o.wall_seconds;
+        return *this;
+    }
+    WorkCounters& operator-=(const WorkCounters& o)
+    {
+        evaluations -= o.evaluations;
+        simulations -= o.simulations;
+        factorisations -= o.factorisations;
+        back_substitutions -= o.back_substitutions;
+        jacobian_jumps -= o.jacobian_jumps;
+        jacobians -= o.jacobians;
+        simulation_seconds -= o.simulation_seconds;
+        wall_seconds -= o.wall_seconds;
+        return *this;
+    }
+    friend WorkCounters operator+(WorkCounters a, const WorkCounters& b) { return a += b; }
+    friend WorkCounters operator-(WorkCounters a, const WorkCounters& b) { return a -= b; }
+};
+
+/// A fit's result; its work (WorkCounters) is the whole fit's, every run's added.
+struct FitResult : WorkCounters {
     std::string name;                           ///< the preset's name (empty: the first record's id)
     std::string blas_kernel;                    ///< the BLAS kernels its drapes rounded with (cloth::blas_kernel)
     cloth::FabricParams params;                 ///< best fit (areal density/thickness of the first record)
@@ -368,18 +412,7 @@ struct FitResult {
     int dof = 0;
     ResidualAnalysis residual;
     std::vector<RecordFit> records;
-    int evaluations = 0;
-    long simulations = 0;
-    long factorisations = 0;      ///< Hessians factorised for sensitivities (one per drape linearised)
-    long back_substitutions = 0;  ///< sensitivity solves (one per parameter per factorisation)
-    /// Jacobian entries left at 0 because their feature jumped between the
-    /// difference's points (slopes at the step and at half of it disagree:
-    /// a selection that switched - an outermost crossing, a closing cut).
-    long jacobian_jumps = 0;
-    int jacobians = 0;            ///< Jacobians taken (scan slopes, Levenberg-Marquardt steps, intervals, effect tests)
     std::vector<FitTraceEntry> trace; ///< every evaluation, in order (a refit's follow the coarse fit's)
-    double seconds_per_simulation = 0;
-    double wall_seconds = 0;
     bool cancelled = false;
     /// A fitted bending's bending length is below the fit's mesh spacing: the
     /// preset is tied to the fit's grid (predictions keep the mesh density).

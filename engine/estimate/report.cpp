@@ -65,7 +65,7 @@ void header_section(std::ostringstream& md, const FitResult& r, const std::strin
     md << "# Fit report: " << r.name << "\n\n";
     md << "Model `" << to_string(r.options.model) << "`, grid " << r.options.grid << ", seed " << r.options.seed << ", "
        << r.options.seeds_per_evaluation << " perturbation seeds per evaluation. " << r.evaluations << " evaluations, "
-       << r.simulations << " simulations, " << num(r.seconds_per_simulation, "%.2f") << " s per simulation, "
+       << r.simulations << " simulations, " << num(r.seconds_per_simulation(), "%.2f") << " s per simulation, "
        << num(r.wall_seconds, "%.0f") << " s in all" << (r.cancelled ? " (**cancelled**: best point so far)" : "") << ".\n\n";
     if (r.refinement.from_grid > 0)
         md << "**Grid refinement**: " << r.refinement.reason

@@ -76,7 +76,7 @@ private slots:
         o.progress = [&](const FitProgress& fp) { seen.push_back(fp); };
         const FitResult r = fit_fabric({rec}, o);
         QVERIFY(!r.cancelled);
-        QVERIFY(r.simulations > 0 && r.seconds_per_simulation > 0);
+        QVERIFY(r.simulations > 0 && r.seconds_per_simulation() > 0);
         {
             QVERIFY(seen.size() > 3);
             QCOMPARE(seen.back().stage, std::string("done"));

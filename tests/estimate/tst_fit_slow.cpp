@@ -93,7 +93,7 @@ private slots:
             }
             seeds_inside += all ? 1 : 0;
             qInfo("  D error %+.2f, node error %+.2f, %ld simulations, %.2f s each; %s%s", r.records[0].dc_error_percent, r.records[0].node_error,
-                  r.simulations, r.seconds_per_simulation, r.anisotropy.reason.c_str(), r.grid_bound ? "; grid-bound" : "");
+                  r.simulations, r.seconds_per_simulation(), r.anisotropy.reason.c_str(), r.grid_bound ? "; grid-bound" : "");
             if (r.shear_hold.assessed) qInfo("  %s", r.shear_hold.reason.c_str());
             good_fits += (std::abs(r.records[0].dc_error_percent) < 2.0 && std::abs(r.records[0].node_error) <= 1.0) ? 1 : 0;
             if (seed == 11) first = r;

@@ -138,13 +138,13 @@ private slots:
         FitResult first, second;
         first.evaluations = 10;
         first.simulations = 40;
-        first.seconds_per_simulation = 1.0;
+        first.simulation_seconds = 40.0;
         first.wall_seconds = 50;
         first.factorisations = 7;
         first.trace = {{1, "scan", 5, 5, {}, 2.0}, {10, "local", 3, 3, {}, 50.0}};
         second.evaluations = 4;
         second.simulations = 10;
-        second.seconds_per_simulation = 2.0;
+        second.simulation_seconds = 20.0;
         second.wall_seconds = 30;
         second.factorisations = 3;
         second.trace = {{1, "local", 4, 4, {}, 5.0}, {4, "mirror", 2, 2, {}, 30.0}};
@@ -155,7 +155,13 @@ private slots:
         QCOMPARE(kept.factorisations, 10L);
         QCOMPARE(kept.wall_seconds, 80.0);
         // Seconds per simulation weighted by the simulations: (40 * 1 + 10 * 2) / 50.
-        QVERIFY(std::abs(kept.seconds_per_simulation - 1.2) < 1e-12);
+        QVERIFY(std::abs(kept.seconds_per_simulation() - 1.2) < 1e-12);
+        // What one stage did is the difference of two snapshots.
+        const WorkCounters stage = static_cast<const WorkCounters&>(kept) - first;
+        QCOMPARE(stage.evaluations, 4);
+        QCOMPARE(stage.simulations, 10L);
+        QCOMPARE(stage.factorisations, 3L);
+        QCOMPARE(stage.seconds_per_simulation(), 2.0);
         QCOMPARE(int(kept.trace.size()), 4);
         QCOMPARE(kept.trace[2].evaluation, 11);
         QCOMPARE(kept.trace[2].stage, std::string("tie local"));

@@ -154,6 +154,9 @@ public:
     long simulations() const { return m_simulations; }
     int evaluations() const { return m_evaluations; }
     double sim_seconds() const { return m_sim_seconds; }
+    /// Its counts so far (wall_seconds: since it was made); a stage's work is the
+    /// difference of two of them.
+    WorkCounters work() const;
     /// Wall time since the evaluator was made [s] (the progress's and trace's clock).
     double elapsed_s() const;
     long unconverged() const { return m_unconverged; }

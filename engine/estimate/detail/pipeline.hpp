@@ -35,9 +35,6 @@ inline constexpr int kHoldEvaluations = 2;
 std::function<void(const FitProgress&)> continued_progress(const FitOptions& options, std::string prefix, const FitResult& before,
                                                            bool search = true);
 
-/// Adds the work of `other` (another run of the fit, or the effect tests run
-/// after `kept`) to `kept`: its counts, wall time and simulation time.
-void add_work(FitResult& kept, const FitResult& other);
 
 /// `kept` (one of two fits of the same records, run one after the other) with the
 /// counts and time of both and one trace in the order they ran, the second's

@@ -133,8 +133,8 @@ Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
             out = cloth::simulate_drape(pr, setup, ro, m_opt.model_options);
         }
     });
-    m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
-    m_simulations += static_cast<long>(R * S);
+    m_work.simulation_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
+    m_work.simulations += static_cast<long>(R * S);
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
 
     for (int r = 0; r < R; ++r) {
@@ -167,7 +167,7 @@ Evaluation Evaluator::evaluate_params(const cloth::FabricParams& p, Start from)
             for (std::size_t i = 0; i < e.terms.size(); ++i) e.terms[i].sigma = m_opt.term_sigmas[i];
     }
     e.chi2 = comparable ? chi_square(e.terms) : std::numeric_limits<double>::infinity();
-    ++m_evaluations;
+    ++m_work.evaluations;
     m_last = e;
     return e;
 }
@@ -200,8 +200,8 @@ void Evaluator::calibrate_spread(const Eigen::VectorXd& x, int extra)
     const auto t0 = Clock::now();
     const int nthreads = std::clamp(m_opt.parallel_seeds, 1, std::max(1, static_cast<int>(jobs.size())));
     parallel_for(jobs.size(), nthreads, [&](std::size_t j) { drawn[j] = drape_cold(jobs[j].r, p, jobs[j].seed, true); });
-    m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
-    m_simulations += static_cast<long>(jobs.size());
+    m_work.simulation_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
+    m_work.simulations += static_cast<long>(jobs.size());
     std::size_t next = 0;
     for (int r = 0; r < R; ++r) {
         const auto& meas = m_meas[static_cast<std::size_t>(r)];
@@ -305,10 +305,10 @@ double Evaluator::elapsed_s() const { return std::chrono::duration<double>(Clock
 
 void Evaluator::report(Stage stage)
 {
-    if (m_evaluations > m_traced) {
-        m_traced = m_evaluations;
+    if (m_work.evaluations > m_traced) {
+        m_traced = m_work.evaluations;
         FitTraceEntry t;
-        t.evaluation = m_evaluations;
+        t.evaluation = m_work.evaluations;
         t.stage = to_string(stage);
         t.chi2 = m_last.chi2;
         t.best_chi2 = m_best.chi2;
@@ -321,14 +321,7 @@ void Evaluator::report(Stage stage)
 
 WorkCounters Evaluator::work() const
 {
-    WorkCounters w;
-    w.evaluations = m_evaluations;
-    w.simulations = m_simulations;
-    w.factorisations = m_factorisations;
-    w.back_substitutions = m_back_substitutions;
-    w.jacobian_jumps = m_jacobian_jumps;
-    w.jacobians = m_jacobians;
-    w.simulation_seconds = m_sim_seconds;
+    WorkCounters w = m_work;
     w.wall_seconds = elapsed_s();
     return w;
 }
@@ -342,10 +335,10 @@ void Evaluator::progress(Stage stage, bool starting)
     p.stage = to_string(stage);
     p.stage_id = stage;
     p.starting = starting;
-    p.evaluation = m_evaluations;
+    p.evaluation = m_work.evaluations;
     p.planned = m_planned;
     p.best_chi2 = m_best.chi2;
-    p.simulations = m_simulations;
+    p.simulations = m_work.simulations;
     p.unconverged = m_unconverged;
     p.elapsed_s = std::chrono::duration<double>(Clock::now() - m_t0).count();
     p.last_coords.assign(m_last_x.data(), m_last_x.data() + m_last_x.size());

@@ -107,8 +107,8 @@ void Evaluator::draw_flat(const Eigen::VectorXd& x, FlatDraw which)
         m.drape.features = drape_cold(job.r, p, job.seed, false, job.grid, &ok, job.start, &m.levels);
         m.drape.at_rest = ok;
     });
-    if (!todo.empty()) m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
-    m_simulations += static_cast<long>(todo.size());
+    if (!todo.empty()) m_work.simulation_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
+    m_work.simulations += static_cast<long>(todo.size());
     for (int r = 0; r < R; ++r) {
         std::vector<DrapeFeatures> cold;
         for (std::size_t j = 0; j < jobs.size(); ++j) {

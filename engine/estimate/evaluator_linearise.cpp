@@ -250,8 +250,8 @@ bool Evaluator::sensitivity_features(const cloth::FabricParams& p, const Evaluat
     } catch (const drape::Error&) {
         return false; // not a stable rest state: differences of re-solves
     }
-    m_factorisations += R * S;
-    m_back_substitutions += static_cast<long>(R * S) * static_cast<long>(qs.size());
+    m_work.factorisations += R * S;
+    m_work.back_substitutions += static_cast<long>(R * S) * static_cast<long>(qs.size());
     return true;
 }
 
@@ -287,7 +287,7 @@ void Evaluator::exact_column(int i, const Evaluation& e, const FeatureTable& fea
             // The floor: 0.05 sigma per thousand steps (a decade of a log
             // coordinate, the range of a linear one).
             if (!slopes_agree(full, half, 0.05 * 1e-3 / d)) {
-                ++m_jacobian_jumps;
+                ++m_work.jacobian_jumps;
                 continue;
             }
             J(static_cast<Eigen::Index>(row), i) = full;
@@ -326,7 +326,7 @@ void Evaluator::resolved_column(int i, const Eigen::VectorXd& x, const Evaluatio
 Eigen::MatrixXd Evaluator::jacobian(const Eigen::VectorXd& x, const Evaluation& e, bool resolves)
 {
     if (m_opt.cancel && m_opt.cancel->load()) throw CancelledFit{};
-    ++m_jacobians;
+    ++m_work.jacobians;
     const cloth::FabricParams p = params_at(x);
     const int n = static_cast<int>(m_vars.size());
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(e.terms.size()), n);
@@ -466,14 +466,14 @@ void Evaluator::signature_features(const cloth::FabricParams& p, const Evaluatio
         std::lock_guard lock(count_mutex);
         resolves += my_resolves;
     });
-    m_simulations += resolves;
-    m_sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
+    m_work.simulations += resolves;
+    m_work.simulation_seconds += std::chrono::duration<double>(Clock::now() - t0).count() * nthreads;
     long specimen_columns = 0;
     for (std::size_t k = 0; k < lib.size(); ++k)
         if (out[k].available && lib[k].kind == EffectKind::Specimen) specimen_columns += 2;
     if ((!sens_params.empty() || specimen_columns > 0) && !parameter_failed) {
-        m_factorisations += R * S;
-        m_back_substitutions += static_cast<long>(R * S) * (static_cast<long>(sens_params.size()) + specimen_columns);
+        m_work.factorisations += R * S;
+        m_work.back_substitutions += static_cast<long>(R * S) * (static_cast<long>(sens_params.size()) + specimen_columns);
     }
     for (std::size_t k = 0; k < lib.size(); ++k) {
         if (!out[k].available) continue;

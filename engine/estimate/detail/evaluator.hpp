@@ -133,12 +133,12 @@ public:
     std::vector<EffectSignature> effect_signatures(const Eigen::VectorXd& x, const Evaluation& e);
     /// The evaluation at full parameters p (not a search point; not the best).
     Evaluation evaluate_params(const cloth::FabricParams& p, Start from);
-    long factorisations() const { return m_factorisations; }
-    int jacobians() const { return m_jacobians; }
-    long back_substitutions() const { return m_back_substitutions; }
+    long factorisations() const { return m_work.factorisations; }
+    int jacobians() const { return m_work.jacobians; }
+    long back_substitutions() const { return m_work.back_substitutions; }
     /// Jacobian entries left at 0 because the feature jumped between the
     /// difference's points (its slopes at the step and at half of it disagree).
-    long jacobian_jumps() const { return m_jacobian_jumps; }
+    long jacobian_jumps() const { return m_work.jacobian_jumps; }
 
     const Evaluation& last() const { return m_last; }
     const Eigen::VectorXd& last_x() const { return m_last_x; }
@@ -151,9 +151,9 @@ public:
     /// restores it exactly.
     void set_best(const Evaluation& e, const Eigen::VectorXd& x);
     bool spread_calibrated() const { return m_spread_calibrated; }
-    long simulations() const { return m_simulations; }
-    int evaluations() const { return m_evaluations; }
-    double sim_seconds() const { return m_sim_seconds; }
+    long simulations() const { return m_work.simulations; }
+    int evaluations() const { return m_work.evaluations; }
+    double sim_seconds() const { return m_work.simulation_seconds; }
     /// Its counts so far (wall_seconds: since it was made); a stage's work is the
     /// difference of two of them.
     WorkCounters work() const;
@@ -264,15 +264,11 @@ private:
     Eigen::VectorXd m_best_x;
     std::vector<std::vector<cloth::Positions>> m_states;
     bool m_have_states = false;
-    long m_simulations = 0, m_unconverged = 0;
-    long m_factorisations = 0, m_back_substitutions = 0;
-    long m_jacobian_jumps = 0;
-    int m_jacobians = 0;
+    WorkCounters m_work; ///< its counts (wall_seconds: see work())
+    long m_unconverged = 0;
     std::vector<FitTraceEntry> m_trace;
     int m_traced = 0; ///< evaluations already in m_trace
-    int m_evaluations = 0;
     int m_planned = 0;
-    double m_sim_seconds = 0;
     Clock::time_point m_t0;
 };
 

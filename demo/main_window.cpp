@@ -23,6 +23,7 @@
 #include <QPainter>
 #include <QProgressBar>
 #include <QPushButton>
+#include <QSignalBlocker>
 #include <QSplitter>
 #include <QStatusBar>
 #include <QTimer>
@@ -338,6 +339,8 @@ void MainWindow::reloadFabrics(const QString& select)
     }
     m_browser->setSortingEnabled(true);
     filterBrowser(m_search->text());
+    // Refilled without a scene per intermediate index: the view shows the choice once, below.
+    const QSignalBlocker blockA(m_fabricA), blockB(m_fabricB);
     for (QComboBox* box : {m_fabricA, m_fabricB}) {
         const QString keep = select.isEmpty() ? box->currentText() : select;
         box->clear();
@@ -349,6 +352,7 @@ void MainWindow::reloadFabrics(const QString& select)
     if (m_fabricB->count() > 1 && m_fabricB->currentIndex() == m_fabricA->currentIndex() && select.isEmpty())
         m_fabricB->setCurrentIndex(1);
     if (!warnings.empty()) showMessage(QString::fromStdString(warnings.front()));
+    showChoices();
 }
 
 int MainWindow::findFabric(const QString& text) const

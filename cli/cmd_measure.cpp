@@ -245,8 +245,7 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
     if (!fs::is_directory(folder, ec)) throw FileError(folder.string() + ": --batch needs a folder of photos");
     std::vector<fs::path> photos;
     for (const auto& e : fs::directory_iterator(folder, ec)) {
-        std::string ext = e.path().extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        const std::string ext = ascii_lower(e.path().extension().string());
         if (e.is_regular_file() && (ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".tif" || ext == ".tiff" || ext == ".bmp"))
             photos.push_back(e.path());
     }
@@ -255,8 +254,7 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
     const auto table = a.get("--table");
     if (!table) throw cli::UsageError("--batch needs --table OUT.csv or OUT.json");
     // The table is what its name says: CSV or JSON, nothing written under another name.
-    std::string table_ext = fs::path(*table).extension().string();
-    std::transform(table_ext.begin(), table_ext.end(), table_ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string table_ext = ascii_lower(fs::path(*table).extension().string());
     if (table_ext != ".csv" && table_ext != ".json")
         throw cli::UsageError("--table " + printable(*table) + ": the table is written as CSV (.csv) or JSON (.json), not '" +
                               printable(table_ext.empty() ? std::string("no extension") : table_ext) + "'");

@@ -2,6 +2,7 @@
 
 #include "engine/cloth/model.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 
 #include <Eigen/Geometry>
@@ -28,7 +29,6 @@ cloth::ModelOptions garment_model_options(const fabric::FabricPreset& fabric)
     return o;
 }
 
-constexpr double kPi = std::numbers::pi;
 
 /// Length of the closed curve r(theta) = rc + a (1 + sin(k theta)) [m].
 double fluted_length(double rc, double a, int k)
@@ -36,9 +36,9 @@ double fluted_length(double rc, double a, int k)
     const int n = 720;
     double len = 0;
     for (int i = 0; i < n; ++i) {
-        const double th = 2 * kPi * (i + 0.5) / n;
+        const double th = 2 * std::numbers::pi * (i + 0.5) / n;
         const double r = rc + a * (1 + std::sin(k * th)), dr = a * k * std::cos(k * th);
-        len += std::sqrt(r * r + dr * dr) * (2 * kPi / n);
+        len += std::sqrt(r * r + dr * dr) * (2 * std::numbers::pi / n);
     }
     return len;
 }
@@ -57,7 +57,7 @@ Panel make_annulus(const Eigen::Vector2d& centre, double z, double inner_radius,
     const int n = segments * (rings + 1);
     p.X.resize(n, 3);
     const double q = std::pow(outer_radius / inner_radius, 1.0 / rings);
-    const double dth = 2 * kPi / segments;
+    const double dth = 2 * std::numbers::pi / segments;
     for (int k = 0; k <= rings; ++k) {
         const double r = inner_radius * std::pow(q, k);
         // Every other ring turned by half a segment: near-equilateral triangles.
@@ -113,9 +113,9 @@ std::string to_string(Garment g)
 }
 
 namespace {
-bool is_pin_name(std::string n)
+bool is_pin_name(const std::string& name)
 {
-    std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string n = ascii_lower(name);
     return n.rfind("pin", 0) == 0 || n.rfind("waist", 0) == 0;
 }
 } // namespace
@@ -223,7 +223,7 @@ cloth::Positions hang_skirt(const Mannequin& m, const Panel& p, const Eigen::Vec
         auto hit = std::find_if(ring.begin(), ring.end(), [&](const auto& r) { return std::abs(r.first - rho) < 1e-9; });
         if (hit != ring.end()) a = hit->second;
         else {
-            const double want = 2 * kPi * rho;
+            const double want = 2 * std::numbers::pi * rho;
             if (fluted_length(rc, 0, k) < want) {
                 double lo = 0, hi = rho;
                 for (int it = 0; it < 60; ++it) {
@@ -257,7 +257,7 @@ Scene make_skirt_scene(std::shared_ptr<const Mannequin> m, const fabric::FabricP
     const double r_out = r_in + opt.length;
     int rings = opt.rings;
     if (rings <= 0)
-        rings = std::max(2, int(std::ceil(std::log(r_out / r_in) / std::log(1 + 2 * kPi / opt.segments))));
+        rings = std::max(2, int(std::ceil(std::log(r_out / r_in) / std::log(1 + 2 * std::numbers::pi / opt.segments))));
     Panel p = make_annulus(s.waist.centre, zband, r_in, r_out, opt.segments, rings);
     const cloth::FabricParams& fp = fabric.params; // a seed preset's continuum equivalent drapes any mesh
     s.fabric_name = fabric.name;
@@ -295,7 +295,7 @@ Scene make_tablecloth_scene(const fabric::FabricPreset& fabric, const Table& tab
     std::vector<double> amp, phase;
     for (int k = 2; k <= 8; ++k) {
         amp.push_back(U(rng));
-        phase.push_back(2 * kPi * U(rng));
+        phase.push_back(2 * std::numbers::pi * U(rng));
     }
     const double lift = 2e-3; // [m]
     for (int i = 0; i < s.system->vertex_count(); ++i) {

@@ -47,12 +47,6 @@ namespace drape::importers {
 
 namespace {
 
-std::string lower(std::string s)
-{
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return s;
-}
-
 double unit_metres(Unit u)
 {
     switch (u) {
@@ -209,7 +203,7 @@ void grow(AlignedBox& b, const AlignedBox& o, bool first)
 
 Unit parse_unit(const std::string& text, const std::string& what)
 {
-    const std::string t = lower(text);
+    const std::string t = ascii_lower(text);
     if (t == "mm") return Unit::Millimetre;
     if (t == "cm") return Unit::Centimetre;
     if (t == "m") return Unit::Metre;
@@ -219,7 +213,7 @@ Unit parse_unit(const std::string& text, const std::string& what)
 
 UpAxis parse_up_axis(const std::string& text, const std::string& what)
 {
-    const std::string t = lower(text);
+    const std::string t = ascii_lower(text);
     if (t == "y") return UpAxis::Y;
     if (t == "z") return UpAxis::Z;
     if (t == "file" || t == "auto") return UpAxis::File;
@@ -721,7 +715,7 @@ void check_header(const std::string& path, const std::string& ext, std::uintmax_
     // "ply" at the start whatever follows it, NUL bytes included).
     std::size_t first = 0;
     while (first < head.size() && std::isspace(static_cast<unsigned char>(head[first]))) ++first;
-    const bool ply = ext == "ply" || lower(head.substr(first, 3)) == "ply";
+    const bool ply = ext == "ply" || ascii_lower(head.substr(first, 3)) == "ply";
     if (ply) check_ply(path, size, check);
 }
 
@@ -1075,7 +1069,7 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
         std::ifstream probe(path, std::ios::binary);
         if (!probe) throw FileError(path + ": cannot open the file for reading");
     }
-    std::string ext = lower(fs::path(path).extension().string());
+    std::string ext = ascii_lower(fs::path(path).extension().string());
     if (!ext.empty()) ext.erase(0, 1);
     if (!taken(ext))
         throw FileError(path + ": '." + printable(ext, 20) + "' is not a mesh format this import takes (" + kTakenFormats + ")");
@@ -1090,7 +1084,7 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
         const aiImporterDesc* d = importer.GetImporterInfo(i);
         std::istringstream exts(d && d->mFileExtensions ? d->mFileExtensions : "");
         bool keep = false;
-        for (std::string e; exts >> e;) keep = keep || taken(lower(e));
+        for (std::string e; exts >> e;) keep = keep || taken(ascii_lower(e));
         if (keep) continue;
         Assimp::BaseImporter* reader = importer.GetImporter(i);
         if (importer.UnregisterLoader(reader) == AI_SUCCESS) delete reader; // unregistering hands it back
@@ -1114,7 +1108,7 @@ ImportedScene import_scene(const std::string& path, const ImportOptions& opt)
     out.path = path;
     aiString fmt;
     if (meta_get(scene, "SourceAsset_Format", fmt)) out.format = fmt.C_Str();
-    const std::string f = lower(out.format);
+    const std::string f = ascii_lower(out.format);
     const bool is_fbx = f.find("fbx") != std::string::npos;
     const bool is_collada = f.find("collada") != std::string::npos;
     const bool is_gltf = f.find("gltf") != std::string::npos;

@@ -9,7 +9,7 @@ bash cmake/setup-deps.sh
 # core in CI for that reason), so it is asked without it, once.
 jobs=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
 WERROR=OFF; [ "${CI:-}" = "true" ] && WERROR=ON
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DDRAPE_WERROR=$WERROR >/dev/null
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_UNITY_BUILD=ON -DDRAPE_WERROR=$WERROR >/dev/null
 # The slow tests and the benchmarks are outside `all` (CI runs the unit label
 # only); `all` builds them too, so they never rot unbuilt for long.
 if [ "${1:-}" = "all" ]; then

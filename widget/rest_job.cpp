@@ -14,7 +14,7 @@
 namespace drape::widget {
 
 namespace {
-constexpr qint64 kFrameIntervalMs = 300; // a static solve moves in steps: a few frames a second show it
+constexpr qint64 kRestFrameIntervalMs = 300; // a static solve moves in steps: a few frames a second show it
 } // namespace
 
 QString describeSolve(const cloth::SolverStatus& st)
@@ -63,7 +63,7 @@ bool RestJob::start(const QString& name, cloth::ClothSystem& system, cloth::Rest
             if (r0 > target && st.residual > 0)
                 frac = std::clamp(std::log(r0 / st.residual) / std::log(r0 / target), 0.0, 1.0);
             ctx.report(frac, QStringLiteral("Newton iteration %1, residual %2").arg(st.newton_iterations).arg(st.residual, 0, 'g', 3));
-            if (since.elapsed() > kFrameIntervalMs) {
+            if (since.elapsed() > kRestFrameIntervalMs) {
                 since.restart();
                 PackedVertices frame = packVertices(sys->x, F, tex);
                 QMetaObject::invokeMethod(

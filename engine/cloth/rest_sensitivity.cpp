@@ -1,4 +1,5 @@
 #include "engine/cloth/rest_sensitivity.hpp"
+#include "engine/cloth/solver_detail.hpp"
 
 #include "engine/cloth/sparse_cholesky.hpp"
 #include "engine/core/error.hpp"
@@ -17,7 +18,7 @@ Positions axis_turn(const Positions& x)
 
 namespace {
 
-Eigen::Map<const Eigen::VectorXd> flat(const Positions& p) { return {p.data(), p.size()}; }
+using detail::flat;
 
 /// The force at fixed positions of the drape scene built with parameters `p`.
 Positions forces_with(const Material& p, const DrapeSetup& setup, const ModelOptions& mopt, const Positions& x)

@@ -145,6 +145,8 @@ BendLaw bend_law(double s2, double quartic, double beta, double rho2, double pea
     return l;
 }
 
+} // namespace
+
 /// One edge in contact at an interior point: p(t) = (1 - t) x_a + t x_b is the
 /// point of the edge deepest in the offset surface (phi(p(t)) minimal in t).
 struct EdgeContact {
@@ -165,6 +167,8 @@ struct EdgeContact {
     Vec3 xa, xb;      ///< the end points [m]
     double w() const { return sa * sb; }
 };
+
+namespace {
 
 /// The edge contact fades out as the edge's deepest point comes up to the depth
 /// of one of its end points (which the vertex contact then covers): the energy

@@ -264,6 +264,14 @@ std::optional<std::string> try_normalize_name(std::string_view name, std::size_t
     return r;
 }
 
+std::string ascii_lower(std::string_view s)
+{
+    std::string out(s);
+    for (char& c : out)
+        if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    return out;
+}
+
 std::string printable(std::string_view s, std::size_t max_chars)
 {
     std::string out;

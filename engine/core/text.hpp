@@ -41,4 +41,7 @@ std::optional<std::string> try_normalize_name(std::string_view name, std::size_t
 /// `max_chars` characters with "...". Never throws.
 std::string printable(std::string_view s, std::size_t max_chars = 120);
 
+/// `s` with the ASCII letters A-Z lowered (file extensions, keywords); other bytes as they are.
+std::string ascii_lower(std::string_view s);
+
 } // namespace drape

@@ -68,7 +68,7 @@ double nice_step(double range, int target)
     return 10 * p;
 }
 
-std::string fmt(double v, double step)
+std::string tick_label(double v, double step)
 {
     char buf[32];
     // Enough decimals to print every multiple of the step exactly (2.5 -> 1 decimal).
@@ -147,13 +147,13 @@ void Plot::save(const std::string& path) const
     const double xs = nice_step(x1 - x0, 8), ys = nice_step(y1 - y0, 6);
     for (double v = std::ceil(x0 / xs) * xs; v <= x1 + 1e-12; v += xs) {
         cv::line(img, P(v, y0), P(v, y1), grid, 1);
-        const std::string t = fmt(v, xs);
+        const std::string t = tick_label(v, xs);
         cv::putText(img, t, P(v, y0) + cv::Point2d(-4.0 * t.size(), 18), cv::FONT_HERSHEY_SIMPLEX, 0.4, axis, 1, cv::LINE_AA);
     }
     if (m_ytick_labels.empty()) {
         for (double v = std::ceil(y0 / ys) * ys; v <= y1 + 1e-12; v += ys) {
             cv::line(img, P(x0, v), P(x1, v), grid, 1);
-            const std::string t = fmt(v, ys);
+            const std::string t = tick_label(v, ys);
             cv::putText(img, t, P(x0, v) + cv::Point2d(-8.0 - 7.5 * t.size(), 4), cv::FONT_HERSHEY_SIMPLEX, 0.4, axis, 1, cv::LINE_AA);
         }
     } else {

@@ -26,7 +26,7 @@ struct Acc {
     double mean() const { return n ? sum / n : 0.0; }
 };
 
-std::string num(double v)
+std::string one_decimal(double v)
 {
     char b[32];
     std::snprintf(b, sizeof b, "%.1f", v);
@@ -80,7 +80,7 @@ void test_groups(ResidualAnalysis& a, const Groups& g)
 {
     auto group_exceeds = [](const Acc& x) { return x.n >= 3 && x.ss > x.n + 4.0 * std::sqrt(2.0 * x.n); };
     if (a.chi2 > a.dof + 3.0 * std::sqrt(2.0 * a.dof))
-        a.exceeds_because.push_back("total: chi2 " + num(a.chi2) + " over " + std::to_string(a.dof) + " degrees of freedom");
+        a.exceeds_because.push_back("total: chi2 " + one_decimal(a.chi2) + " over " + std::to_string(a.dof) + " degrees of freedom");
     // Not the closure terms: each is a fraction of seeds (0, 1/2 or 1 with two
     // seeds) at 0.1 per sigma, not a Gaussian draw, and a cut just above the hem's
     // highest point closes in one drape and not in the next of the same fabric, so
@@ -89,9 +89,9 @@ void test_groups(ResidualAnalysis& a, const Groups& g)
     // records) was flagged by "closure: chi2 50.0 over 14 terms" alone. They stay
     // in the total chi2 and its test.
     for (const auto& [k, x] : g.kinds)
-        if (k != "closure" && group_exceeds(x)) a.exceeds_because.push_back(k + ": chi2 " + num(x.ss) + " over " + std::to_string(x.n) + " terms");
+        if (k != "closure" && group_exceeds(x)) a.exceeds_because.push_back(k + ": chi2 " + one_decimal(x.ss) + " over " + std::to_string(x.n) + " terms");
     for (const auto& [k, x] : g.harm)
-        if (group_exceeds(x)) a.exceeds_because.push_back("harmonic " + std::to_string(k) + ": chi2 " + num(x.ss) + " over " + std::to_string(x.n) + " terms");
+        if (group_exceeds(x)) a.exceeds_because.push_back("harmonic " + std::to_string(k) + ": chi2 " + one_decimal(x.ss) + " over " + std::to_string(x.n) + " terms");
     a.exceeds_noise = !a.exceeds_because.empty();
 }
 
@@ -128,7 +128,7 @@ public:
         a.signature_z.push_back({name, z});
         if (z > 3.0) {
             a.exceeds_noise = true;
-            a.exceeds_because.push_back(std::string(what) + ": matched filter z " + num(z));
+            a.exceeds_because.push_back(std::string(what) + ": matched filter z " + one_decimal(z));
         }
         return z;
     }
@@ -172,7 +172,7 @@ double test_off_centre(ResidualAnalysis& a, const std::vector<ResidualTerm>& ter
     a.signature_z.push_back({"specimen_off_centre", z});
     if (z2 > limit) {
         a.exceeds_noise = true;
-        a.exceeds_because.push_back("off-centre signature (a common shift of every cut): matched filter z " + num(z));
+        a.exceeds_because.push_back("off-centre signature (a common shift of every cut): matched filter z " + one_decimal(z));
     }
     return z;
 }
@@ -227,7 +227,7 @@ void name_candidates(ResidualAnalysis& a, const Groups& g, double rim_z, double 
     const auto h1 = g.harm.find(1);
     if ((h1 != g.harm.end() && h1->second.rms() > 2.0) || off_centre_z * off_centre_z > off_centre_limit)
         add_candidate(a, "specimen_off_centre",
-                      "harmonic 1 (a shift of the contour: the signed a1, b1) is beyond noise (matched filter z = " + num(off_centre_z) +
+                      "harmonic 1 (a shift of the contour: the signed a1, b1) is beyond noise (matched filter z = " + one_decimal(off_centre_z) +
                           "): the specimen or the profiler axis is off the pedestal axis");
     if ((g.kind("cos2").rms() > 2.0) || (g.kind("cos4").rms() > 2.0))
         add_candidate(a, "in_plane_anisotropy",

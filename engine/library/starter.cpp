@@ -1,19 +1,13 @@
 #include "engine/library/starter.hpp"
 
 #include "engine/core/io.hpp"
+#include "engine/core/text.hpp"
 
 #include <algorithm>
 #include <cctype>
 
 namespace drape::library {
 
-namespace {
-std::string lower(std::string s)
-{
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return s;
-}
-} // namespace
 
 const std::vector<Starter>& starters()
 {
@@ -34,9 +28,9 @@ const std::vector<Starter>& starters()
 
 std::optional<fabric::FabricPreset> find_starter(const std::string& name)
 {
-    const std::string n = lower(name);
+    const std::string n = ascii_lower(name);
     for (const auto& s : starters())
-        if (s.short_name == n || lower(s.preset.name) == n) return s.preset;
+        if (s.short_name == n || ascii_lower(s.preset.name) == n) return s.preset;
     return std::nullopt;
 }
 

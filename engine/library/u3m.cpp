@@ -4,6 +4,7 @@
 #include "engine/cloth/params.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/json_reader.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/units.hpp"
 
 #include <algorithm>
@@ -63,12 +64,6 @@ const char* const kFibres[] = {
     "Recycled Polyester", "Silk", "Spandex", "Tactel", "Triacetate", "Vicugna", "Vinyl", "Virgin Wool", "Wild Silk",
     "Wool", "Yack", "Viscose"};
 
-std::string lower(std::string s)
-{
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return s;
-}
-
 std::string trim(const std::string& s)
 {
     const auto b = s.find_first_not_of(" \t");
@@ -95,7 +90,7 @@ json composition_parts(const std::string& composition)
         const std::string fibre = trim((*it)[2].str());
         std::string type = "other";
         for (const char* f : kFibres)
-            if (lower(f) == lower(fibre)) type = f;
+            if (ascii_lower(f) == ascii_lower(fibre)) type = f;
         if (type == "Viscose") type = "Rayon"; // not in U3M's list: the same fibre
         parts.push_back({{"ratio", ratio}, {"type", type}, {"name", type == "other" ? json(fibre) : json(nullptr)}});
         sum += ratio;
@@ -202,7 +197,7 @@ fabric::FabricPreset preset_from_u3m(const json& j, const std::string& where, st
             std::string fibre = part.contains("name") && part["name"].is_string() ? part["name"].get<std::string>()
                                 : part.contains("type") && part["type"].is_string() ? part["type"].get<std::string>()
                                                                                      : "unknown";
-            text += (text.empty() ? "" : ", ") + format_value(std::round(r * 1000) / 10) + " % " + lower(fibre);
+            text += (text.empty() ? "" : ", ") + format_value(std::round(r * 1000) / 10) + " % " + ascii_lower(fibre);
         }
         p.composition = text;
     }

@@ -21,7 +21,7 @@
 #include <iostream>
 
 namespace drape::cli {
-namespace {
+namespace cmd_compare {
 
 const char* kUsage = R"(usage: drape compare RECORD_DIR [RECORD_DIR ...] --fabric FABRIC.json [options]
 
@@ -250,8 +250,8 @@ int run(const std::vector<std::string>& argv)
     return all_converged ? 0 : 4;
 }
 
-} // namespace
+} // namespace cmd_compare
 
-DRAPE_COMMAND({"compare", "simulate a preset on records' set-ups and compare channel by channel (no fitting)", kUsage, run});
+DRAPE_COMMAND({"compare", "simulate a preset on records' set-ups and compare channel by channel (no fitting)", cmd_compare::kUsage, cmd_compare::run});
 
 } // namespace drape::cli

@@ -14,7 +14,7 @@
 #include <iostream>
 
 namespace drape::cli {
-namespace {
+namespace cmd_export_seed {
 
 const char* kUsage = R"(usage: drape export-seed --fabric FABRIC.json --out SEED.json [options]
 
@@ -87,8 +87,8 @@ int run(const std::vector<std::string>& argv)
     return e.matched ? 0 : 3;
 }
 
-} // namespace
+} // namespace cmd_export_seed
 
-DRAPE_COMMAND({"export-seed", "write a fabric preset as the seed paper's 19 grid constants for one grid", kUsage, run});
+DRAPE_COMMAND({"export-seed", "write a fabric preset as the seed paper's 19 grid constants for one grid", cmd_export_seed::kUsage, cmd_export_seed::run});
 
 } // namespace drape::cli

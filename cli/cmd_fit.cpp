@@ -21,7 +21,7 @@
 #include <iostream>
 
 namespace drape::cli {
-namespace {
+namespace cmd_fit {
 
 const char* kUsage = R"(usage: drape fit RECORD_DIR [RECORD_DIR ...] --out FABRIC.json [options]
 
@@ -385,8 +385,8 @@ int run(const std::vector<std::string>& argv)
     return r.cancelled ? 3 : 0;
 }
 
-} // namespace
+} // namespace cmd_fit
 
-DRAPE_COMMAND({"fit", "fit a fabric preset to drape-test records (NLopt, with intervals)", kUsage, run});
+DRAPE_COMMAND({"fit", "fit a fabric preset to drape-test records (NLopt, with intervals)", cmd_fit::kUsage, cmd_fit::run});
 
 } // namespace drape::cli

@@ -22,7 +22,7 @@
 #include <sstream>
 
 namespace drape::cli {
-namespace {
+namespace cmd_fit_summary {
 
 const char* kUsage = R"(usage: drape fit-summary --out DIR LABEL=REPORT_DIR [LABEL=REPORT_DIR ...]
 
@@ -362,8 +362,8 @@ int run(const std::vector<std::string>& argv)
     return 0;
 }
 
-} // namespace
+} // namespace cmd_fit_summary
 
-DRAPE_COMMAND({"fit-summary", "tables and plots across fit reports (records x models), e.g. before/after", kUsage, run});
+DRAPE_COMMAND({"fit-summary", "tables and plots across fit reports (records x models), e.g. before/after", cmd_fit_summary::kUsage, cmd_fit_summary::run});
 
 } // namespace drape::cli

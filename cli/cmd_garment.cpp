@@ -18,7 +18,7 @@
 #include <unistd.h>
 
 namespace drape::cli {
-namespace {
+namespace cmd_garment {
 
 const char* kUsage = R"(usage: drape garment --body FILE --garment circle-skirt|FILE [options]
 
@@ -154,8 +154,8 @@ int run(const std::vector<std::string>& argv)
     return st.converged() ? 0 : 4;
 }
 
-} // namespace
+} // namespace cmd_garment
 
-DRAPE_COMMAND({"garment", "drape a garment on a mannequin and measure it (hem, folds, body, self-intersections)", kUsage, run});
+DRAPE_COMMAND({"garment", "drape a garment on a mannequin and measure it (hem, folds, body, self-intersections)", cmd_garment::kUsage, cmd_garment::run});
 
 } // namespace drape::cli

@@ -13,7 +13,7 @@
 #include <cstdio>
 #include <iostream>
 
-namespace {
+namespace cmd_import {
 
 using namespace drape;
 
@@ -89,5 +89,5 @@ DRAPE_COMMAND({"import", "report the meshes of a mesh file (assimp) in metres, z
                "  --json   machine-readable: vertices, triangles, bounding_box_m {min, max}, meshes[]",
                run_import});
 
-} // namespace
+} // namespace cmd_import
 #endif

@@ -11,7 +11,7 @@
 
 #include <cstdio>
 
-namespace {
+namespace cmd_kes {
 
 /// Physical ranges of the KES-FB values (the regression's inputs), in their units.
 struct KesInput {
@@ -71,5 +71,5 @@ DRAPE_COMMAND({"kes-dc", "drape coefficient from KES-FB values (Gider 2004 regre
                "extrapolated beyond the fabrics it was fitted on) is refused with exit 1.",
                run_kes});
 
-} // namespace
+} // namespace cmd_kes
 #endif

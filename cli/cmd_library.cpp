@@ -20,7 +20,7 @@
 #include <filesystem>
 #include <iostream>
 
-namespace {
+namespace cmd_library {
 
 using namespace drape;
 using namespace drape::library;
@@ -397,5 +397,5 @@ DRAPE_COMMAND({"library", "manage the fabric library (SQLite): list, show, add, 
                "                                    (e.g. data/library, the starter library); all or nothing",
                run_library});
 
-} // namespace
+} // namespace cmd_library
 #endif

@@ -23,7 +23,7 @@
 #include <iostream>
 #include <sstream>
 
-namespace {
+namespace cmd_measure {
 
 using namespace drape;
 namespace fs = std::filesystem;
@@ -403,9 +403,10 @@ DRAPE_COMMAND({"measure", "measure a drape-test record, a single top photo, or a
                "  --rays N         rays traced around the axis (default 720)\n"
                "  --no-calibrate   use the declared top pose instead of solvePnP on the floor chessboards\n"
                "  --node-prominence F  a fold crest must rise F x (max r - min r) above its troughs (default 0.10)\n"
-               "  --perspective P  the model D is reported with: auto (hem when the camera height is known, else\n"
-               "                   disc-plane), none (outline in the scale reference's plane), disc-plane, hem,\n"
-               "                   calibration (hem on a calibrated record). Every model is reported beside it.\n"
+               "  --perspective P  the model D is reported with: auto (hem: the vertical projection; from an assumed\n"
+               "                   camera height, with its spread in D's uncertainty, when the height is not known),\n"
+               "                   none (outline in the scale reference's plane), disc-plane, hem, calibration (hem\n"
+               "                   on a calibrated record). Every model is reported beside it.\n"
                "  --threshold T    manual segmentation: L<NN, L>NN, a>NN, b<NN ... (CIE L*a*b*)\n"
                "  --mask FILE      a mask the size of the photo: white = cloth, black = not, grey = decide\n"
                "  --segmentation S auto (default), photo (the single-photo GrabCut segmenter, also on a lab record),\n"
@@ -432,5 +433,5 @@ DRAPE_COMMAND({"measure", "measure a drape-test record, a single top photo, or a
                "not what meta.json says) is listed too, and measure exits 1 after printing the rest.",
                run_measure});
 
-} // namespace
+} // namespace cmd_measure
 #endif

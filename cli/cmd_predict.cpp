@@ -17,7 +17,7 @@
 #include <iostream>
 
 namespace drape::cli {
-namespace {
+namespace cmd_predict {
 
 const char* kUsage = R"(usage: drape predict --fabric FABRIC.json --sample-diameter L --disc-diameter L [options]
 
@@ -161,8 +161,8 @@ int run(const std::vector<std::string>& argv)
     return pr.converged ? 0 : 4;
 }
 
-} // namespace
+} // namespace cmd_predict
 
-DRAPE_COMMAND({"predict", "predict the drape of a fitted preset on another set-up (same JSON as simulate)", kUsage, run});
+DRAPE_COMMAND({"predict", "predict the drape of a fitted preset on another set-up (same JSON as simulate)", cmd_predict::kUsage, cmd_predict::run});
 
 } // namespace drape::cli

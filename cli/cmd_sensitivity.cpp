@@ -9,7 +9,7 @@
 #include <cstdio>
 
 namespace drape::cli {
-namespace {
+namespace cmd_sensitivity {
 
 const char* kUsage = R"(usage: drape sensitivity --fabric FABRIC.json --out DIR [options]
 
@@ -76,8 +76,8 @@ int run(const std::vector<std::string>& argv)
     return 0;
 }
 
-} // namespace
+} // namespace cmd_sensitivity
 
-DRAPE_COMMAND({"sensitivity", "vary one parameter at a time and plot D, nodes and harmonics", kUsage, run});
+DRAPE_COMMAND({"sensitivity", "vary one parameter at a time and plot D, nodes and harmonics", cmd_sensitivity::kUsage, cmd_sensitivity::run});
 
 } // namespace drape::cli

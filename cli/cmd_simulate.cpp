@@ -24,7 +24,7 @@
 #include <nlohmann/json.hpp>
 
 namespace drape::cli {
-namespace {
+namespace cmd_simulate {
 
 const char* kUsage = R"(usage: drape simulate --fabric FABRIC.json|seed-table1 [options]
 
@@ -269,8 +269,8 @@ int run(const std::vector<std::string>& argv)
     return r.status.converged() ? 0 : 4;
 }
 
-} // namespace
+} // namespace cmd_simulate
 
-DRAPE_COMMAND({"simulate", "drape a fabric preset over the drapemeter and measure it", kUsage, run});
+DRAPE_COMMAND({"simulate", "drape a fabric preset over the drapemeter and measure it", cmd_simulate::kUsage, cmd_simulate::run});
 
 } // namespace drape::cli

@@ -2,6 +2,8 @@
 // Sub-command registry of the `drape` tool. Each cli/cmd_*.cpp registers one
 // command with a static DRAPE_COMMAND(...) object; cli/CMakeLists.txt compiles
 // every cmd_*.cpp straight into the executable, so the registrations are kept.
+// A command's own names (kUsage, run, helpers) live in a namespace named after
+// its file (cmd_fit): a unity build puts several commands in one unit.
 #include <nlohmann/json_fwd.hpp>
 
 #include <functional>
@@ -76,4 +78,4 @@ struct Registrar {
 #define DRAPE_CLI_CONCAT2(a, b) a##b
 #define DRAPE_CLI_CONCAT(a, b) DRAPE_CLI_CONCAT2(a, b)
 /// Usage: DRAPE_COMMAND({"name", "summary", usage_text, run_function});
-#define DRAPE_COMMAND(...) static ::drape::cli::Registrar DRAPE_CLI_CONCAT(drape_cmd_, __LINE__)(__VA_ARGS__)
+#define DRAPE_COMMAND(...) static ::drape::cli::Registrar DRAPE_CLI_CONCAT(drape_cmd_, __COUNTER__)(__VA_ARGS__)

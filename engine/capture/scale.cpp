@@ -271,22 +271,69 @@ std::vector<MarkerSeen> find_markers(const cv::Mat& bgr, const std::string& dict
     return out;
 }
 
-cv::Mat rough_cloth_mask(const cv::Mat& bgr)
+namespace {
+
+/// How far each pixel's colour is from the floor's: the floor's L*a*b* as a
+/// quadratic surface in the pixel position (light falls off across a floor),
+/// fitted to the photo's border band with the outliers (markers, boards, cloth
+/// that reaches the border) dropped, twice. Distance with L* weighted 0.3, as the
+/// segmentation weighs it (a shadow changes L* and hardly a*, b*). Also returns the
+/// border's own spread (the robust sd of its distances).
+cv::Mat floor_deviation(const cv::Mat& small_bgr, double& border_sd)
 {
-    const double s = std::min(1.0, 480.0 / std::max(bgr.cols, bgr.rows));
-    cv::Mat small;
-    cv::resize(bgr, small, {}, s, s, cv::INTER_AREA);
-    const int bx = std::max(3, small.cols / 25), by = std::max(3, small.rows / 25);
-    cv::Mat mask(small.size(), CV_8U, cv::Scalar(cv::GC_BGD)), bgd, fgd;
-    cv::Rect rect(bx, by, small.cols - 2 * bx, small.rows - 2 * by);
-    cv::grabCut(detail::grabcut_input(small), mask, rect, bgd, fgd, 4, cv::GC_INIT_WITH_RECT);
-    cv::Mat fg = (mask == cv::GC_FGD) | (mask == cv::GC_PR_FGD);
-    cv::morphologyEx(fg, fg, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5}));
+    const cv::Mat lab = to_lab(small_bgr);
+    const int W = lab.cols, H = lab.rows;
+    const int bx = std::max(2, W / 25), by = std::max(2, H / 25);
+    auto basis = [&](int x, int y) {
+        const double u = 2.0 * x / W - 1, v = 2.0 * y / H - 1;
+        Eigen::Matrix<double, 6, 1> b;
+        b << 1, u, v, u * u, u * v, v * v;
+        return b;
+    };
+    std::vector<cv::Point> band;
+    for (int y = 0; y < H; y += 2)
+        for (int x = 0; x < W; x += 2)
+            if (x < bx || y < by || x >= W - bx || y >= H - by) band.emplace_back(x, y);
+    constexpr double wL = 0.3;
+    auto distance = [&](const cv::Vec3f& c, const Eigen::Matrix<double, 6, 3>& C, const Eigen::Matrix<double, 6, 1>& b) {
+        const Eigen::Vector3d f = C.transpose() * b;
+        return std::sqrt(wL * wL * (c[0] - f[0]) * (c[0] - f[0]) + (c[1] - f[1]) * (c[1] - f[1]) + (c[2] - f[2]) * (c[2] - f[2]));
+    };
+    std::vector<char> keep(band.size(), 1);
+    Eigen::Matrix<double, 6, 3> C = Eigen::Matrix<double, 6, 3>::Zero();
+    border_sd = 0;
+    for (int pass = 0; pass < 3; ++pass) {
+        Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+        Eigen::Matrix<double, 6, 3> rhs = Eigen::Matrix<double, 6, 3>::Zero();
+        for (std::size_t i = 0; i < band.size(); ++i) {
+            if (!keep[i]) continue;
+            const auto b = basis(band[i].x, band[i].y);
+            const cv::Vec3f c = lab.at<cv::Vec3f>(band[i]);
+            A += b * b.transpose();
+            rhs += b * Eigen::RowVector3d(c[0], c[1], c[2]);
+        }
+        C = A.ldlt().solve(rhs);
+        std::vector<double> d(band.size());
+        for (std::size_t i = 0; i < band.size(); ++i) d[i] = distance(lab.at<cv::Vec3f>(band[i]), C, basis(band[i].x, band[i].y));
+        border_sd = 1.4826 * median(d);
+        const double cut = std::max(3 * border_sd, 1.0);
+        for (std::size_t i = 0; i < band.size(); ++i) keep[i] = d[i] <= cut;
+    }
+    cv::Mat dev(lab.size(), CV_32F);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) dev.at<float>(y, x) = static_cast<float>(distance(lab.at<cv::Vec3f>(y, x), C, basis(x, y)));
+    return dev;
+}
+
+/// The component of `fg` that is large and central (area x (1 - distance from the
+/// centre / half the diagonal)); empty when there is none.
+cv::Mat large_central_component(const cv::Mat& fg)
+{
     cv::Mat labels, stats, centroids;
     const int n = cv::connectedComponentsWithStats(fg, labels, stats, centroids, 8, CV_32S);
     int best = 0;
     double best_score = 0;
-    const cv::Point2d mid(small.cols / 2.0, small.rows / 2.0);
+    const cv::Point2d mid(fg.cols / 2.0, fg.rows / 2.0);
     for (int i = 1; i < n; ++i) {
         const double area = stats.at<int>(i, cv::CC_STAT_AREA);
         const cv::Point2d c(centroids.at<double>(i, 0), centroids.at<double>(i, 1));
@@ -297,8 +344,40 @@ cv::Mat rough_cloth_mask(const cv::Mat& bgr)
             best = i;
         }
     }
-    cv::Mat out = cv::Mat::zeros(small.size(), CV_8U);
+    cv::Mat out = cv::Mat::zeros(fg.size(), CV_8U);
     if (best > 0) out = labels == best;
+    return out;
+}
+
+} // namespace
+
+cv::Mat rough_cloth_mask(const cv::Mat& bgr)
+{
+    const double s = std::min(1.0, 480.0 / std::max(bgr.cols, bgr.rows));
+    cv::Mat small;
+    cv::resize(bgr, small, {}, s, s, cv::INTER_AREA);
+    const int bx = std::max(3, small.cols / 25), by = std::max(3, small.rows / 25);
+    cv::Mat mask(small.size(), CV_8U, cv::Scalar(cv::GC_BGD)), bgd, fgd;
+    cv::Rect rect(bx, by, small.cols - 2 * bx, small.rows - 2 * by);
+    cv::grabCut(detail::grabcut_input(small), mask, rect, bgd, fgd, 4, cv::GC_INIT_WITH_RECT);
+    cv::Mat fg = (mask == cv::GC_FGD) | (mask == cv::GC_PR_FGD);
+    const auto open = cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5});
+    cv::morphologyEx(fg, fg, cv::MORPH_OPEN, open);
+    cv::Mat out = large_central_component(fg);
+    // GrabCut's background model is learnt from the border alone: where light
+    // falls off across the floor, the brighter floor near the middle can join the
+    // cloth (a lab photo: the cloth's centroid 50 mm off the axis). Floor that is
+    // the floor's colour where it lies leaves the cloth; when that would leave
+    // little of it (cloth in the floor's colour), GrabCut's answer stands.
+    double border_sd = 0;
+    const cv::Mat dev = floor_deviation(small, border_sd);
+    cv::Mat distinct = dev > std::max(6.0, 5 * border_sd);
+    cv::morphologyEx(distinct, distinct, cv::MORPH_CLOSE, open);
+    cv::Mat trimmed = out & distinct;
+    cv::morphologyEx(trimmed, trimmed, cv::MORPH_OPEN, open);
+    trimmed = large_central_component(trimmed);
+    const int kept = cv::countNonZero(trimmed), had = cv::countNonZero(out);
+    if (had > 0 && kept >= 0.25 * had) out = trimmed;
     cv::resize(out, out, bgr.size(), 0, 0, cv::INTER_NEAREST);
     return out;
 }

@@ -348,13 +348,16 @@ std::string choose_perspective(const record::Record& rec, const MeasureOptions& 
         persp = "hem";
         tv.perspective_reason = "asked for: the hanging-hem model on the calibrated camera";
     } else if (persp == "auto") {
+        // The vertical projection (what a drapemeter's shadow and the lab's D are)
+        // in either case: with an unknown camera height the hem is back-projected
+        // from the assumed one, whose spread is in D's uncertainty. The disc-plane
+        // value is low by construction (the hem hangs below the disc and looks
+        // smaller), so its interval would not cover the vertical projection.
+        persp = "hem";
         if (single && !g.camera_height_known) {
-            persp = "disc-plane";
-            tv.perspective_reason = "the camera height is not known (declare it, or a focal length, or put the scale "
-                                    "reference at another height than the disc), so the outline is measured in the disc-top "
-                                    "plane; the hem model's value is reported beside it";
+            tv.perspective_reason = "the camera height is not known (" + g.camera_height_source +
+                                    "): the hem is back-projected from that height, its spread in D's uncertainty";
         } else {
-            persp = "hem";
             tv.perspective_reason = std::string("the camera height is known (") + g.camera_height_source +
                                     "): the hem is back-projected to where it hangs";
         }

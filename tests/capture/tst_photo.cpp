@@ -126,11 +126,11 @@ private slots:
         const double z_ref = j["scale"]["reference_height_m"].get<double>();
         const bool height_known = j["scale"]["camera_height_known"].get<bool>();
         const std::string chosen = j["perspective"].get<std::string>();
-        QCOMPARE(chosen, std::string(height_known ? "hem" : "disc-plane"));
+        // The vertical projection, from an assumed camera height when it is not known.
+        QCOMPARE(chosen, std::string("hem"));
         QCOMPARE(D, pm[chosen]["drape_coefficient_percent"].get<double>());
         for (const std::string model : {"none", "disc-plane", "hem"}) {
             QVERIFY(pm[model]["available"].get<bool>());
-            if (model == "hem" && !height_known) continue; // the hem model needs the camera height
             const double dc = pm[model]["drape_coefficient_percent"].get<double>();
             const double a = area_of(dc, c.scene), truth = true_area_for(model, c.scene, z_ref);
             const double err = (a - truth) / truth;
@@ -138,8 +138,12 @@ private slots:
             const double dc_truth = (truth - synth_photo::kPi * c.scene.R2 * c.scene.R2) /
                                     (synth_photo::specimen_area(c.scene) - synth_photo::kPi * c.scene.R2 * c.scene.R2) * 100;
             qInfo("%-10s D %6.2f %% (true %6.2f) +- %.2f, area %+.2f %%", model.c_str(), dc, dc_truth, sigma, 100 * err);
-            QVERIFY2(std::abs(err) < c.area_tolerance, qPrintable(QString("%1: area off by %2 %").arg(model.c_str()).arg(100 * err)));
-            QVERIFY(std::abs(dc - dc_truth) <= 2 * sigma); // the stated uncertainty covers the error
+            // From an assumed camera height the hem's area is as far off as the
+            // height; its stated uncertainty must still cover the truth.
+            if (!(model == "hem" && !height_known))
+                QVERIFY2(std::abs(err) < c.area_tolerance, qPrintable(QString("%1: area off by %2 %").arg(model.c_str()).arg(100 * err)));
+            QVERIFY2(std::abs(dc - dc_truth) <= 2 * sigma, // the stated uncertainty covers the error
+                     qPrintable(QString("%1: D %2, true %3, +- %4").arg(model.c_str()).arg(dc).arg(dc_truth).arg(sigma)));
         }
         // Uncertainty terms name the unknowns.
         std::set<std::string> names;
@@ -148,7 +152,6 @@ private slots:
         if (!height_known) {
             // The hem model is reported with the assumed camera height and a wide band.
             QVERIFY(pm["hem"]["uncertainty_percent"].get<double>() > 3.0);
-            QCOMPARE(D, pm["disc-plane"]["drape_coefficient_percent"].get<double>());
         }
     }
 
@@ -370,6 +373,43 @@ private slots:
         QVERIFY(m.top.segmentation_method.find("GrabCut") != std::string::npos);
         QVERIFY2(std::abs(m.top.metrics.drape_coefficient_percent - synth::true_dc(s)) < 0.5,
                  qPrintable(QString::number(m.top.metrics.drape_coefficient_percent)));
+    }
+
+    /// A lab's own top photo measured as a plain photo, the floor chessboard (at
+    /// -120 mm) its only scale and no lens given: the lab's D (its calibrated rig's
+    /// vertical projection, not this engine's) within 2 points or inside twice the
+    /// stated uncertainty. One record whose cloth's colour spreads onto the lit floor
+    /// in a rough segmentation (the disc centre was 50 mm off and the photo refused),
+    /// one with a 30 mm overhang (D most sensitive to the unknown camera height).
+    void lab_photo_with_floor_chessboard_only_data()
+    {
+        QTest::addColumn<QString>("record");
+        QTest::newRow("DL-A04") << "set-a/DL-A04";
+        QTest::newRow("DL-D1-240-180") << "set-d/DL-D1-240-180";
+    }
+    void lab_photo_with_floor_chessboard_only()
+    {
+        QFETCH(QString, record);
+        const fs::path rec = fs::path(DRAPE_SHARED_DIR) / "data/drape-lab" / record.toStdString();
+        if (!fs::exists(rec / "meta.json")) QSKIP("the lab's records are not beside the repository");
+        const json meta = json::parse(std::ifstream(rec / "meta.json"));
+        const auto& cfg = meta["configuration"];
+        const double lab_dc = meta["lab_drape_coefficient_percent"].get<double>();
+        // Outside the record: only the photo and the flags are known.
+        const fs::path dir = temp_dir("lab-photo-" + rec.filename().string());
+        fs::copy_file(rec / "top.jpg", dir / "top.jpg", fs::copy_options::overwrite_existing);
+        auto mm = [](double v) { return std::to_string(static_cast<int>(std::lround(v))) + "mm"; };
+        const Run r = run_drape({"measure", "--top", (dir / "top.jpg").string(), "--disc", mm(cfg["support_disc_diameter_D2_mm"].get<double>()),
+                                 "--specimen", mm(cfg["specimen_diameter_D1_mm"].get<double>()), "--scale", "chessboard", "--board", "6x11",
+                                 "--square", "25mm", "--reference-height", "-120mm", "--json"});
+        QVERIFY2(r.code == 0, r.err.c_str());
+        const json j = json::parse(r.out);
+        QVERIFY(!j["scale"]["camera_height_known"].get<bool>());
+        QCOMPARE(j["perspective"].get<std::string>(), std::string("hem"));
+        const double D = j["drape_coefficient_percent"].get<double>(), u = j["drape_coefficient_uncertainty_percent"].get<double>();
+        qInfo("%s: D %.1f +- %.1f %%, the lab's %.1f %%", record.toUtf8().constData(), D, u, lab_dc);
+        QVERIFY2(std::abs(D - lab_dc) <= std::max(2.0, 2 * u),
+                 qPrintable(QString("D %1 +- %2, the lab's %3").arg(D).arg(u).arg(lab_dc)));
     }
 
     /// DRAPE_PHOTO_EXAMPLES=DIR writes every scene's photo and its flags (for

@@ -645,8 +645,9 @@ void level_camera(const record::Record& rec, const Frame& fr, ViewGeometry& g)
     } else if (tp.focal_px) {
         f = *tp.focal_px;
         H = f / s_ref + g.reference_height;
-        g.camera_height_sigma = 0.02 * H;
-        g.camera_height_source = "from the declared focal length (" + fmt("%.0f", f) + " px, +-2 %)";
+        g.camera_height_sigma = tp.focal_px_sigma_rel * H;
+        g.camera_height_source = "from the " + tp.focal_px_source + " focal length (" + fmt("%.0f", f) + " px, +-" +
+                                 fmt("%.0f", 100 * tp.focal_px_sigma_rel) + " %)";
     } else {
         f = prior_focal(fr.W, fr.H);
         H = f / s_ref + g.reference_height;
@@ -759,7 +760,8 @@ double reference_focal(const record::Record& rec, const Frame& fr, ViewGeometry&
     double f = f_prior;
     if (tp.focal_px) {
         f = *tp.focal_px;
-        g.camera_height_source = "from the reference's pose with the declared focal length (+-2 %)";
+        g.camera_height_source = "from the reference's pose with the " + tp.focal_px_source + " focal length (" + fmt("%.0f", f) +
+                                 " px, +-" + fmt("%.0f", 100 * tp.focal_px_sigma_rel) + " %)";
     } else if (auto dh = declared_height(tp)) {
         // Focal length such that the reference plane lies H - z_ref below the camera.
         double lo = 0.05 * f_prior, hi = 20 * f_prior;
@@ -807,7 +809,8 @@ ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv:
     g.plane_normal_cam = pp.up_cam;
     g.reference_distance = pp.distance;
     g.camera_height = pp.distance + g.reference_height;
-    if (g.camera_height_sigma == 0) g.camera_height_sigma = g.camera_height_known ? 0.02 * g.camera_height : 0.3 * g.camera_height;
+    if (g.camera_height_sigma == 0)
+        g.camera_height_sigma = (!g.camera_height_known ? 0.3 : tp.focal_px ? tp.focal_px_sigma_rel : 0.02) * g.camera_height;
     if (auto dh = declared_height(tp)) g.camera_height_sigma = dh->second;
     g.scale_px_per_m = pp.scale_px_per_m;
     g.scale_sigma_rel = pp.scale_sigma_rel;

@@ -1,3 +1,4 @@
+#include "engine/capture/exif.hpp"
 #include "engine/capture/top_view.hpp"
 
 #include "engine/capture/calibrate.hpp"
@@ -311,6 +312,20 @@ ViewGeometry top_view_geometry(const record::Record& rec, const MeasureOptions& 
                                 "photograph the drape on its stand (a lens cap, a blank or overexposed file shows nothing)"});
         cv::Mat rough;
         if (!(tp.disc_centre_px && tp.disc_radius_px)) rough = rough_cloth_mask(out.top_image);
+        // A phone writes its lens into the photo: the focal length from the 35 mm
+        // equivalent, +-5 % (rounded to a whole mm, and a crop of the frame the
+        // camera reports changes it), unless the camera height or focal length is declared.
+        if (!tp.focal_px && !tp.camera_height) {
+            const ExifLens lens = exif_lens(rec.file(rec.top_image()));
+            if (!lens.warning.empty()) out.warnings.push_back("top view: " + rec.top_image() + ": " + lens.warning + " (lens not read)");
+            if (lens.focal_35mm_mm) {
+                record::Record with_lens = rec;
+                with_lens.top_photo->focal_px = focal_px_from_35mm(*lens.focal_35mm_mm, out.top_image.cols, out.top_image.rows);
+                with_lens.top_photo->focal_px_sigma_rel = 0.05;
+                with_lens.top_photo->focal_px_source = "photo's EXIF (" + fmt("%.0f", *lens.focal_35mm_mm) + " mm, 35 mm equivalent)";
+                return solve_view(with_lens, out.top_image, lab, rough);
+            }
+        }
         return solve_view(rec, out.top_image, lab, rough);
     }
     const record::Camera& declared = rec.cameras.at("top");

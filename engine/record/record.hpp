@@ -124,6 +124,8 @@ struct TopPhoto {
     std::optional<double> camera_height;      ///< optical centre above the disc top [m]
     std::optional<double> camera_height_sigma;///< [m]
     std::optional<double> focal_px;           ///< focal length [px]
+    double focal_px_sigma_rel = 0.02;         ///< its relative uncertainty
+    std::string focal_px_source = "declared"; ///< where focal_px came from, for the output ("declared", the photo's EXIF)
     std::string perspective = "auto";         ///< none | disc-plane | hem | auto
     // Segmentation overrides.
     std::string mask;                         ///< a user mask image inside the record ("" = none)

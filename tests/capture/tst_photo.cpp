@@ -4,6 +4,7 @@
 // low contrast, white and dark cloth, prints, a reverse side, sequins, an
 // upper disc; manual overrides; refusals; batch. Synthetic photos with known
 // outlines (synthetic_photo.hpp, photo_scenes.hpp).
+#include "engine/capture/exif.hpp"
 #include "engine/capture/measure.hpp"
 #include "engine/capture/report.hpp"
 #include "engine/core/error.hpp"
@@ -373,6 +374,106 @@ private slots:
         QVERIFY(m.top.segmentation_method.find("GrabCut") != std::string::npos);
         QVERIFY2(std::abs(m.top.metrics.drape_coefficient_percent - synth::true_dc(s)) < 0.5,
                  qPrintable(QString::number(m.top.metrics.drape_coefficient_percent)));
+    }
+
+    /// The lens from the photo's EXIF (a phone's 35 mm equivalent focal length):
+    /// the camera height follows from it (+-5 %) instead of an assumed lens
+    /// (+-30 %); a block that is cut short or points outside itself is ignored
+    /// with a warning, never read past its end.
+    void exif_lens()
+    {
+        // APP1 "Exif" with IFD0 -> the EXIF directory -> FocalLengthIn35mmFilm.
+        auto app1 = [](std::uint16_t f35, bool little) {
+            std::vector<std::uint8_t> t;
+            auto byte = [&](std::uint32_t v) { t.push_back(std::uint8_t(v & 0xff)); };
+            auto u16 = [&](std::uint32_t v) {
+                if (little) { byte(v); byte(v >> 8); }
+                else { byte(v >> 8); byte(v); }
+            };
+            auto u32 = [&](std::uint32_t v) {
+                if (little) { u16(v & 0xffff); u16(v >> 16); }
+                else { u16(v >> 16); u16(v & 0xffff); }
+            };
+            byte(little ? 'I' : 'M');
+            byte(little ? 'I' : 'M');
+            u16(42); u32(8);
+            u16(1); u16(0x8769); u16(4); u32(1); u32(26); u32(0); // IFD0: the EXIF directory at 26
+            u16(1); u16(0xA405); u16(3); u32(1); u16(f35); u16(0); u32(0);
+            const std::string head("\xFF\xE1\0\0Exif\0\0", 10);
+            std::vector<std::uint8_t> seg(head.begin(), head.end());
+            for (std::uint8_t b : t) seg.push_back(b);
+            const std::size_t len = seg.size() - 2;
+            seg[2] = std::uint8_t(len >> 8);
+            seg[3] = std::uint8_t(len);
+            return seg;
+        };
+        auto jpeg_with = [](const std::vector<std::uint8_t>& jpeg, const std::vector<std::uint8_t>& seg) {
+            std::vector<std::uint8_t> out; // SOI, the segment, the rest
+            out.reserve(jpeg.size() + seg.size());
+            for (std::size_t i = 0; i < jpeg.size(); ++i) {
+                if (i == 2)
+                    for (std::uint8_t b : seg) out.push_back(b);
+                out.push_back(jpeg[i]);
+            }
+            return out;
+        };
+        const auto& c = find_case("plain-unknown-height");
+        std::vector<std::uint8_t> jpeg;
+        cv::imencode(".jpg", synth_photo::render(c.scene), jpeg, {cv::IMWRITE_JPEG_QUALITY, 92});
+        QVERIFY(!capture::exif_lens(jpeg).focal_35mm_mm); // OpenCV writes none
+        // The scene's lens as a phone would round it: 1100 px on a 1600 px diagonal.
+        const double f35 = std::round(c.scene.f / std::hypot(c.scene.width_px, c.scene.height_px) * std::hypot(36.0, 24.0));
+        for (bool little : {true, false}) {
+            const capture::ExifLens l = capture::exif_lens(jpeg_with(jpeg, app1(std::uint16_t(f35), little)));
+            QVERIFY(l.focal_35mm_mm && l.warning.empty());
+            QCOMPARE(*l.focal_35mm_mm, f35);
+        }
+        // Every cut of the block, and every byte of it flipped: no read past the end.
+        const auto seg = app1(std::uint16_t(f35), true);
+        for (std::size_t n = 4; n < seg.size(); ++n) {
+            auto cut = std::vector<std::uint8_t>(seg.begin(), seg.begin() + long(n));
+            cut[2] = std::uint8_t((n - 2) >> 8);
+            cut[3] = std::uint8_t(n - 2);
+            const capture::ExifLens l = capture::exif_lens(jpeg_with(jpeg, cut));
+            QVERIFY(!l.focal_35mm_mm || n >= seg.size() - 6);
+        }
+        for (std::size_t i = 4; i < seg.size(); ++i) {
+            auto bad = seg;
+            bad[i] ^= 0xA5;
+            (void)capture::exif_lens(jpeg_with(jpeg, bad));
+        }
+        // Through the command: the camera height from the EXIF lens, and D's interval
+        // (+-5 % of the height) covering the truth, narrower than the assumed lens's.
+        const fs::path dir = temp_dir("exif");
+        const auto bytes = jpeg_with(jpeg, seg);
+        std::ofstream(dir / "phone.jpg", std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+        std::ofstream(dir / "plain.jpg", std::ios::binary).write(reinterpret_cast<const char*>(jpeg.data()), long(jpeg.size()));
+        auto measure = [&](const std::string& name) {
+            std::vector<std::string> args{"measure", "--top", (dir / name).string(), "--json"};
+            args.insert(args.end(), c.flags.begin(), c.flags.end());
+            const Run r = run_drape(args);
+            if (r.code != 0) qWarning("%s", r.err.c_str());
+            return json::parse(r.out);
+        };
+        const json with_lens = measure("phone.jpg"), without = measure("plain.jpg");
+        QVERIFY(with_lens["scale"]["camera_height_known"].get<bool>());
+        QVERIFY2(with_lens["scale"]["camera_height_source"].get<std::string>().find("EXIF") != std::string::npos,
+                 with_lens["scale"]["camera_height_source"].dump().c_str());
+        QVERIFY(!without["scale"]["camera_height_known"].get<bool>());
+        const double truth = synth_photo::true_dc(c.scene);
+        const double D = with_lens["drape_coefficient_percent"].get<double>(), u = with_lens["drape_coefficient_uncertainty_percent"].get<double>();
+        qInfo("EXIF %.0f mm: D %.2f +- %.2f %%, without %.2f +- %.2f %%, true %.2f %%", f35, D, u,
+              without["drape_coefficient_percent"].get<double>(), without["drape_coefficient_uncertainty_percent"].get<double>(), truth);
+        QVERIFY(std::abs(D - truth) <= 2 * u);
+        QVERIFY(u < without["drape_coefficient_uncertainty_percent"].get<double>());
+        // The camera height's own term: +-5 % against +-30 %.
+        auto height_term = [](const json& m) {
+            for (const auto& t : m["perspective_models"]["hem"]["uncertainty_terms"])
+                if (t["name"] == "camera_height") return t["points_percent"].get<double>();
+            return -1.0;
+        };
+        qInfo("camera height term: %.2f points with the EXIF lens, %.2f assumed", height_term(with_lens), height_term(without));
+        QVERIFY(height_term(with_lens) >= 0 && height_term(with_lens) < 0.3 * height_term(without));
     }
 
     /// A lab's own top photo measured as a plain photo, the floor chessboard (at

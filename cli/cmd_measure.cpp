@@ -271,7 +271,8 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
     json rows = json::array();
     std::ostringstream csv;
     csv << "photo,status,check,drape_coefficient_percent,uncertainty_percent,perspective,uncorrected_percent,disc_plane_percent,"
-           "hem_percent,hem_uncertainty_percent,nodes,scale,px_per_mm,camera_height_mm,camera_height_known,message\n";
+           "hem_percent,hem_uncertainty_percent,nodes,area_mm2,scale,px_per_mm,camera_height_mm,camera_height_known,centre_x_px,centre_y_px,"
+           "centre_source,message\n";
     int failed = 0;
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < photos.size(); ++i) {
@@ -325,10 +326,12 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
             << num_cell(ok ? tv.dc_uncertainty_percent : std::nan("")) << "," << (ok ? tv.perspective : "") << ","
             << num_cell(ok ? tv.uncorrected.dc_percent : std::nan("")) << "," << num_cell(ok ? tv.disc_plane.dc_percent : std::nan("")) << ","
             << num_cell(ok ? tv.hem.dc_percent : std::nan("")) << "," << num_cell(ok ? tv.hem.uncertainty_percent : std::nan("")) << ","
-            << (ok ? std::to_string(tv.metrics.node_count) : "") << "," << (m.view ? record::to_string(m.view->source) : "") << ","
-            << num_cell(m.view ? m.view->scale_px_per_m * 1e-3 : std::nan(""), 4) << ","
+            << (ok ? std::to_string(tv.metrics.node_count) : "") << "," << num_cell(ok ? tv.metrics.shadow_area_m2 * 1e6 : std::nan(""), 0) << ","
+            << (m.view ? record::to_string(m.view->source) : "") << "," << num_cell(m.view ? m.view->scale_px_per_m * 1e-3 : std::nan(""), 4) << ","
             << num_cell(m.view ? m.view->camera_height * 1e3 : std::nan(""), 0) << ","
-            << (m.view ? (m.view->camera_height_known ? "yes" : "no") : "") << "," << csv_cell(message) << "\n";
+            << (m.view ? (m.view->camera_height_known ? "yes" : "no") : "") << "," << num_cell(m.view ? m.view->centre_px.x() : std::nan(""), 1)
+            << "," << num_cell(m.view ? m.view->centre_px.y() : std::nan(""), 1) << "," << csv_cell(m.view ? m.view->centre_source : "") << ","
+            << csv_cell(message) << "\n";
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         // The table so far, rewritten atomically after every photo: a later
         // failure or an interrupted run keeps every row measured before it.

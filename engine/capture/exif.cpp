@@ -1,5 +1,7 @@
 #include "engine/capture/exif.hpp"
 
+#include "engine/capture/detail/jpeg.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -97,30 +99,16 @@ ExifLens read_tiff(const std::uint8_t* p, std::size_t n)
 ExifLens exif_lens(const std::vector<std::uint8_t>& b)
 {
     if (b.size() < 4 || b[0] != 0xFF || b[1] != 0xD8) return {}; // not a JPEG
-    std::size_t at = 2;
-    // Markers up to the image data: each FF xx with a 16-bit length (SOI, EOI and
-    // RSTn carry none; SOS starts the data, where EXIF no longer comes).
-    for (int markers = 0; markers < 64 && at + 4 <= b.size(); ++markers) {
-        if (b[at] != 0xFF) return {};
-        const std::uint8_t m = b[at + 1];
-        if (m == 0xFF) { // fill byte
-            ++at;
-            continue;
-        }
-        if (m == 0xD8 || (m >= 0xD0 && m <= 0xD7) || m == 0x01) {
-            at += 2;
-            continue;
-        }
-        if (m == 0xDA || m == 0xD9) return {};
-        const std::size_t len = static_cast<std::size_t>(b[at + 2]) << 8 | b[at + 3];
-        if (len < 2 || at + 2 + len > b.size()) return {};
+    ExifLens out;
+    detail::walk_jpeg_segments(b.data(), b.size(), [&](unsigned marker, std::size_t at, std::size_t length) {
+        if (length < 2 || at + 2 + length > b.size()) return true; // cut short: no lens
         const std::uint8_t* seg = b.data() + at + 4;
-        const std::size_t n = len - 2;
-        if (m == 0xE1 && n >= 6 && std::equal(seg, seg + 6, reinterpret_cast<const std::uint8_t*>("Exif\0\0")))
-            return read_tiff(seg + 6, n - 6);
-        at += 2 + len;
-    }
-    return {};
+        const std::size_t n = length - 2;
+        if (marker != 0xE1 || n < 6 || !std::equal(seg, seg + 6, reinterpret_cast<const std::uint8_t*>("Exif\0\0"))) return false;
+        out = read_tiff(seg + 6, n - 6);
+        return true;
+    }, 64);
+    return out;
 }
 
 ExifLens exif_lens(const std::filesystem::path& jpeg)

@@ -1,5 +1,6 @@
 #include "engine/capture/image.hpp"
 
+#include "engine/capture/detail/jpeg.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/io.hpp"
 
@@ -46,30 +47,14 @@ std::optional<std::pair<long, long>> header_size(const std::string& b, Format f)
         return std::pair{static_cast<long>(w), h < 0 ? -static_cast<long>(h) : static_cast<long>(h)};
     }
     case Format::Jpeg: {
-        std::size_t i = 2;
-        while (i + 1 < b.size()) {
-            if (u8(i) != 0xFF) return std::nullopt;
-            const unsigned long marker = u8(i + 1);
-            if (marker == 0xFF) { // fill byte
-                ++i;
-                continue;
-            }
-            if (marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) {
-                i += 2;
-                continue;
-            }
-            if (marker == 0xDA || marker == 0xD9) return std::nullopt; // image data (or the end) before any frame header
-            if (i + 3 >= b.size()) return std::nullopt;
-            const std::size_t len = (u8(i + 2) << 8) | u8(i + 3);
+        std::optional<std::pair<long, long>> size;
+        detail::walk_jpeg_segments(reinterpret_cast<const unsigned char*>(b.data()), b.size(), [&](unsigned marker, std::size_t i, std::size_t) {
             // SOF0..SOF15 except DHT (C4), JPG (C8) and DAC (CC).
-            if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
-                if (i + 8 >= b.size()) return std::nullopt;
-                return std::pair{static_cast<long>((u8(i + 7) << 8) | u8(i + 8)), static_cast<long>((u8(i + 5) << 8) | u8(i + 6))};
-            }
-            if (len < 2) return std::nullopt;
-            i += 2 + len;
-        }
-        return std::nullopt;
+            if (!(marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC)) return false;
+            if (i + 8 < b.size()) size = std::pair{static_cast<long>((u8(i + 7) << 8) | u8(i + 8)), static_cast<long>((u8(i + 5) << 8) | u8(i + 6))};
+            return true;
+        });
+        return size; // none before the image data (or the end): refused
     }
     case Format::Other: break;
     }

@@ -328,8 +328,19 @@ void residual_section(std::ostringstream& md, const FitResult& r, const fs::path
     if (a.dominant_harmonics.empty()) md << "none";
     for (int k : a.dominant_harmonics) md << k << " ";
     md << "\n\n";
-    if (a.candidate_effects.empty()) md << "No candidate effect: the model explains the record(s) to the noise level"
-                                        << (a.exceeds_noise ? " as far as the signatures checked can tell" : "") << ".\n";
+    // The matched filters are a first screen; when the candidate library ran, its
+    // verdict (named effect, or unexplained) above is the report's word on the
+    // cause, and this paragraph must not contradict it.
+    const bool library_ran = !r.residual.candidates.empty();
+    if (a.candidate_effects.empty()) {
+        if (library_ran)
+            md << "Matched filters: no signature above 3 sigma (the candidate effects' refits above decide what is named).\n";
+        else
+            md << "No candidate effect: the model explains the record(s) to the noise level"
+               << (a.exceeds_noise ? " as far as the signatures checked can tell" : "") << ".\n";
+    } else if (library_ran) {
+        md << "Matched filters above 3 sigma (a screen; the refits above decide what is named):\n";
+    }
     for (std::size_t i = 0; i < a.candidate_effects.size(); ++i) md << "- **" << a.candidate_effects[i] << "**: " << a.evidence[i] << "\n";
     md << "\nNoise model (1 sigma): laser " << num(r.options.noise.laser_m * 1e3, "%.2f") << " mm per point, D "
        << num(r.options.noise.dc_lab_percent, "%.1f") << " % (drapemeter) + " << num(r.options.noise.dc_seed_percent, "%.1f")

@@ -6,6 +6,10 @@
 #include "engine/estimate/detail/pipeline.hpp"
 #include "engine/estimate/fit.hpp"
 #include "engine/estimate/objective.hpp"
+#include "engine/estimate/report.hpp"
+
+#include <QFile>
+#include <QTemporaryDir>
 
 #include <QTest>
 
@@ -171,6 +175,42 @@ private slots:
         const FitResult first_kept = combine_runs(first, second, false, "tie ");
         QCOMPARE(first_kept.evaluations, 14);
         QCOMPARE(first_kept.trace.front().stage, std::string("scan"));
+    }
+
+    void theReportNeverContradictsTheNamedEffect()
+    {
+        // The candidate library named an effect while the matched filters (an older,
+        // narrower screen) flagged nothing: report.md says what the JSON says.
+        FitResult r = free_fit(-5.0, -5.0, 0.01);
+        const EffectCandidate c{.name = "profiler_scale",
+                                .family = "instrument",
+                                .description = "the profiler reads radii scaled",
+                                .z = 5.1,
+                                .delta_chi2 = 26.0,
+                                .information = 20.0,
+                                .amplitude = 1.5,
+                                .amplitudes = {1.5},
+                                .amplitude_unit = "%",
+                                .verdict = "beyond noise",
+                                .note = ""};
+        r.residual.candidates = {c};
+        r.residual.named_effect = c.name;
+        r.residual.exceeds_noise = true;
+        QTemporaryDir dir;
+        QVERIFY(dir.isValid());
+        write_fit_report(r, dir.path().toStdString());
+        QFile f(dir.path() + "/report.md");
+        QVERIFY(f.open(QIODevice::ReadOnly));
+        const QString md = QString::fromUtf8(f.readAll());
+        QVERIFY2(md.contains("Named effect: **profiler_scale**"), qPrintable(md));
+        QVERIFY2(!md.contains("No candidate effect"), qPrintable(md));
+        // Without the library's refits, the matched filters' word stands.
+        FitResult plain = free_fit(-5.0, -5.0, 0.01);
+        QTemporaryDir dir2;
+        write_fit_report(plain, dir2.path().toStdString());
+        QFile g(dir2.path() + "/report.md");
+        QVERIFY(g.open(QIODevice::ReadOnly));
+        QVERIFY(QString::fromUtf8(g.readAll()).contains("No candidate effect"));
     }
 
     void stageNames()

@@ -1,6 +1,7 @@
 // `drape measure`: a drape-test record, a single top photo, or a folder of
 // photos -> calibrated measurements.
 #include "cli/command.hpp"
+#include "cli/photo_manifest.hpp"
 #include "cli/progress.hpp"
 
 #ifdef HAVE_DRAPE_CAPTURE
@@ -34,6 +35,15 @@ double length_mm(const cli::Args& a, const std::string& flag)
     return 1e3 * a.get_length(flag, std::nan(""));
 }
 
+/// --specimen-angle DEG|auto as meta.json's angle_deg.
+std::optional<json> angle_flag(const cli::Args& a)
+{
+    const auto ang = a.get("--specimen-angle");
+    if (!ang) return std::nullopt;
+    if (*ang == "auto") return json("auto");
+    return json(a.get_double("--specimen-angle", 0));
+}
+
 /// "300mm" -> round; "300x400mm" or "30x40cm" -> rectangle.
 json specimen_json(const std::string& text, const cli::Args& a)
 {
@@ -49,22 +59,30 @@ json specimen_json(const std::string& text, const cli::Args& a)
         if (w.find_first_not_of("0123456789.eE+-") == std::string::npos) w += unit;
         sp = {{"shape", "rectangle"}, {"width_mm", 1e3 * parse_length(w, "--specimen")}, {"length_mm", 1e3 * parse_length(l, "--specimen")}};
     }
-    if (auto ang = a.get("--specimen-angle")) {
-        if (*ang == "auto") sp["angle_deg"] = "auto";
-        else sp["angle_deg"] = a.get_double("--specimen-angle", 0);
-    }
+    if (auto ang = angle_flag(a)) sp["angle_deg"] = *ang;
     return sp;
 }
 
 /// The meta.json the single-photo flags describe (documented in docs/capture.md).
-json meta_from_flags(const cli::Args& a, const std::string& image, const std::string& id)
+/// With a manifest row (`row`, at `row_where`), the sizes it gives need no flag;
+/// apply_manifest_row then puts its values in.
+json meta_from_flags(const cli::Args& a, const std::string& image, const std::string& id, const cli::ManifestRow* row = nullptr,
+                     const std::string& row_where = "")
 {
     json conf;
     const auto disc = a.get("--disc");
     const auto spec = a.get("--specimen");
-    if (!disc || !spec) throw cli::UsageError("a photo needs --disc DIAMETER and --specimen DIAMETER|WxL");
-    conf["support_disc_diameter_D2_mm"] = length_mm(a, "--disc");
-    conf["specimen"] = specimen_json(*spec, a);
+    if (row && (!disc || !spec)) {
+        if (!disc && !row->disc_mm)
+            throw FileError(row_where + ": column 'disc_mm' is empty (or missing) for " + printable(image) + " and there is no --disc");
+        if (!spec && !row->specimen_width_mm)
+            throw FileError(row_where + ": column 'specimen_mm' is empty (or missing) for " + printable(image) + " and there is no --specimen");
+    } else if (!disc || !spec) {
+        throw cli::UsageError("a photo needs --disc DIAMETER and --specimen DIAMETER|WxL");
+    }
+    if (disc) conf["support_disc_diameter_D2_mm"] = length_mm(a, "--disc");
+    if (spec) conf["specimen"] = specimen_json(*spec, a);
+    else if (auto ang = angle_flag(a)) conf["specimen"] = {{"angle_deg", *ang}}; // for the row's rectangle
     if (a.has("--pedestal-height")) conf["pedestal_height_mm"] = length_mm(a, "--pedestal-height");
     json scale;
     const std::string s = a.get_or("--scale", "disc");
@@ -104,6 +122,46 @@ json meta_from_flags(const cli::Args& a, const std::string& image, const std::st
     if (a.has("--focal-px")) tp["focal_px"] = a.get_double("--focal-px", 0);
     if (auto p = a.get("--perspective"); p && *p != "calibration") tp["perspective"] = *p;
     return {{"specimen_id", id}, {"configuration", conf}, {"top_photo", tp}};
+}
+
+/// A manifest row's values over a photo's meta.json (from the flags or a --meta
+/// template). `where` is "M.csv:LINE".
+void apply_manifest_row(json& meta, const cli::ManifestRow& r, const std::string& where)
+{
+    json& conf = meta["configuration"];
+    if (r.disc_mm) conf["support_disc_diameter_D2_mm"] = *r.disc_mm;
+    if (r.specimen_width_mm) {
+        json sp = r.specimen_length_mm
+                      ? json{{"shape", "rectangle"}, {"width_mm", *r.specimen_width_mm}, {"length_mm", *r.specimen_length_mm}}
+                      : json{{"shape", "round"}, {"diameter_mm", *r.specimen_width_mm}};
+        // A rectangle keeps the default's orientation unless the row gives its own.
+        if (r.specimen_length_mm && conf.contains("specimen") && conf["specimen"].is_object() && conf["specimen"].contains("angle_deg"))
+            sp["angle_deg"] = conf["specimen"]["angle_deg"];
+        conf.erase("specimen_diameter_D1_mm");
+        conf["specimen"] = sp;
+    }
+    if (r.specimen_angle_deg || r.specimen_angle_auto) {
+        const bool round = !conf.contains("specimen") || !conf["specimen"].is_object() || conf["specimen"].value("shape", "round") == "round";
+        if (round)
+            throw FileError(where + ": column 'specimen_angle_deg': '" + printable(r.specimen_angle_text) +
+                            "' turns a rectangle, square or polygon, and this photo's specimen is round");
+        conf["specimen"]["angle_deg"] = r.specimen_angle_auto ? json("auto") : json(*r.specimen_angle_deg);
+    }
+    // The disc centre as --disc-px X,Y gives it (a declared radius stays).
+    if (r.centre_x_px) meta["top_photo"]["disc_px"]["centre"] = {*r.centre_x_px, *r.centre_y_px};
+}
+
+/// The markers or chessboard of the scale declaration `decl`, found once in the
+/// calibration photo `given` (--scale-from).
+capture::ScaleCalibration read_calibration(const std::string& given, const record::TopPhoto& decl)
+{
+    if (decl.scale != record::ScaleSource::Markers && decl.scale != record::ScaleSource::Chessboard)
+        throw cli::UsageError(std::string("--scale-from ") + printable(given) + ": the scale is '" + record::to_string(decl.scale) +
+                              "'; a calibration photo is read for --scale markers or --scale chessboard (the disc rim is found in "
+                              "each photo, a px/mm needs no photo)");
+    std::error_code ec;
+    if (!fs::is_regular_file(fs::path(given), ec)) throw FileError(given + ": no such calibration photo (--scale-from)");
+    return capture::read_scale_calibration(decl, given);
 }
 
 capture::MeasureOptions options(const cli::Args& a)
@@ -238,7 +296,18 @@ std::string num_cell(double v, int prec = 2)
     return b;
 }
 
-int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
+/// The specimen as the batch table gives it: "300" (round, mm), "300x400" (a
+/// rectangle, with " at 20 deg" or " at auto"), else the shape in words.
+std::string specimen_cell(const record::Specimen& sp)
+{
+    if (sp.shape == record::Specimen::Shape::Round) return format_value(2e3 * sp.radius);
+    if (sp.shape == record::Specimen::Shape::Rectangle)
+        return format_value(1e3 * sp.width) + "x" + format_value(1e3 * sp.length) + " at " +
+               (sp.angle_from_photo ? std::string("auto") : format_value(sp.angle * 180 / M_PI) + " deg");
+    return sp.describe();
+}
+
+int run_batch(const cli::Args& a, capture::MeasureOptions opt)
 {
     const fs::path folder = *a.get("--batch");
     std::error_code ec;
@@ -259,20 +328,75 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
         throw cli::UsageError("--table " + printable(*table) + ": the table is written as CSV (.csv) or JSON (.json), not '" +
                               printable(table_ext.empty() ? std::string("no extension") : table_ext) + "'");
     const bool as_json = table_ext == ".json";
+    // One calibration for every photo: a meta.json template (--meta), or the flags;
+    // per photo, a manifest's row over it.
+    json templ;
+    if (auto mt = a.get("--meta")) templ = parse_json(read_file(*mt, std::size_t(4) << 20), *mt);
+    std::optional<cli::PhotoManifest> manifest;
+    if (auto mf = a.get("--manifest")) {
+        std::vector<std::string> names;
+        for (const auto& p : photos) names.push_back(p.filename().string());
+        manifest = cli::read_photo_manifest(*mf, folder.string(), names);
+    }
+    const std::string defaults = templ.is_null() ? "the command line" : printable(*a.get("--meta"));
+    auto row_of = [&](const fs::path& p) { return manifest ? manifest->find(p.filename().string()) : nullptr; };
+    auto meta_for = [&](const fs::path& p) {
+        const std::string name = p.filename().string();
+        const cli::ManifestRow* row = row_of(p);
+        const std::string row_where = row ? manifest->where(*row) : std::string();
+        json meta = templ.is_null() ? meta_from_flags(a, name, p.stem().string(), row, row_where) : templ;
+        if (!templ.is_null()) {
+            meta["top_photo"]["image"] = name;
+            meta["specimen_id"] = p.stem().string();
+        }
+        if (row) apply_manifest_row(meta, *row, row_where);
+        return meta;
+    };
+    auto record_for = [&](const fs::path& p) {
+        const cli::ManifestRow* row = row_of(p);
+        return record::parse_meta_json(meta_for(p), folder,
+                                       defaults + (row ? " and " + manifest->where(*row) : std::string()) + " for " + p.filename().string());
+    };
+    if (manifest) {
+        // Every photo's set-up is checked before any is measured: a bad row stops
+        // the batch with no table written.
+        std::vector<std::string> unlisted;
+        for (const auto& p : photos) {
+            if (!row_of(p)) {
+                unlisted.push_back(printable(p.filename().string()));
+                if (templ.is_null() && (!a.has("--disc") || !a.has("--specimen")))
+                    throw FileError(printable(manifest->file) + ": " + printable(p.filename().string()) + " is not in the manifest and there is no " +
+                                    (a.has("--disc") ? "--specimen" : "--disc") + " for it on the command line");
+            }
+            (void)record_for(p);
+        }
+        if (!unlisted.empty()) {
+            std::string list;
+            for (std::size_t i = 0; i < unlisted.size() && i < 5; ++i) list += (i ? ", " : "") + unlisted[i];
+            if (unlisted.size() > 5) list += ", ...";
+            std::fprintf(stderr, "manifest %s: %zu of %zu photos are not in it and are measured with %s's values (%s)\n",
+                         printable(manifest->file).c_str(), unlisted.size(), photos.size(), defaults.c_str(), list.c_str());
+        }
+    }
+    if (auto sf = a.get("--scale-from")) {
+        // Read once, before any photo is measured, with the photos' own scale declaration.
+        const record::Record first = record_for(photos.front());
+        opt.scale_calibration = read_calibration(*sf, *first.top_photo);
+        const auto& cal = *opt.scale_calibration;
+        std::fprintf(stderr, "scale for every photo: %s, found in %s (%d x %d px)\n", cal.description.c_str(), printable(cal.photo).c_str(),
+                     cal.width, cal.height);
+    }
     cli::prepare_output_file(*table, "--table");
     std::optional<fs::path> overlays;
     if (auto d = a.get("--overlays")) {
         cli::prepare_output_dir(*d, "--overlays");
         overlays = *d;
     }
-    // One calibration for every photo: a meta.json template (--meta), or the flags.
-    json templ;
-    if (auto mt = a.get("--meta")) templ = parse_json(read_file(*mt, std::size_t(4) << 20), *mt);
     json rows = json::array();
     std::ostringstream csv;
     csv << "photo,status,check,drape_coefficient_percent,uncertainty_percent,perspective,uncorrected_percent,disc_plane_percent,"
            "hem_percent,hem_uncertainty_percent,nodes,area_mm2,scale,px_per_mm,camera_height_mm,camera_height_known,centre_x_px,centre_y_px,"
-           "centre_source,message\n";
+           "centre_source,disc_mm,specimen_mm,manifest_line,message\n";
     int failed = 0;
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < photos.size(); ++i) {
@@ -281,19 +405,16 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
         // File names are untrusted text: escape sequences and control bytes are
         // escaped (\x1B) on the terminal and in the CSV; the JSON escapes them itself.
         const std::string shown = printable(name, 400);
-        json row = {{"photo", name}};
+        const cli::ManifestRow* row = row_of(p);
+        json row_json = {{"photo", name}};
         std::string status = "measured", check, message;
         capture::Measurement m;
+        std::optional<record::Record> rec;
         try {
-            json meta = templ.is_null() ? meta_from_flags(a, name, p.stem().string()) : templ;
-            if (!templ.is_null()) {
-                meta["top_photo"]["image"] = name;
-                meta["specimen_id"] = p.stem().string();
-            }
-            const record::Record rec = record::parse_meta_json(meta, folder, a.get_or("--meta", "the command line") + " for " + name);
-            m = capture::measure_record(rec, opt);
+            rec = record_for(p);
+            m = capture::measure_record(*rec, opt);
             if (overlays && !m.top_image.empty())
-                cv::imwrite((*overlays / (p.stem().string() + "-overlay.png")).string(), capture::draw_top_overlay(rec, m));
+                cv::imwrite((*overlays / (p.stem().string() + "-overlay.png")).string(), capture::draw_top_overlay(*rec, m));
             if (m.refused) {
                 status = "refused";
                 check = m.refused->check;
@@ -315,22 +436,31 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
         const auto& tv = m.top;
         const bool ok = status == "measured";
         const double D = ok ? tv.metrics.drape_coefficient_percent : std::nan("");
-        row["status"] = status;
-        row["check"] = check;
-        row["message"] = message;
+        const double disc_mm = rec ? 2e3 * rec->R2 : std::nan("");
+        const std::string specimen = rec ? specimen_cell(rec->specimen) : "";
+        const std::string scale = m.view ? std::string(record::to_string(m.view->source)) +
+                                               (m.view->calibration_photo.empty() ? "" : " in " + printable(m.view->calibration_photo, 400))
+                                         : "";
+        row_json["status"] = status;
+        row_json["check"] = check;
+        row_json["message"] = message;
+        row_json["disc_mm"] = rec ? json(disc_mm) : json(nullptr);
+        row_json["specimen_mm"] = rec ? json(specimen) : json(nullptr);
+        row_json["manifest_line"] = row ? json(row->line) : json(nullptr);
         if (ok) {
-            row["measurement"] = capture::to_json(m);
+            row_json["measurement"] = capture::to_json(m);
         }
-        rows.push_back(row);
+        rows.push_back(row_json);
         csv << csv_cell(shown) << "," << status << "," << check << "," << num_cell(D) << ","
             << num_cell(ok ? tv.dc_uncertainty_percent : std::nan("")) << "," << (ok ? tv.perspective : "") << ","
             << num_cell(ok ? tv.uncorrected.dc_percent : std::nan("")) << "," << num_cell(ok ? tv.disc_plane.dc_percent : std::nan("")) << ","
             << num_cell(ok ? tv.hem.dc_percent : std::nan("")) << "," << num_cell(ok ? tv.hem.uncertainty_percent : std::nan("")) << ","
             << (ok ? std::to_string(tv.metrics.node_count) : "") << "," << num_cell(ok ? tv.metrics.shadow_area_m2 * 1e6 : std::nan(""), 0) << ","
-            << (m.view ? record::to_string(m.view->source) : "") << "," << num_cell(m.view ? m.view->scale_px_per_m * 1e-3 : std::nan(""), 4) << ","
+            << csv_cell(scale) << "," << num_cell(m.view ? m.view->scale_px_per_m * 1e-3 : std::nan(""), 4) << ","
             << num_cell(m.view ? m.view->camera_height * 1e3 : std::nan(""), 0) << ","
             << (m.view ? (m.view->camera_height_known ? "yes" : "no") : "") << "," << num_cell(m.view ? m.view->centre_px.x() : std::nan(""), 1)
             << "," << num_cell(m.view ? m.view->centre_px.y() : std::nan(""), 1) << "," << csv_cell(m.view ? m.view->centre_source : "") << ","
+            << (rec ? format_value(disc_mm) : "") << "," << csv_cell(specimen) << "," << (row ? std::to_string(row->line) : "") << ","
             << csv_cell(message) << "\n";
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         // The table so far, rewritten atomically after every photo: a later
@@ -340,6 +470,7 @@ int run_batch(const cli::Args& a, const capture::MeasureOptions& opt)
         if (ok) std::fprintf(stderr, "  D = %.1f %% +- %.1f (%s)", D, tv.dc_uncertainty_percent, tv.perspective.c_str());
         else if (!check.empty()) std::fprintf(stderr, " (%s)", check.c_str());
         std::fprintf(stderr, "   %.0f s, about %.0f s left\n", elapsed, elapsed / static_cast<double>(i + 1) * static_cast<double>(photos.size() - i - 1));
+        if (status == "error") std::fprintf(stderr, "      %s\n", message.c_str());
     }
     std::fprintf(stderr, "%zu photos: %zu measured, %d refused or failed; table in %s\n", photos.size(),
                  photos.size() - static_cast<std::size_t>(failed), failed, printable(*table).c_str());
@@ -352,9 +483,16 @@ int run_measure(const std::vector<std::string>& argv)
                 {"--overlay", "--rays", "--node-prominence", "--texture", "--mesh", "--top", "--disc", "--specimen",
                  "--specimen-angle", "--scale", "--marker-size", "--marker-dict", "--board", "--square", "--reference-height",
                  "--disc-px", "--camera-height", "--focal-px", "--perspective", "--threshold", "--mask", "--segmentation",
-                 "--write-meta", "--batch", "--table", "--overlays", "--meta", "--pedestal-height"},
+                 "--write-meta", "--batch", "--table", "--overlays", "--meta", "--pedestal-height", "--scale-from", "--manifest"},
                 {"--json", "--no-calibrate"});
-    const capture::MeasureOptions opt = options(a);
+    capture::MeasureOptions opt = options(a);
+    if (a.has("--manifest") && !a.has("--batch")) throw cli::UsageError("--manifest goes with --batch FOLDER (one row per photo of the folder)");
+    if (a.has("--scale-from")) {
+        if (!a.has("--batch") && !a.has("--top"))
+            throw cli::UsageError("--scale-from goes with --top PHOTO or --batch FOLDER (a record's meta.json says where its own scale comes from)");
+        if (a.has("--write-meta"))
+            throw cli::UsageError("--write-meta cannot record --scale-from: a meta.json has no field for a separate calibration photo");
+    }
     if (a.has("--batch")) {
         if (!a.positionals().empty() || a.has("--top")) throw cli::UsageError("--batch takes no RECORD_DIR or --top");
         return run_batch(a, opt);
@@ -370,6 +508,7 @@ int run_measure(const std::vector<std::string>& argv)
         const json meta = meta_from_flags(a, p.filename().string(), p.stem().string());
         if (auto out = a.get("--write-meta")) write_file_atomic(*out, cli::dump_json(meta, 1) + "\n");
         rec = record::parse_meta_json(meta, p.parent_path(), "the command line (as meta.json)");
+        if (auto sf = a.get("--scale-from")) opt.scale_calibration = read_calibration(*sf, *rec.top_photo);
         photo = true;
         what = *top;
     } else {
@@ -393,8 +532,10 @@ DRAPE_COMMAND({"measure", "measure a drape-test record, a single top photo, or a
                "usage: drape measure RECORD_DIR [--json] [--overlay out.png] [--texture F.bmp] [--mesh F.obj]\n"
                "                    [--rays N] [--no-calibrate] [--node-prominence F] [--perspective P]\n"
                "                    [--threshold T] [--mask M.png] [--segmentation auto|photo|lab]\n"
-               "       drape measure --top PHOTO --disc 180mm --specimen 300mm|300x400mm [--scale S] [photo flags] [...]\n"
+               "       drape measure --top PHOTO --disc 180mm --specimen 300mm|300x400mm [--scale S] [--scale-from CALIB_PHOTO]\n"
+               "                     [photo flags] [...]\n"
                "       drape measure --batch FOLDER --table OUT.csv|OUT.json [--overlays DIR] (--meta TEMPLATE.json | photo flags)\n"
+               "                     [--scale-from CALIB_PHOTO] [--manifest M.csv]\n"
                "  RECORD_DIR       folder with meta.json and its photos (a lab record with cameras and contours, or a\n"
                "                   single-camera record with \"top_photo\": docs/capture.md)\n"
                "  --json           print the measurements as JSON (SI units, unit in each key)\n"
@@ -424,12 +565,21 @@ DRAPE_COMMAND({"measure", "measure a drape-test record, a single top photo, or a
                "  --board CxR      chessboard inner corners; --square L (default 25mm)\n"
                "  --reference-height Z  height of the markers / ruler / board above the disc top (negative: below;\n"
                "                   on the floor of a 120 mm stand: -120mm). Default 0.\n"
+               "  --scale-from CALIB_PHOTO  find the markers or chessboard once, in a separate photo of the same fixed\n"
+               "                   camera at the same pixel size (e.g. the board alone), not in each photo; the output\n"
+               "                   names it (\"chessboard ... in CALIB_PHOTO\"). Needs --scale markers or chessboard.\n"
                "  --disc-px X,Y[,R]  the disc's centre (and radius) in the photo [px], when it cannot be found\n"
                "  --camera-height H  optical centre above the disc top; or --focal-px F (the lens in pixels)\n"
                "  --pedestal-height H  the stand's height (default 120mm)\n"
                "  --write-meta FILE  write the meta.json these flags describe (keep it beside the photo)\n"
                "  --table FILE     the batch's table: FILE.csv or FILE.json (rewritten after every photo, so a run\n"
                "                   cut short keeps the rows measured before; a photo that fails is a row with its error)\n"
+               "  --manifest M.csv per-photo values for --batch: a header, then a row per photo; columns photo (the file\n"
+               "                   name in FOLDER, required), disc_mm, specimen_mm (300 or 300x400), specimen_angle_deg\n"
+               "                   (DEG or auto), centre_x_px and centre_y_px (the disc centre, as --disc-px X,Y). An\n"
+               "                   empty cell or an unlisted photo takes the command line's value. Checked whole before\n"
+               "                   any photo is measured: an unknown column, a photo not in FOLDER or a bad number is an\n"
+               "                   error naming the line, column and value (exit 1, no table).\n"
                "Exit codes: 0 measured; 1 refused (the check and what to try are printed) or bad input; 2 bad command\n"
                "line. Files missing from a lab record are listed under not_measured (exit 0); a file the record names\n"
                "that is there but cannot be read (a value out of range, a cell that is not a number, a photo that is\n"

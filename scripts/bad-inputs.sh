@@ -332,6 +332,31 @@ case_ "measure --top: uniform grey photo" 1 "refused (no-cloth): no cloth found"
 cp "$tmp/photos/grey.png" "$tmp/photos/"$'b\e[2J\ax.png'
 case_ "measure --batch --table out.xlsx" 2 "--table" -- "$drape" measure --batch "$tmp/photos" --table "$tmp/out.xlsx" --disc 150mm --specimen 300mm
 case_ "measure --batch: ESC in a file name" 1 'b\x1B[2J\x07x.png' -- "$drape" measure --batch "$tmp/photos" --table "$tmp/out.csv" --disc 150mm --specimen 300mm
+# A scale calibration photo (--scale-from): the example record's top.jpg has the
+# floor chessboard (6 x 11 inner corners, 25 mm, 120 mm below the disc top).
+board=(--disc 150mm --specimen 300mm --scale chessboard --board 6x11 --square 25mm --reference-height -120mm)
+"$py" - "$tmp/photos/small.png" <<'EOF'
+import struct, sys, zlib
+w, h = 800, 600
+raw = b"".join(b"\x00" + b"\x80" * (3 * w) for _ in range(h))
+def chunk(t, d): return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
+open(sys.argv[1], "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)) +
+                              chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+EOF
+case_ "measure --scale-from: no such photo" 1 "none.jpg: no such calibration photo (--scale-from)" -- "$drape" measure --top "$src_record/top.jpg" "${board[@]}" --scale-from "$tmp/none.jpg"
+case_ "measure --scale-from: another size" 1 "small.png: the photo is 800 x 600 px but the scale calibration photo $src_record/top.jpg is 1152 x 872 px" -- "$drape" measure --top "$tmp/photos/small.png" "${board[@]}" --scale-from "$src_record/top.jpg"
+case_ "measure --scale-from: no board in it" 1 "grey.png: scale calibration photo: no chessboard of 6 x 11 inner corners" -- "$drape" measure --top "$src_record/top.jpg" "${board[@]}" --scale-from "$tmp/photos/grey.png"
+case_ "measure --scale-from with --scale disc" 2 "--scale-from" -- "$drape" measure --top "$src_record/top.jpg" --disc 150mm --specimen 300mm --scale-from "$src_record/top.jpg"
+# A manifest (--manifest) is checked whole before any photo is measured.
+mkdir -p "$tmp/mphotos" && cp "$tmp/photos/grey.png" "$tmp/mphotos/grey.png"
+printf 'photo,disk_mm\ngrey.png,150\n' >"$tmp/unknown-column.csv"
+case_ "manifest: unknown column" 1 "unknown-column.csv:1: column 2 'disk_mm' is not a manifest column" -- "$drape" measure --batch "$tmp/mphotos" --table "$tmp/m.csv" --disc 150mm --specimen 300mm --manifest "$tmp/unknown-column.csv"
+printf 'photo,disc_mm\ngrey.png,150\nnone.png,150\n' >"$tmp/missing-photo.csv"
+case_ "manifest: photo not in the folder" 1 "missing-photo.csv:3: column 'photo': 'none.png' does not exist" -- "$drape" measure --batch "$tmp/mphotos" --table "$tmp/m.csv" --disc 150mm --specimen 300mm --manifest "$tmp/missing-photo.csv"
+printf 'photo,disc_mm,specimen_mm\ngrey.png,150,300x4OO\n' >"$tmp/bad-size.csv"
+case_ "manifest: specimen 300x4OO" 1 "bad-size.csv:2: column 'specimen_mm': '300x4OO' is not a diameter" -- "$drape" measure --batch "$tmp/mphotos" --table "$tmp/m.csv" --disc 150mm --specimen 300mm --manifest "$tmp/bad-size.csv"
+printf 'photo,disc_mm\ngrey.png,1e400\n' >"$tmp/bad-number.csv"
+case_ "manifest: disc_mm 1e400" 1 "bad-number.csv:2: column 'disc_mm': '1e400' is not a number" -- "$drape" measure --batch "$tmp/mphotos" --table "$tmp/m.csv" --disc 150mm --specimen 300mm --manifest "$tmp/bad-number.csv"
 
 # ---- meshes -----------------------------------------------------------------
 printf 'v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n' >"$tmp/nan.obj"

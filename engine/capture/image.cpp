@@ -124,9 +124,11 @@ cv::Mat load_image(const record::Record& rec, const std::string& camera)
     return img;
 }
 
-cv::Mat load_photo(const record::Record& rec, const std::string& name)
+cv::Mat load_photo(const record::Record& rec, const std::string& name) { return load_photo_file(rec.file(name)); }
+
+cv::Mat load_photo_file(const std::filesystem::path& path)
 {
-    const PhotoFile f = read_photo(rec.file(name).string(), std::size_t(256) << 20);
+    const PhotoFile f = read_photo(path.string(), std::size_t(256) << 20);
     if (f.width < 16 || f.height < 16 || f.width > 20000 || f.height > 20000 || static_cast<double>(f.width) * f.height > 200e6)
         throw FileError(f.path + ": image is " + std::to_string(f.width) + " x " + std::to_string(f.height) +
                         " px (accepted: 16 .. 20000 px a side, at most 200 megapixels)");

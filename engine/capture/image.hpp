@@ -6,6 +6,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <filesystem>
 #include <string>
 
 namespace drape::capture {
@@ -22,6 +23,9 @@ cv::Mat load_image(const record::Record& rec, const std::string& camera);
 /// a side and 200 megapixels (read from the header before decoding), JPEG
 /// checked for truncation. Throws FileError.
 cv::Mat load_photo(const record::Record& rec, const std::string& name);
+
+/// The same for a photo outside any record (a scale calibration photo), by path.
+cv::Mat load_photo_file(const std::filesystem::path& path);
 
 /// The intrinsic matrix K of a camera [px].
 cv::Matx33d camera_matrix(const record::Camera& c);

@@ -66,6 +66,10 @@ struct MeasureOptions {
     std::string segmentation = "auto";
     /// Manual overrides (threshold, user mask); they select the photo segmenter.
     SegmentOverrides overrides;
+    /// A single photo's markers or chessboard as found once in a separate
+    /// calibration photo of the same fixed camera (read_scale_calibration): not
+    /// searched in the photo. Only for single-camera records.
+    std::optional<ScaleCalibration> scale_calibration;
 };
 
 /// Segments and measures a record. Missing or broken optional files

@@ -116,6 +116,7 @@ json scale_json(const ViewGeometry& g)
         sc["markers_found"] = mk;
     }
     if (!g.board_corners_px.empty()) sc["chessboard_corners"] = g.board_corners_px.size();
+    sc["calibration_photo"] = g.calibration_photo.empty() ? json(nullptr) : json(g.calibration_photo);
     return sc;
 }
 

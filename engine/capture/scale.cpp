@@ -359,6 +359,10 @@ cv::Mat rough_cloth_mask(const cv::Mat& bgr)
     const int bx = std::max(3, small.cols / 25), by = std::max(3, small.rows / 25);
     cv::Mat mask(small.size(), CV_8U, cv::Scalar(cv::GC_BGD)), bgd, fgd;
     cv::Rect rect(bx, by, small.cols - 2 * bx, small.rows - 2 * by);
+    // GrabCut's k-means draws from the thread's OpenCV RNG: started as a process
+    // starts it, so a photo's rough mask (and the disc centre taken from it) is the
+    // same alone or after other photos of a batch.
+    cv::theRNG() = cv::RNG();
     cv::grabCut(detail::grabcut_input(small), mask, rect, bgd, fgd, 4, cv::GC_INIT_WITH_RECT);
     cv::Mat fg = (mask == cv::GC_FGD) | (mask == cv::GC_PR_FGD);
     const auto open = cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5});
@@ -786,9 +790,81 @@ double reference_focal(const record::Record& rec, const Frame& fr, ViewGeometry&
 
 } // namespace
 
-ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv::Mat& lab, const cv::Mat& rough_cloth)
+namespace {
+
+bool printed_reference(record::ScaleSource s) { return s == record::ScaleSource::Markers || s == record::ScaleSource::Chessboard; }
+
+/// The record with the calibration photo's scale declaration in place of its own.
+record::Record with_calibration_reference(const record::Record& rec, const ScaleCalibration& cal)
 {
-    if (!rec.top_photo) throw ParameterError("solve_view: the record has no top_photo");
+    record::Record r = rec;
+    record::TopPhoto& tp = *r.top_photo;
+    const record::TopPhoto& ref = cal.reference;
+    tp.scale = ref.scale;
+    tp.reference_height = ref.reference_height;
+    tp.reference_height_sigma = ref.reference_height_sigma;
+    tp.marker_dictionary = ref.marker_dictionary;
+    tp.marker_size = ref.marker_size;
+    tp.marker_layout = ref.marker_layout;
+    tp.board_cols = ref.board_cols;
+    tp.board_rows = ref.board_rows;
+    tp.board_square = ref.board_square;
+    return r;
+}
+
+} // namespace
+
+void check_calibration_size(const ScaleCalibration& cal, const std::string& name, int width, int height)
+{
+    if (width == cal.width && height == cal.height) return;
+    throw FileError(name + ": the photo is " + std::to_string(width) + " x " + std::to_string(height) + " px but the scale calibration photo " +
+                    cal.photo + " is " + std::to_string(cal.width) + " x " + std::to_string(cal.height) +
+                    " px: a scale read in one photo holds for another only from the same fixed camera at the same image size");
+}
+
+ScaleCalibration read_scale_calibration(const record::TopPhoto& reference, const std::filesystem::path& photo)
+{
+    if (!printed_reference(reference.scale))
+        throw ParameterError(std::string("a scale calibration photo is read for markers or a chessboard, not for the scale source '") +
+                             record::to_string(reference.scale) + "' (the disc rim is found in each photo; px/mm needs no photo)");
+    ScaleCalibration cal;
+    cal.photo = photo.string();
+    cal.reference = reference;
+    const cv::Mat bgr = load_photo_file(photo);
+    cal.width = bgr.cols;
+    cal.height = bgr.rows;
+    ViewGeometry g;
+    g.reference_height = reference.reference_height;
+    const Frame fr{bgr.cols, bgr.rows, (bgr.cols - 1) / 2.0, (bgr.rows - 1) / 2.0};
+    try {
+        find_reference(bgr, reference, g);
+        // The scale in the reference's plane does not depend on the focal length;
+        // the plane's pose does, and is solved in each photo with that photo's lens.
+        const PlanePose pp = reference_plane(reference, g, prior_focal(fr.W, fr.H), fr.cx, fr.cy);
+        cal.scale_px_per_m = pp.scale_px_per_m;
+        cal.scale_sigma_rel = pp.scale_sigma_rel;
+        cal.description = pp.text + " at z = " + fmt("%.0f", 1e3 * reference.reference_height) + " mm: " +
+                          fmt("%.5g", 1e-3 * pp.scale_px_per_m) + " px/mm (+-" + fmt("%.2f", 100 * pp.scale_sigma_rel) + " %)";
+    } catch (const RefusalError& e) {
+        throw FileError(cal.photo + ": scale calibration photo: " + e.refusal.message + " -- try: " + e.refusal.remedy);
+    }
+    cal.markers = std::move(g.markers);
+    cal.board_corners_px = std::move(g.board_corners_px);
+    return cal;
+}
+
+ViewGeometry solve_view(const record::Record& rec_in, const cv::Mat& bgr, const cv::Mat& lab, const cv::Mat& rough_cloth,
+                        const ScaleCalibration* calibration)
+{
+    if (!rec_in.top_photo) throw ParameterError("solve_view: the record has no top_photo");
+    std::optional<record::Record> calibrated;
+    if (calibration) {
+        if (!printed_reference(calibration->reference.scale))
+            throw ParameterError("solve_view: a scale calibration holds markers or a chessboard");
+        check_calibration_size(*calibration, rec_in.file(rec_in.top_image()).string(), bgr.cols, bgr.rows);
+        calibrated = with_calibration_reference(rec_in, *calibration);
+    }
+    const record::Record& rec = calibrated ? *calibrated : rec_in;
     const record::TopPhoto& tp = *rec.top_photo;
     ViewGeometry g;
     g.single_camera = true;
@@ -802,7 +878,14 @@ ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv:
     // Markers or a chessboard: a plane of known geometry at a declared height.
     g.reference_height = tp.reference_height;
     g.reference_height_sigma = tp.reference_height_sigma.value_or(0.001);
-    find_reference(bgr, tp, g);
+    if (calibration) {
+        // Found once in the calibration photo: the same camera, so the same pixels.
+        g.markers = calibration->markers;
+        g.board_corners_px = calibration->board_corners_px;
+        g.calibration_photo = calibration->photo;
+    } else {
+        find_reference(bgr, tp, g);
+    }
     const double f = reference_focal(rec, fr, g);
     auto [pp, cam] = camera_at_focal(tp, g, fr, f);
     g.focal_px = f;
@@ -814,7 +897,8 @@ ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv:
     if (auto dh = declared_height(tp)) g.camera_height_sigma = dh->second;
     g.scale_px_per_m = pp.scale_px_per_m;
     g.scale_sigma_rel = pp.scale_sigma_rel;
-    g.source_text = pp.text + " at z = " + fmt("%.0f", 1e3 * g.reference_height) + " mm";
+    g.source_text = pp.text + (calibration ? " in " + calibration->photo : std::string()) + " at z = " + fmt("%.0f", 1e3 * g.reference_height) +
+                    " mm";
     for (auto& w : pp.warnings) g.warnings.push_back(w);
     if (!(g.camera_height > 0.05)) throw FileError("top_photo: the camera comes out below the disc top; check the scale's height_mm");
     const double tilt = std::acos(std::clamp(-pp.up_cam.z(), -1.0, 1.0)) * 180 / M_PI;

@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -64,6 +65,9 @@ struct ViewGeometry {
     std::optional<DiscRim> disc;
     std::vector<MarkerSeen> markers;
     std::vector<Eigen::Vector2d> board_corners_px; ///< chessboard corners used
+    /// The separate calibration photo the markers or chessboard were found in
+    /// (ScaleCalibration::photo); "" when they were found in this photo.
+    std::string calibration_photo;
     // Internal: the plane model the camera was built from (single camera).
     double focal_px = 0;
     Eigen::Vector3d plane_normal_cam = Eigen::Vector3d(0, 0, -1); ///< world +z in camera coordinates
@@ -85,11 +89,43 @@ struct RefusalError : std::runtime_error {
     explicit RefusalError(Refusal r) : std::runtime_error(r.message), refusal(std::move(r)) {}
 };
 
+/// A scale reference (printed markers or a chessboard) found once in a separate
+/// calibration photo, taken with the same fixed camera at the same image size as
+/// the photos it is used for. Each of those photos is then solved as if the
+/// reference had been found in it: the same corners, so the same plane, px/mm,
+/// reference height and sigma; the disc, the lens (EXIF) and the camera height
+/// are still each photo's own.
+struct ScaleCalibration {
+    std::string photo;          ///< the calibration photo, as named to the user
+    int width = 0, height = 0;  ///< its size [px]; every photo it is used for must have the same
+    record::TopPhoto reference; ///< the declaration it was read with: source, size, layout, dictionary, height (image unused)
+    std::vector<MarkerSeen> markers;               ///< the markers found in it
+    std::vector<Eigen::Vector2d> board_corners_px; ///< the chessboard corners found in it
+    double scale_px_per_m = 0;  ///< the reference's image scale in its plane [px/m]
+    double scale_sigma_rel = 0; ///< relative error of that scale [-]
+    std::string description;    ///< what was found, one line
+};
+
+/// Finds the markers or the chessboard that `reference` declares (its scale
+/// source, sizes, layout and height; reference.image is not used) in the photo
+/// at `photo`. Throws FileError naming the photo when it cannot be read or the
+/// reference is not in it, ParameterError for a scale source that is not a
+/// printed pattern (the disc rim is found in each photo; px/mm needs no photo).
+ScaleCalibration read_scale_calibration(const record::TopPhoto& reference, const std::filesystem::path& photo);
+
+/// Throws FileError naming both photos and both sizes unless the photo `name` is
+/// `width` x `height` px, the size of the calibration photo.
+void check_calibration_size(const ScaleCalibration& cal, const std::string& name, int width, int height);
+
 /// The camera of a single-camera record's top photo from its scale source.
 /// `rough_cloth` is a rough mask of the cloth (for the disc search; may be
-/// empty). Throws RefusalError when the scale reference is not in the photo,
-/// FileError for an unusable declaration.
-ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv::Mat& lab, const cv::Mat& rough_cloth);
+/// empty). With `calibration` the markers or chessboard are not searched in the
+/// photo: the calibration photo's are used, with its declaration (the record's
+/// own scale source is then not used). Throws RefusalError when the scale
+/// reference is not in the photo, FileError for an unusable declaration or a
+/// calibration photo of another size.
+ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv::Mat& lab, const cv::Mat& rough_cloth,
+                        const ScaleCalibration* calibration = nullptr);
 
 /// The same camera with the camera height changed to `H` [m], keeping the
 /// image of the scale reference plane (what the photo measured) fixed.

@@ -301,8 +301,14 @@ namespace {
 ViewGeometry top_view_geometry(const record::Record& rec, const MeasureOptions& opt, const cv::Mat& lab, Measurement& out)
 {
     ViewGeometry g;
+    const ScaleCalibration* cal = opt.scale_calibration ? &*opt.scale_calibration : nullptr;
+    if (cal && !rec.single_camera())
+        throw ParameterError("a scale calibration photo (" + cal->photo + ") is for single photos; " + rec.specimen_id +
+                             " is measured on its calibrated camera (cameras.top)");
     if (rec.single_camera()) {
         const auto& tp = *rec.top_photo;
+        // A calibration photo of another size: said before any work on the photo.
+        if (cal) check_calibration_size(*cal, rec.file(rec.top_image()).string(), out.top_image.cols, out.top_image.rows);
         // Nothing in the photo (one colour throughout): said at once, before
         // the disc search and GrabCut look for what is not there.
         if (const double spread = colour_spread(out.top_image); spread < kMinColourSpread)
@@ -323,10 +329,10 @@ ViewGeometry top_view_geometry(const record::Record& rec, const MeasureOptions& 
                 with_lens.top_photo->focal_px = focal_px_from_35mm(*lens.focal_35mm_mm, out.top_image.cols, out.top_image.rows);
                 with_lens.top_photo->focal_px_sigma_rel = 0.05;
                 with_lens.top_photo->focal_px_source = "photo's EXIF (" + fmt("%.0f", *lens.focal_35mm_mm) + " mm, 35 mm equivalent)";
-                return solve_view(with_lens, out.top_image, lab, rough);
+                return solve_view(with_lens, out.top_image, lab, rough, cal);
             }
         }
-        return solve_view(rec, out.top_image, lab, rough);
+        return solve_view(rec, out.top_image, lab, rough, cal);
     }
     const record::Camera& declared = rec.cameras.at("top");
     g.camera = declared;

@@ -739,10 +739,11 @@ private slots:
               ma["scale"]["px_per_m"].get<double>() * 1e-3, a["scale"]["px_per_m"].get<double>() * 1e-3);
         QCOMPARE(Dd, Dd0); // the same pixels: the same corners, the same camera
         QCOMPARE(md["scale"]["px_per_m"].get<double>(), d["scale"]["px_per_m"].get<double>());
-        QCOMPARE(one_decimal(Da), one_decimal(Da0));
-        QCOMPARE(one_decimal(ma["drape_coefficient_uncertainty_percent"].get<double>()),
-                 one_decimal(a["drape_coefficient_uncertainty_percent"].get<double>()));
+        // Another photo's corners carry their own pixel noise: the same D to well
+        // within its uncertainty (not to the printed digit, which a rounding step
+        // can split).
         QVERIFY(std::abs(Da - Da0) < 0.06);
+        QVERIFY(std::abs(ma["drape_coefficient_uncertainty_percent"].get<double>() - a["drape_coefficient_uncertainty_percent"].get<double>()) < 0.06);
     }
 
     /// DRAPE_PHOTO_EXAMPLES=DIR writes every scene's photo and its flags (for

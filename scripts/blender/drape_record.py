@@ -59,6 +59,9 @@ def parse_args():
     ap.add_argument("--pin-centre-mm", type=float, default=0.0,
                     help="pin the specimen's vertices within this radius of its centre (as the engine anchors its centre: "
                          "no sliding off the pedestal)")
+    ap.add_argument("--collision-mm", type=float, default=1.0,
+                    help="Blender's cloth collision distance and the pedestal's outer thickness [mm]")
+    ap.add_argument("--bending-model", default="ANGULAR", choices=["ANGULAR", "LINEAR"], help="Blender's bending springs")
     ap.add_argument("--friction", type=float, default=5.0, help="Blender's cloth friction on the pedestal")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--bend-Nm", type=float, default=0.0,
@@ -185,7 +188,7 @@ def build_scene(a):
     ped = bpy.context.active_object
     ped.name = "pedestal"
     ped.modifiers.new("Collision", "COLLISION")
-    ped.collision.thickness_outer = 0.001
+    ped.collision.thickness_outer = a.collision_mm / 1000.0
     ped.collision.cloth_friction = a.friction
     ped.collision.damping = 0.5
     # The specimen.
@@ -207,7 +210,7 @@ def build_scene(a):
     s.quality = a.quality
     s.mass = a.vertex_mass
     s.air_damping = a.air_damping
-    s.bending_model = "ANGULAR"
+    s.bending_model = a.bending_model
     s.tension_stiffness = a.tension
     s.compression_stiffness = a.compression
     s.shear_stiffness = a.shear
@@ -222,7 +225,7 @@ def build_scene(a):
         physical_settings(s, a, h, len(verts))
     c = mod.collision_settings
     c.use_collision = True
-    c.distance_min = 0.001
+    c.distance_min = a.collision_mm / 1000.0
     c.collision_quality = 2
     c.use_self_collision = False
     mod.point_cache.frame_start = 1

@@ -318,16 +318,20 @@ case_ "compare REC symlink-to-REC" 2 "the same record folder" -- "$drape" compar
 case_ "fit REC ./REC" 2 "the same record folder" -- "$drape" fit "$src_record" "$src_record/." --out "$tmp/fit.json" --quiet
 
 # ---- photos -----------------------------------------------------------------
-# A uniform grey 1152 x 872 PNG: GrabCut spun on it for minutes (issue 55).
-mkdir -p "$tmp/photos"
-"$py" - "$tmp/photos/grey.png" <<'EOF'
+# A uniform grey PNG of W x H px (RGB 128) at PATH: grey_png PATH W H.
+grey_png() {
+  "$py" - "$1" "$2" "$3" <<'EOF'
 import struct, sys, zlib
-w, h = 1152, 872
+w, h = int(sys.argv[2]), int(sys.argv[3])
 raw = b"".join(b"\x00" + b"\x80" * (3 * w) for _ in range(h))
 def chunk(t, d): return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
 open(sys.argv[1], "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)) +
                               chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
 EOF
+}
+# A uniform grey 1152 x 872 PNG: GrabCut spun on it for minutes (issue 55).
+mkdir -p "$tmp/photos"
+grey_png "$tmp/photos/grey.png" 1152 872
 case_ "measure --top: uniform grey photo" 1 "refused (no-cloth): no cloth found" -- "$drape" measure --top "$tmp/photos/grey.png" --disc 150mm --specimen 300mm
 cp "$tmp/photos/grey.png" "$tmp/photos/"$'b\e[2J\ax.png'
 case_ "measure --batch --table out.xlsx" 2 "--table" -- "$drape" measure --batch "$tmp/photos" --table "$tmp/out.xlsx" --disc 150mm --specimen 300mm
@@ -335,14 +339,7 @@ case_ "measure --batch: ESC in a file name" 1 'b\x1B[2J\x07x.png' -- "$drape" me
 # A scale calibration photo (--scale-from): the example record's top.jpg has the
 # floor chessboard (6 x 11 inner corners, 25 mm, 120 mm below the disc top).
 board=(--disc 150mm --specimen 300mm --scale chessboard --board 6x11 --square 25mm --reference-height -120mm)
-"$py" - "$tmp/photos/small.png" <<'EOF'
-import struct, sys, zlib
-w, h = 800, 600
-raw = b"".join(b"\x00" + b"\x80" * (3 * w) for _ in range(h))
-def chunk(t, d): return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
-open(sys.argv[1], "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)) +
-                              chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
-EOF
+grey_png "$tmp/photos/small.png" 800 600
 case_ "measure --scale-from: no such photo" 1 "none.jpg: no such calibration photo (--scale-from)" -- "$drape" measure --top "$src_record/top.jpg" "${board[@]}" --scale-from "$tmp/none.jpg"
 case_ "measure --scale-from: another size" 1 "small.png: the photo is 800 x 600 px but the scale calibration photo $src_record/top.jpg is 1152 x 872 px" -- "$drape" measure --top "$tmp/photos/small.png" "${board[@]}" --scale-from "$src_record/top.jpg"
 case_ "measure --scale-from: no board in it" 1 "grey.png: scale calibration photo: no chessboard of 6 x 11 inner corners" -- "$drape" measure --top "$src_record/top.jpg" "${board[@]}" --scale-from "$tmp/photos/grey.png"

@@ -15,10 +15,14 @@ droops as far as Blender's strip. Prints B_blender / B for the spacing.
 import argparse
 import json
 import math
+import os
 import sys
 import time
 
 import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from drape_record import physical_cloth  # noqa: E402 (the same mapping as the drapes)
 
 
 def args():
@@ -44,7 +48,7 @@ def droop(lam, n=2000):
         y = 0.0
         for i in range(n):
             s = i * ds
-            # theta'' = -lam (1 - s) cos(theta), with theta measured downward: theta'' = -lam (1 - s) cos(theta) * (-1)
+            # theta (downward from the horizontal) and k = theta'; theta'' = -lam (1 - s) cos(theta)
             def f(s_, th_, k_):
                 return k_, -lam * (1 - s_) * math.cos(th_)
             a1, b1 = f(s, th, k)
@@ -97,13 +101,8 @@ def main():
     s.air_damping = 2.0
     s.tension_damping = s.compression_damping = s.shear_damping = 25.0
     s.bending_damping = 5.0
-    area_per_vertex = h * h  # interior vertices of a square grid
-    mass = a.density_gm2 * 1e-3 * area_per_vertex
-    f = a.vertex_mass / mass
-    s.mass = a.vertex_mass
-    s.tension_stiffness = s.compression_stiffness = f * 0.001 * a.stretch_N_m * h
-    s.shear_stiffness = f * 0.001 * a.shear_N_m * h
-    s.bending_stiffness = f * 0.01 * a.bend_Nm / (h * h)
+    # Each interior vertex of the square grid carries a square h x h.
+    physical_cloth(s, a.density_gm2 * 1e-3 * h * h, h, a.bend_Nm, a.stretch_N_m, a.shear_N_m, a.vertex_mass)
     mod.collision_settings.use_collision = False
     mod.point_cache.frame_end = a.frames
     scene.frame_end = a.frames

@@ -160,21 +160,27 @@ def apply_preset(settings, name):
     raise SystemExit("drape_record.py: --preset %r: no such Blender cloth preset (folders: %s)" % (name, bpy.utils.preset_paths("cloth")))
 
 
+def physical_cloth(s, mass_per_vertex, h, bend_Nm, stretch_N_m, shear_N_m, vertex_mass, compression_ratio=1.0, bending_factor=1.0):
+    """docs/library.md's mapping of a physical fabric onto Blender's cloth settings
+    `s` (its cloth forces scale gravity by 0.001, springs are per edge length), for
+    a mesh of spacing h [m] whose vertices carry `mass_per_vertex` [kg]; every
+    value times one factor so the vertex mass is `vertex_mass` (statics depend on
+    the ratios only). Returns what was set. Shared with cantilever.py."""
+    f = vertex_mass / mass_per_vertex
+    s.mass = vertex_mass
+    s.tension_stiffness = f * 0.001 * stretch_N_m * h
+    s.compression_stiffness = compression_ratio * s.tension_stiffness
+    s.shear_stiffness = f * 0.001 * shear_N_m * h
+    s.bending_stiffness = bending_factor * f * 0.01 * bend_Nm / (h * h)
+    return {"vertex_mass_kg": s.mass, "tension": s.tension_stiffness, "compression": s.compression_stiffness,
+            "shear": s.shear_stiffness, "bending": s.bending_stiffness, "factor": f}
+
+
 def physical_settings(s, a, h, nverts):
-    """docs/library.md's mapping of a physical fabric onto Blender's cloth (its
-    cloth forces scale gravity by 0.001, springs are per edge length), for a
-    mesh of spacing h [m]; every value times one factor so the vertex mass is
-    --vertex-mass."""
+    """physical_cloth for the specimen: its mass spread evenly over its vertices."""
     area = math.pi * (a.sample_mm / 2000.0) ** 2
-    mass = a.density_gm2 * 1e-3 * area / nverts
-    f = a.vertex_mass / mass
-    s.mass = a.vertex_mass
-    s.tension_stiffness = f * 0.001 * a.stretch_N_m * h
-    s.compression_stiffness = a.compression_ratio * s.tension_stiffness
-    s.shear_stiffness = f * 0.001 * a.shear_N_m * h
-    s.bending_stiffness = a.bending_factor * f * 0.01 * a.bend_Nm / (h * h)
-    a.blender_settings = {"vertex_mass_kg": s.mass, "tension": s.tension_stiffness, "compression": s.compression_stiffness,
-                          "shear": s.shear_stiffness, "bending": s.bending_stiffness, "factor": f}
+    a.blender_settings = physical_cloth(s, a.density_gm2 * 1e-3 * area / nverts, h, a.bend_Nm, a.stretch_N_m, a.shear_N_m, a.vertex_mass,
+                                        a.compression_ratio, a.bending_factor)
 
 
 def build_scene(a):
@@ -290,7 +296,7 @@ def node_count(env, prominence_mm=3.0):
 
 
 def drape_coefficient(pos, edges, a, step_deg):
-    env = ray_envelope([((pos[u][0], pos[u][1]), (pos[v][0], pos[v][1])) for u, v in edges], step_deg)
+    env = outline(pos, edges, step_deg)
     area = sum(0.5 * r * r * math.radians(step_deg) for r in env if r == r)
     r1, r2 = a.sample_mm / 2, a.disc_mm / 2
     return 100.0 * (area - math.pi * r2 * r2) / (math.pi * r1 * r1 - math.pi * r2 * r2)
@@ -398,7 +404,7 @@ def main():
         json.dump(meta, f, indent=2)
         f.write("\n")
     info = {"blender": bpy.app.version_string, "settings": getattr(a, "blender_settings", None), "args": {k: v for k, v in vars(a).items() if k != "offset"},
-            "vertices": len(pos), "triangles": len(faces), "spacing_mm": 1000 * h if h < 1 else h,
+            "vertices": len(pos), "triangles": len(faces), "spacing_mm": 1000 * h,
             "frames": frames, "at_rest": at_rest, "dc_history": history, "wall_s": round(wall, 1),
             "drape_coefficient_percent": dc, "node_count": nodes,
             "specimen_centre_at_rest_mm": [round(pos[0][0], 2), round(pos[0][1], 2)], "depths_mm": depths, "lift_mm": lift}
@@ -408,4 +414,5 @@ def main():
     print("drape_record: %s D %.2f %%, %d folds, %d frames%s, %.1f s" % (rid, dc, nodes, frames, "" if at_rest else " (NOT at rest)", wall))
 
 
-main()
+if __name__ == "__main__":  # (cantilever.py imports physical_cloth)
+    main()

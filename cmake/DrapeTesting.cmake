@@ -1,6 +1,10 @@
 # drape_add_test(NAME name SOURCES a.cpp ... LIBS lib ... LABELS unit|slow [GUI] [TIMEOUT s])
 # One Qt Test executable per test file. GUI tests run under xvfb-run when there is
 # no display, with Mesa's software OpenGL.
+# The malloc settings of the `drape` command (below), for every test entry; a
+# second entry of the same executable (tests/capture) sets them from here too.
+set(DRAPE_TEST_MALLOC_ENV "GLIBC_TUNABLES=glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=536870912")
+
 function(drape_add_test)
   cmake_parse_arguments(T "GUI" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS;SANITIZE_FUNCTIONS" ${ARGN})
   # The sanitizer build runs the unit tests only: slow tests are not built there.
@@ -48,5 +52,5 @@ function(drape_add_test)
   # test's own TIMEOUT, so a loaded machine meets ctest's limit, not a hidden one.
   math(EXPR _qt_timeout_ms "${T_TIMEOUT} * 1000")
   set_tests_properties(${T_NAME} PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT}
-    ENVIRONMENT "GLIBC_TUNABLES=glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=536870912;QTEST_FUNCTION_TIMEOUT=${_qt_timeout_ms}")
+    ENVIRONMENT "${DRAPE_TEST_MALLOC_ENV};QTEST_FUNCTION_TIMEOUT=${_qt_timeout_ms}")
 endfunction()

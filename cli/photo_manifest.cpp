@@ -18,13 +18,6 @@ namespace manifest_detail {
 /// Largest manifest read [bytes]: a row per photo is a few dozen bytes.
 constexpr std::size_t kMaxManifestBytes = std::size_t(16) << 20;
 
-std::string trim_blanks(const std::string& s)
-{
-    const auto b = s.find_first_not_of(" \t");
-    if (b == std::string::npos) return {};
-    return s.substr(b, s.find_last_not_of(" \t") - b + 1);
-}
-
 /// One CSV line into cells: commas separate, a quoted cell may hold commas and
 /// doubled quotes. Blanks around a cell are dropped.
 std::vector<std::string> split_cells(const std::string& line, const std::string& where)

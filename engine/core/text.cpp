@@ -272,6 +272,13 @@ std::string ascii_lower(std::string_view s)
     return out;
 }
 
+std::string trim_blanks(std::string_view s)
+{
+    const auto b = s.find_first_not_of(" \t");
+    if (b == std::string_view::npos) return {};
+    return std::string(s.substr(b, s.find_last_not_of(" \t") - b + 1));
+}
+
 std::string printable(std::string_view s, std::size_t max_chars)
 {
     std::string out;

@@ -44,4 +44,7 @@ std::string printable(std::string_view s, std::size_t max_chars = 120);
 /// `s` with the ASCII letters A-Z lowered (file extensions, keywords); other bytes as they are.
 std::string ascii_lower(std::string_view s);
 
+/// `s` without the blanks (spaces and tabs) at either end.
+std::string trim_blanks(std::string_view s);
+
 } // namespace drape

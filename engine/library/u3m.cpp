@@ -64,14 +64,6 @@ const char* const kFibres[] = {
     "Recycled Polyester", "Silk", "Spandex", "Tactel", "Triacetate", "Vicugna", "Vinyl", "Virgin Wool", "Wild Silk",
     "Wool", "Yack", "Viscose"};
 
-std::string trim(const std::string& s)
-{
-    const auto b = s.find_first_not_of(" \t");
-    if (b == std::string::npos) return {};
-    const auto e = s.find_last_not_of(" \t");
-    return s.substr(b, e - b + 1);
-}
-
 double number_or(const json& j, const char* key, double fallback)
 {
     if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return fallback;
@@ -87,7 +79,7 @@ json composition_parts(const std::string& composition)
     double sum = 0;
     for (auto it = std::sregex_iterator(composition.begin(), composition.end(), part); it != std::sregex_iterator(); ++it) {
         const double ratio = std::stod((*it)[1].str()) / 100.0;
-        const std::string fibre = trim((*it)[2].str());
+        const std::string fibre = trim_blanks((*it)[2].str());
         std::string type = "other";
         for (const char* f : kFibres)
             if (ascii_lower(f) == ascii_lower(fibre)) type = f;

@@ -10,6 +10,7 @@
 #include "engine/core/error.hpp"
 #include "photo_scenes.hpp"
 #include "synthetic.hpp"
+#include "tests/slow_cases.hpp"
 
 #include <QProcess>
 #include <QTest>
@@ -111,11 +112,11 @@ std::vector<std::map<std::string, std::string>> read_csv_table(const fs::path& f
 }
 
 /// The lab-photo cases that cost most (several real photos each) run in the slow
-/// entry tst_photo_lab_slow (tests/capture/CMakeLists.txt sets this variable);
-/// the unit run keeps one lab photo and the synthetic scenes of the same code.
+/// entry tst_photo_lab_slow; the unit run keeps one lab photo and the synthetic
+/// scenes of the same code.
 bool slow_lab_photos_enabled()
 {
-    return qEnvironmentVariableIsSet("DRAPE_SLOW_LAB_PHOTOS");
+    return drape_test::slow_cases_enabled();
 }
 
 std::string one_decimal(double v)

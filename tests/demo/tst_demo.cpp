@@ -1,6 +1,7 @@
 // The fitting demo under Xvfb: the MakeHuman mannequin comes in standing on the
 // floor at human size, a circular skirt drapes on it without passing through
 // the body, and the screenshot shows the cloth around the hips.
+#include "importers/garment_metrics.hpp"
 #include "importers/garment_scene.hpp"
 #include "demo/main_window.hpp"
 #include "widget/drape_controller.hpp"
@@ -191,6 +192,10 @@ void TstDemo::skirtDrapesOnBody()
     // The waistband stayed where it was pinned.
     for (int i = 0; i < s->system->vertex_count(); ++i)
         if (s->system->pinned(i)) QVERIFY((x.row(i) - s->system->mesh().X.row(i)).norm() < 1e-12);
+    // Self-collision (on in every garment scene): no fold passes through another.
+    const importers::GarmentMetrics gm = importers::garment_metrics(x, s->system->mesh().F, s->system->model().pinned,
+                                                                    s->mannequin.get(), s->waist.centre);
+    QCOMPARE(gm.self_intersections, 0L);
 
     // The screenshot shows the cloth around the hips: project the hip point into the view.
     const QImage img = w.screenshot();

@@ -143,6 +143,11 @@ void print_comparison(const nlohmann::json& rec, const std::vector<estimate::Res
                 v("drape_coefficient_percent", "measured"), v("drape_coefficient_percent", "error"));
     std::printf("  nodes  sim %5.1f    meas %5.1f    err %+5.1f\n", v("node_count", "simulated"), v("node_count", "measured"),
                 v("node_count", "error"));
+    if (rec.contains("free_strip") && rec["free_strip"]["below"].get<bool>())
+        std::printf("  out of reach: the preset's free strips alone drape to %.1f %% here, above the record's %.1f %%; no drape of its "
+                    "bending gets down to it (the record allows at most %.2g N*m; docs/model-discrepancy.md, the free-strip bound)\n",
+                    rec["free_strip"]["preset_drape_coefficient_percent"].get<double>(), v("drape_coefficient_percent", "measured"),
+                    rec["free_strip"]["bending_bound_Nm"].get<double>());
     if (rec.contains("hem_min_z_m"))
         std::printf("  hem    sim %5.1f mm meas %5.1f mm err %+5.1f mm\n", 1e3 * v("hem_min_z_m", "simulated"),
                     1e3 * v("hem_min_z_m", "measured"), 1e3 * v("hem_min_z_m", "error"));
@@ -242,7 +247,12 @@ int run(const std::vector<std::string>& argv)
         const auto terms = estimate::residual_terms(0, meas, sim, closed, noise);
         const double chi2 = estimate::chi_square(terms);
         check_finite(m.id, terms, chi2);
-        const nlohmann::json rec = comparison_json(m.id, grid, mesh, seeds, folds, chi2, terms, meas, sim, closed);
+        nlohmann::json rec = comparison_json(m.id, grid, mesh, seeds, folds, chi2, terms, meas, sim, closed);
+        const estimate::FreeStripCheck strips = estimate::free_strip_check(m, meas.drape_coefficient_percent, p);
+        auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+        rec["free_strip"] = {{"bending_bound_Nm", finite_or_null(strips.bound_Nm)},
+                             {"preset_drape_coefficient_percent", finite_or_null(strips.preset_dc_percent)},
+                             {"below", strips.below}};
         out.push_back(rec);
         if (!json_out) print_comparison(rec, terms);
     }

@@ -223,6 +223,9 @@ void print_text(const capture::Measurement& m)
     }
     if (m.hem_min_height)
         std::printf("  lowest hem         z = %.1f mm (%s)\n", *m.hem_min_height * 1e3, m.hem_min_source.c_str());
+    if (m.free_strip_bending_bound)
+        std::printf("  free-strip bound   B <= %.2g N*m (a linear bending that drapes to this D; docs/model-discrepancy.md)\n",
+                    *m.free_strip_bending_bound);
     if (m.top_calibration && m.top_calibration->ok)
         std::printf("  top camera         %zu boards, reprojection %.2f px, declared pose off by %.2f px\n",
                     m.top_calibration->boards_found.size(), m.top_calibration->rms_px_measured, m.top_calibration->max_shift_px);

@@ -2,6 +2,7 @@
 
 #include "engine/capture/image.hpp"
 #include "engine/capture/steps.hpp"
+#include "engine/cloth/elastica.hpp"
 #include "engine/core/error.hpp"
 
 #include <algorithm>
@@ -118,6 +119,13 @@ Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
         out.hem_min_source = "deepest closed laser contour (upper bound: the hem is lower still)";
     }
     if (!out.hem_min_height) out.not_measured.push_back("hem height: needs the top view, side view or contours");
+    // What D says about bending, whatever the folds do: the bending whose free
+    // radial strips drape to it (a round specimen of declared weight).
+    if (out.top.measured && !out.refused && rec.areal_density && rec.specimen.shape == record::Specimen::Shape::Round) {
+        const double dc = out.top.metrics.drape_coefficient_percent;
+        if (dc > 0 && dc < 100)
+            out.free_strip_bending_bound = cloth::free_strip_bending_bound(2 * rec.R1, 2 * rec.R2, *rec.areal_density, dc);
+    }
     for (const auto& w : out.top.warnings) out.warnings.push_back(w);
     for (const auto& w : out.side.warnings) out.warnings.push_back(w);
     return out;

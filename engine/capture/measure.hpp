@@ -34,6 +34,11 @@ struct Measurement {
     SideView side;
     std::vector<ContourLevel> contours;
     std::optional<double> hem_min_height;  ///< lowest hem point z [m] (< 0 below the pedestal top)
+    /// The bending rigidity [N*m] whose free radial strips (heavy elastica clamped
+    /// level at the rim, cloth/elastica.hpp) drape to the measured D: a fabric of
+    /// one linear bending that drapes to that D has at most this bending. Round
+    /// specimens with a declared areal density only.
+    std::optional<double> free_strip_bending_bound;
     std::string hem_min_source;            ///< which evidence gave it
     std::vector<std::string> measured;     ///< what was measured
     std::vector<std::string> not_measured; ///< "what: why"

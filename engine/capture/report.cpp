@@ -175,6 +175,7 @@ nlohmann::ordered_json to_json(const Measurement& m)
     if (m.view) j["scale"] = scale_json(*m.view);
     j["hem_min_height_m"] = m.hem_min_height ? json(*m.hem_min_height) : json(nullptr);
     j["hem_min_height_source"] = m.hem_min_source;
+    j["free_strip_bending_bound_Nm"] = m.free_strip_bending_bound ? json(*m.free_strip_bending_bound) : json(nullptr);
     if (!top_block.is_null()) j["top"] = top_block;
     if (m.top_calibration) {
         const auto& c = *m.top_calibration;

@@ -6,6 +6,7 @@
 #include "engine/estimate/fit.hpp"
 
 #include "engine/cloth/blas_threads.hpp"
+#include "engine/cloth/elastica.hpp"
 #include "engine/core/error.hpp"
 #include "engine/estimate/detail/pipeline.hpp"
 #include "engine/estimate/detail/stages.hpp"
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <memory>
 
 namespace drape::estimate {
@@ -255,9 +257,33 @@ static FitResult fit_runs(const std::vector<MeasuredDrape>& records, const FitOp
     return kept.anisotropy.tied ? finish(kept, tied_effects, "tie ") : finish(kept, free_effects, "");
 }
 
+FreeStripCheck free_strip_check(const MeasuredDrape& m, double dc, const cloth::FabricParams& p)
+{
+    FreeStripCheck c;
+    if (!(dc > 0 && dc < 100) || !(m.areal_density > 0) || !(m.disc_diameter > 0) || !(m.disc_diameter < m.sample_diameter)) return c;
+    c.bound_Nm = cloth::free_strip_bending_bound(m.sample_diameter, m.disc_diameter, m.areal_density, dc);
+    const double warp = p[cloth::Param::BendWarp], weft = p[cloth::Param::BendWeft];
+    if (!(warp > 0 && weft > 0)) return c;
+    c.preset_dc_percent = 0.5 * (cloth::free_strip_drape_coefficient(m.sample_diameter, m.disc_diameter, m.areal_density, warp) +
+                                 cloth::free_strip_drape_coefficient(m.sample_diameter, m.disc_diameter, m.areal_density, weft));
+    c.below = c.preset_dc_percent > dc + kFreeStripMarginPoints;
+    return c;
+}
+
+void check_free_strips(FitResult& out)
+{
+    for (RecordFit& rf : out.records) {
+        const FreeStripCheck c = free_strip_check(rf.measured, rf.measured_features.drape_coefficient_percent, out.params);
+        rf.free_strip_bound_Nm = c.bound_Nm;
+        rf.free_strip_preset_dc_percent = c.preset_dc_percent;
+        rf.below_free_strips = c.below;
+    }
+}
+
 FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions& options)
 {
     FitResult out = fit_runs(records, options);
+    if (!out.cancelled) check_free_strips(out);
     if (options.progress) {
         FitProgress p;
         p.stage = to_string(Stage::Done);

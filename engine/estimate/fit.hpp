@@ -48,6 +48,23 @@ cloth::FabricParams default_fit_start();
 /// plain engine (no laying, no drapes from flat, no calibration) for tests.
 FitOptions drape_fit_defaults();
 
+/// A record against a preset's free strips (cloth/elastica.hpp): the bending
+/// whose free radial strips drape to the record's D, and the D the preset's own
+/// strips drape to at its set-up (the mean of a warp and a weft strip); `below`
+/// when those lie more than kFreeStripMarginPoints above the record's D - no drape
+/// of the preset's bending reaches it. NaN / false without a D in (0, 100) or a
+/// declared weight.
+struct FreeStripCheck {
+    double bound_Nm = std::numeric_limits<double>::quiet_NaN();
+    double preset_dc_percent = std::numeric_limits<double>::quiet_NaN();
+    bool below = false;
+};
+FreeStripCheck free_strip_check(const MeasuredDrape& m, double measured_dc_percent, const cloth::FabricParams& p);
+
+/// free_strip_check for every record of a fit, at its preset (RecordFit::free_strip_*,
+/// below_free_strips); fit_fabric calls it on its result.
+void check_free_strips(FitResult& r);
+
 /// Preset JSON of a fit: parameters plus provenance (records, date, model,
 /// grid, seeds), fit quality, intervals, correlations and the residual analysis.
 nlohmann::json fit_to_json(const FitResult& r);

@@ -342,7 +342,21 @@ struct RecordFit {
     DrapeFeatures preset_features;
     double preset_dc_error_percent = 0;
     double preset_node_error = 0;
+    /// The free-strip bound (cloth/elastica.hpp): the bending whose free radial
+    /// strips drape to the record's D (NaN: no D, or no declared weight), and the
+    /// D the preset's own strips drape to at the record's set-up (the mean of a
+    /// warp and a weft strip). A drape lies at or above its strips, so when the
+    /// preset's strips are more than kFreeStripMarginPoints above the record's D
+    /// no drape of the preset's bending can reach it (`below_free_strips`).
+    double free_strip_bound_Nm = std::numeric_limits<double>::quiet_NaN();
+    double free_strip_preset_dc_percent = std::numeric_limits<double>::quiet_NaN();
+    bool below_free_strips = false;
 };
+
+/// How far [points of D] a preset's free strips may lie above a record's D before
+/// the record is reported as out of the preset's reach: about twice a drapemeter's
+/// repeatability (0.3-0.4 points) and the discretisation of the strips.
+inline constexpr double kFreeStripMarginPoints = 1.0;
 
 /// One evaluation of the fit (the convergence trace of the report).
 struct FitTraceEntry {

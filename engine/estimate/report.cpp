@@ -144,6 +144,28 @@ void records_section(std::ostringstream& md, const FitResult& r)
     }
 }
 
+/// Records out of the preset's reach: its free strips already drape above them.
+void free_strip_section(std::ostringstream& md, const FitResult& r)
+{
+    bool any = false;
+    for (const auto& rf : r.records) any = any || rf.below_free_strips;
+    if (!any) return;
+    md << "**Out of any drape's reach.** Each radial line of the overhang, alone, is a heavy elastica clamped at the rim; a drape must "
+          "also fold or shorten around its circumference, so it lies at or above the D of its free strips. At the preset's bending "
+          "(warp "
+       << num(r.params[cloth::Param::BendWarp], "%.3g") << ", weft " << num(r.params[cloth::Param::BendWeft], "%.3g")
+       << " N*m) the strips alone drape above these records' D, so no drape of this linear bending reaches them:\n\n"
+       << "| record | set-up [mm] | D measured [%] | the preset's free strips [%] | the largest bending that drapes to D [N*m] |\n"
+          "|---|---|---|---|---|\n";
+    for (const auto& rf : r.records)
+        if (rf.below_free_strips)
+            md << "| " << rf.measured.id << " | " << num(rf.measured.sample_diameter * 1e3, "%.0f") << "/"
+               << num(rf.measured.disc_diameter * 1e3, "%.0f") << " | " << num(rf.measured_features.drape_coefficient_percent, "%.1f") << " | "
+               << num(rf.free_strip_preset_dc_percent, "%.1f") << " | " << num(rf.free_strip_bound_Nm, "%.2g") << " |\n";
+    md << "\nThe records together ask for a bending that changes with the drape's scale, or carry an effect of their set-up the model "
+          "lacks; fitted alone, such a record gets a bending below its bound (docs/model-discrepancy.md, \"The free-strip bound\").\n\n";
+}
+
 /// The preset draped from flat, as predict, compare and the widget drape it, on the
 /// fit's grid and a finer one.
 void from_flat_section(std::ostringstream& md, const FitResult& r)
@@ -363,6 +385,7 @@ std::vector<std::string> write_fit_report(const FitResult& r, const std::string&
     parameters_section(md, r, root, files);
     records_section(md, r);
     from_flat_section(md, r);
+    free_strip_section(md, r);
     const json recs = record_sections(md, r, root, files);
     convergence_section(md, r, root, files);
     residual_section(md, r, root, files);

@@ -504,6 +504,31 @@ private slots:
         QVERIFY(std::isfinite(rec["chi2"].toDouble()));
     }
 
+    /// compare names a record no drape of the preset's bending can reach: DL-D1's
+    /// 240/180 drape (55.4 %) lies below the free strips of B 4e-6 N*m (68.5 %), so
+    /// `free_strip.below` and the printed "out of reach"; at B 1.5e-6 it is within reach.
+    void compareSaysWhenARecordIsOutOfThePresetsReach()
+    {
+        const QString record = DRAPE_SHARED_DIR "/data/drape-lab/set-d/DL-D1-240-180";
+        if (!QFileInfo::exists(record)) QSKIP("the drape lab's set-d is not beside the repository");
+        auto at = [&](const char* bending, bool json) {
+            QStringList args{"compare", record, "--fabric", "cotton", "--set", QString("bend_warp_Nm=") + bending,
+                             "--set", QString("bend_weft_Nm=") + bending, "--grid", "9", "--seeds", "1"};
+            if (json) args << "--json";
+            return run(args);
+        };
+        const Out stiff = at("4e-6", true);
+        QVERIFY2(stiff.code == 0 || stiff.code == 4, qPrintable(stiff.err));
+        const QJsonObject fs = QJsonDocument::fromJson(stiff.out.toUtf8()).array().at(0).toObject()["free_strip"].toObject();
+        QVERIFY(fs["below"].toBool());
+        QVERIFY2(std::abs(fs["preset_drape_coefficient_percent"].toDouble() - 68.5) < 0.3,
+                 qPrintable(QString::number(fs["preset_drape_coefficient_percent"].toDouble())));
+        QVERIFY(fs["bending_bound_Nm"].toDouble() > 2.4e-6 && fs["bending_bound_Nm"].toDouble() < 2.9e-6);
+        QVERIFY(at("4e-6", false).out.contains("out of reach"));
+        const Out limp = at("1.5e-6", true);
+        QVERIFY(!QJsonDocument::fromJson(limp.out.toUtf8()).array().at(0).toObject()["free_strip"].toObject()["below"].toBool());
+    }
+
     /// compare --set of a value the record declares (its thickness, its areal
     /// density) drapes with the asked value and says so; it was silently the
     /// record's (a probe of a thicker specimen came out identical to the digit).

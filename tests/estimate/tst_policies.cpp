@@ -213,6 +213,53 @@ private slots:
         QVERIFY(QString::fromUtf8(g.readAll()).contains("No candidate effect"));
     }
 
+    void aRecordBelowThePresetsFreeStripsIsOutOfReach()
+    {
+        // DL-D1's fabric (125 g/m^2) at 240/180 mm reads 55.4 %: free strips of
+        // B 4e-6 N*m reach 68.5 %, so no drape of that bending gets down to it; the
+        // largest bending that can is about 2.7e-6 (tst_physics checks the strips and
+        // that drapes lie above them).
+        auto fit_at = [](double bending) {
+            FitResult r = free_fit(std::log10(bending), std::log10(bending), 0.01);
+            r.params[Param::BendWarp] = r.params[Param::BendWeft] = bending;
+            RecordFit rf;
+            rf.measured.id = "short-overhang";
+            rf.measured.sample_diameter = 0.24;
+            rf.measured.disc_diameter = 0.18;
+            rf.measured.areal_density = 0.125;
+            rf.measured_features.drape_coefficient_percent = 55.4;
+            r.records.push_back(rf);
+            check_free_strips(r);
+            return r;
+        };
+        FitResult stiff = fit_at(4e-6);
+        const RecordFit& s = stiff.records[0];
+        QVERIFY2(std::abs(s.free_strip_preset_dc_percent - 68.5) < 0.3, qPrintable(QString::number(s.free_strip_preset_dc_percent)));
+        QVERIFY(s.free_strip_bound_Nm > 2.4e-6 && s.free_strip_bound_Nm < 2.8e-6);
+        QVERIFY(s.below_free_strips);
+        QCOMPARE(fit_to_json(stiff)["fit"]["records"][0]["below_free_strips"].get<bool>(), true);
+        QTemporaryDir dir;
+        write_fit_report(stiff, dir.path().toStdString());
+        QFile f(dir.path() + "/report.md");
+        QVERIFY(f.open(QIODevice::ReadOnly));
+        const QString md = QString::fromUtf8(f.readAll());
+        QVERIFY2(md.contains("Out of any drape's reach") && md.contains("| short-overhang | 240/180 | 55.4 | 68.5 |"), qPrintable(md));
+        // A bending below the bound: within reach, and the report says nothing.
+        FitResult limp = fit_at(2e-6);
+        QVERIFY(!limp.records[0].below_free_strips);
+        QVERIFY(limp.records[0].free_strip_preset_dc_percent < 55.4);
+        QTemporaryDir dir2;
+        write_fit_report(limp, dir2.path().toStdString());
+        QFile g(dir2.path() + "/report.md");
+        QVERIFY(g.open(QIODevice::ReadOnly));
+        QVERIFY(!QString::fromUtf8(g.readAll()).contains("Out of any drape's reach"));
+        // No declared weight: no bound.
+        FitResult unknown = fit_at(4e-6);
+        unknown.records[0].measured.areal_density = 0;
+        check_free_strips(unknown);
+        QVERIFY(std::isnan(unknown.records[0].free_strip_bound_Nm) && !unknown.records[0].below_free_strips);
+    }
+
     void stageNames()
     {
         QCOMPARE(std::string(to_string(Stage::FromFlatFoldCount)), std::string("from flat, fold count"));

@@ -866,10 +866,13 @@ private slots:
         QFETCH(double, sample);
         QFETCH(double, disc);
         QFETCH(double, bending);
+#if defined(__SANITIZE_ADDRESS__)
+        if (QByteArray(QTest::currentDataTag()) != "240/180, B 4e-6") QSKIP("under the sanitizers one drape reaches the same code");
+#endif
         DrapeSetup setup;
         setup.sample_diameter = sample;
         setup.disc_diameter = disc;
-        setup.grid = 41;
+        setup.grid = 33;
         FabricParams p;
         p[Param::BendWarp] = p[Param::BendWeft] = bending;
         p[Param::AreaDensity] = 0.125;

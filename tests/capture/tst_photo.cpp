@@ -111,14 +111,6 @@ std::vector<std::map<std::string, std::string>> read_csv_table(const fs::path& f
     return rows;
 }
 
-/// The lab-photo cases that cost most (several real photos each) run in the slow
-/// entry tst_photo_lab_slow; the unit run keeps one lab photo and the synthetic
-/// scenes of the same code.
-bool slow_lab_photos_enabled()
-{
-    return drape_test::slow_cases_enabled();
-}
-
 std::string one_decimal(double v)
 {
     char b[32];
@@ -537,7 +529,9 @@ private slots:
     void lab_photo_with_floor_chessboard_only()
     {
         QFETCH(QString, record);
-        if (record.startsWith("set-d/") && !slow_lab_photos_enabled()) QSKIP("a slow case: tst_photo_lab_slow runs it");
+        // The costly lab-photo cases run in the slow entry tst_photo_lab_slow; the unit
+        // run keeps one lab photo and the synthetic scenes of the same code.
+        if (record.startsWith("set-d/") && !drape_test::slow_cases_enabled()) QSKIP("a slow case: tst_photo_lab_slow runs it");
         const fs::path rec = fs::path(DRAPE_SHARED_DIR) / "data/drape-lab" / record.toStdString();
         if (!fs::exists(rec / "meta.json")) QSKIP("the lab's records are not beside the repository");
         const json meta = json::parse(std::ifstream(rec / "meta.json"));
@@ -696,7 +690,7 @@ private slots:
     /// calibration photo, D moved by at most 0.054 points, px/mm by 0.025 %.)
     void lab_photos_with_one_calibration_photo()
     {
-        if (!slow_lab_photos_enabled()) QSKIP("a slow case: tst_photo_lab_slow runs it (scale_from_calibration_photo covers the code)");
+        if (!drape_test::slow_cases_enabled()) QSKIP("a slow case: tst_photo_lab_slow runs it (scale_from_calibration_photo covers the code)");
         const fs::path lab = fs::path(DRAPE_SHARED_DIR) / "data/drape-lab";
         const fs::path rec_a = lab / "set-a/DL-A04", rec_d = lab / "set-d/DL-D1-240-180";
         if (!fs::exists(rec_a / "top.jpg") || !fs::exists(rec_d / "top.jpg")) QSKIP("the lab's records are not beside the repository");

@@ -46,6 +46,16 @@ FitResult free_fit(double log_warp, double log_weft, double var, double c_wf = 0
     return r;
 }
 
+/// report.md of `r` as write_fit_report writes it ("" when it cannot be written or read).
+QString report_md(const FitResult& r)
+{
+    QTemporaryDir dir;
+    if (!dir.isValid()) return {};
+    write_fit_report(r, dir.path().toStdString());
+    QFile f(dir.path() + "/report.md");
+    return f.open(QIODevice::ReadOnly) ? QString::fromUtf8(f.readAll()) : QString();
+}
+
 } // namespace
 
 class TestPolicies : public QObject {
@@ -196,21 +206,13 @@ private slots:
         r.residual.candidates = {c};
         r.residual.named_effect = c.name;
         r.residual.exceeds_noise = true;
-        QTemporaryDir dir;
-        QVERIFY(dir.isValid());
-        write_fit_report(r, dir.path().toStdString());
-        QFile f(dir.path() + "/report.md");
-        QVERIFY(f.open(QIODevice::ReadOnly));
-        const QString md = QString::fromUtf8(f.readAll());
+        const QString md = report_md(r);
+        QVERIFY(!md.isEmpty());
         QVERIFY2(md.contains("Named effect: **profiler_scale**"), qPrintable(md));
         QVERIFY2(!md.contains("No candidate effect"), qPrintable(md));
         // Without the library's refits, the matched filters' word stands.
         FitResult plain = free_fit(-5.0, -5.0, 0.01);
-        QTemporaryDir dir2;
-        write_fit_report(plain, dir2.path().toStdString());
-        QFile g(dir2.path() + "/report.md");
-        QVERIFY(g.open(QIODevice::ReadOnly));
-        QVERIFY(QString::fromUtf8(g.readAll()).contains("No candidate effect"));
+        QVERIFY(report_md(plain).contains("No candidate effect"));
     }
 
     void aRecordBelowThePresetsFreeStripsIsOutOfReach()
@@ -238,21 +240,15 @@ private slots:
         QVERIFY(s.free_strip_bound_Nm > 2.4e-6 && s.free_strip_bound_Nm < 2.8e-6);
         QVERIFY(s.below_free_strips);
         QCOMPARE(fit_to_json(stiff)["fit"]["records"][0]["below_free_strips"].get<bool>(), true);
-        QTemporaryDir dir;
-        write_fit_report(stiff, dir.path().toStdString());
-        QFile f(dir.path() + "/report.md");
-        QVERIFY(f.open(QIODevice::ReadOnly));
-        const QString md = QString::fromUtf8(f.readAll());
+        const QString md = report_md(stiff);
         QVERIFY2(md.contains("Out of any drape's reach") && md.contains("| short-overhang | 240/180 | 55.4 | 68.5 |"), qPrintable(md));
         // A bending below the bound: within reach, and the report says nothing.
         FitResult limp = fit_at(2e-6);
         QVERIFY(!limp.records[0].below_free_strips);
         QVERIFY(limp.records[0].free_strip_preset_dc_percent < 55.4);
-        QTemporaryDir dir2;
-        write_fit_report(limp, dir2.path().toStdString());
-        QFile g(dir2.path() + "/report.md");
-        QVERIFY(g.open(QIODevice::ReadOnly));
-        QVERIFY(!QString::fromUtf8(g.readAll()).contains("Out of any drape's reach"));
+        const QString limp_md = report_md(limp);
+        QVERIFY(!limp_md.isEmpty());
+        QVERIFY(!limp_md.contains("Out of any drape's reach"));
         // No declared weight: no bound.
         FitResult unknown = fit_at(4e-6);
         unknown.records[0].measured.areal_density = 0;

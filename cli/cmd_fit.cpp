@@ -43,6 +43,7 @@ as not identifiable.
                       | full (stiffening + tensile stiffness warp/weft)
                       | buckling (+ the membrane's compression limit, buckling_length_m)
                       | peaking (+ bending whose moment peaks at a radius and falls beyond, bend_peak_radius_m)
+                      | slack (+ slack in compression, compression_slack)
   --recentre-contours measurement model: re-centre every contour stack (record and simulation)
                       on its own axis, for a profiler or specimen off the pedestal axis
   --untilt-contours   measurement model: as --recentre-contours with an axis that moves with depth

@@ -465,6 +465,7 @@ void add_triangle_membrane(ClothModel& m, const ClothMesh& mesh, const FabricPar
             fb.k = fam.E * A / (h * h);
             fb.d = fam.c * A / (h * h);
             if (lb > 0) fb.fc = compression_limit(fam.B, A / h, fam.length_scale * h, lb);
+            fb.slack = p[Param::CompressionSlack] * h;
             m.fibers.push_back(fb);
         }
     }
@@ -565,6 +566,9 @@ ClothModel make_model(const ClothMesh& mesh, const FabricParams& p, const ModelO
                 else if (sp.kind == SpringKind::Shear) sp.fc = compression_limit(std::sqrt(Bu * Bv), hu * hv / L, L, lb);
             }
         }
+        if (const double slack = p[Param::CompressionSlack]; slack > 0)
+            for (auto& sp : m.springs)
+                if (sp.kind == SpringKind::StretchU || sp.kind == SpringKind::StretchV || sp.kind == SpringKind::Shear) sp.slack = slack * sp.rest;
         return m;
     }
     // General triangle mesh.

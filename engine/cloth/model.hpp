@@ -36,6 +36,36 @@ inline void spring_law(double x, double k, double fc, double& e, double& de, dou
     d2e = k;
 }
 
+/// Stiffness of a slack element in its slack, as a fraction of its tensile
+/// stiffness (Param::CompressionSlack).
+inline constexpr double kSlackStiffnessFraction = 0.01;
+
+/// spring_law with slack in compression (Param::CompressionSlack): the element
+/// shortens by its first `slack` [m] at kSlackStiffnessFraction of k, the yarns'
+/// crimp taking it up, and then resists as spring_law does from that point on:
+///   E(x) = eps k x^2 / 2 + (1 - eps) E_fc(min(0, x + slack))   for x < 0,
+/// tension unchanged. Force continuous; the stiffness steps from k to eps k at
+/// x = 0 and back at x = -slack (as a no-compression element's does at 0).
+/// slack = 0: spring_law.
+inline void slack_spring_law(double x, double k, double fc, double slack, double& e, double& de, double& d2e)
+{
+    if (!(slack > 0) || x >= 0 || fc == 0) {
+        spring_law(x, k, fc, e, de, d2e);
+        return;
+    }
+    constexpr double eps = kSlackStiffnessFraction;
+    e = 0.5 * eps * k * x * x;
+    de = eps * k * x;
+    d2e = eps * k;
+    if (x + slack < 0) {
+        double e2, de2, d2e2;
+        spring_law(x + slack, k, fc, e2, de2, d2e2);
+        e += (1 - eps) * e2;
+        de += (1 - eps) * de2;
+        d2e += (1 - eps) * d2e2;
+    }
+}
+
 /// Spring with a dashpot along it (Provot 1995). Energy 1/2 k x^2 in the extension
 /// x = |xi - xj| - rest, except in compression towards the strip's buckling load:
 /// with fc > 0 the compressive force approaches fc and never exceeds it, the
@@ -56,9 +86,10 @@ struct Spring {
     double d;    ///< [N*s/m]
     SpringKind kind;
     double fc = -1; ///< [N] compressive force limit; < 0: linear in compression too
+    double slack = 0; ///< [m] shortening taken up almost freely (slack_spring_law); 0: none
     int arc = -1;   ///< index into ClothModel::arcs: the spring measures its material line's arc, not its chord; < 0: the chord
     /// Energy [J], its first and second derivative in the length [N], [N/m].
-    void law(double length, double& e, double& de, double& d2e) const { spring_law(length - rest, k, fc, e, de, d2e); }
+    void law(double length, double& e, double& de, double& d2e) const { slack_spring_law(length - rest, k, fc, slack, e, de, d2e); }
 };
 
 /// One fibre family of one triangle of a general mesh: the triangle's membrane
@@ -76,13 +107,14 @@ struct MembraneFiber {
     double k;    ///< [N/m]
     double d;    ///< [N*s/m]
     double fc = -1; ///< [N]
+    double slack = 0; ///< [m] (slack_spring_law)
     /// The fibre's current vector at positions X.
     template <class P>
     Eigen::Vector3d vec(const P& X) const
     {
         return w[0] * X.row(v[0]).transpose() + w[1] * X.row(v[1]).transpose() + w[2] * X.row(v[2]).transpose();
     }
-    void law(double length, double& e, double& de, double& d2e) const { spring_law(length - rest, k, fc, e, de, d2e); }
+    void law(double length, double& e, double& de, double& d2e) const { slack_spring_law(length - rest, k, fc, slack, e, de, d2e); }
 };
 
 /// Quadratic bending stencil (after Bergou, Wardetzky, Harmon, Zorin, Grinspun

@@ -72,6 +72,10 @@ constexpr std::array<ParamSpec, kParamCount> kTable{{
      "B/(2R) where the radius of curvature is R, where the tangent stiffness is 0 (cantilever measurements of real "
      "fabrics put it near 5 mm), and falling in sharper bends, which hinge. Not with bend_softening_radius_m "
      "(0 = linear bending, as in the seed paper)."},
+    {Param::CompressionSlack, "compression_slack", "", "-", 0.0, 0.2, 0.0, false, true, 0.0, 0.05,
+     "Slack in compression: the strain by which the membrane (warp, weft and the shear diagonals) shortens at 1 % "
+     "of its tensile stiffness before it resists as in tension, the crimp of woven yarns taking it up; beyond it the "
+     "buckling length's limit applies as before (0 = as stiff in compression as in tension, as in the seed paper)."},
 }};
 
 constexpr bool table_is_consistent()

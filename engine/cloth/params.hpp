@@ -33,6 +33,7 @@ enum class Param : int {
     BendSofteningRadius,  ///< [m] bending that yields: moment B kappa / sqrt(1 + (rho kappa)^2), at most B / rho (0 = linear)
     BucklingLength,       ///< [m] compression limit of the membrane: at most pi^2 B / l^2 per unit width (0 = linear in compression)
     BendPeakRadius,       ///< [m] bending whose moment peaks: B kappa / (1 + (R kappa)^2), at most B / (2 R) at kappa = 1 / R, falling beyond (0 = linear)
+    CompressionSlack,     ///< [1] strain of shortening the membrane takes up at 1 % of its tensile stiffness before it resists (0 = none)
     Count
 };
 

@@ -121,6 +121,8 @@ FitResult fit_at_grid(const std::vector<MeasuredDrape>& records_in, const FitOpt
     cloth::FabricParams base = options.start.value_or(cloth::FabricParams{});
     if (options.shear_held_N_m > 0) base[Param::Shear] = options.shear_held_N_m;
     if (options.model == ModelVariant::Baseline) base[Param::Friction] = 0.0; // the seed's frictionless disc
+    // The slack's sensitivity is taken by a relative step: a fit of it starts inside its range.
+    if (options.model == ModelVariant::Slack && !(base[Param::CompressionSlack] > 0)) base[Param::CompressionSlack] = kSlackFitStart;
     base = params_for_record(base, records.front());
     state->ev.emplace(records, options, vars, base);
     Evaluator& ev = *state->ev;

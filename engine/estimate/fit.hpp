@@ -36,6 +36,11 @@ FitResult fit_fabric(const std::vector<MeasuredDrape>& records, const FitOptions
 /// membrane, l = 0), so `drape fit` holds it here rather than at the seed's 0.
 inline constexpr double kTypicalBucklingLength = 0.0075;
 
+/// Where `--model slack` starts cloth::Param::CompressionSlack when the start has
+/// none: 1 %, the middle of its fit range (a fit cannot leave 0, where the
+/// parameter's relative step is none).
+inline constexpr double kSlackFitStart = 0.01;
+
 /// The start `drape fit` uses without --start: the parameter table's defaults
 /// with buckling_length_m = kTypicalBucklingLength.
 cloth::FabricParams default_fit_start();

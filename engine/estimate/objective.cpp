@@ -17,7 +17,8 @@ ModelVariant parse_model_variant(const std::string& name)
     if (name == "full") return ModelVariant::Full;
     if (name == "buckling") return ModelVariant::Buckling;
     if (name == "peaking") return ModelVariant::Peaking;
-    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, softening, full, buckling, peaking");
+    if (name == "slack") return ModelVariant::Slack;
+    throw ParameterError("model: '" + name + "' is not one of baseline, stiffening, softening, full, buckling, peaking, slack");
 }
 
 std::string to_string(ModelVariant v)
@@ -29,6 +30,7 @@ std::string to_string(ModelVariant v)
     case ModelVariant::Full: return "full";
     case ModelVariant::Buckling: return "buckling";
     case ModelVariant::Peaking: return "peaking";
+    case ModelVariant::Slack: return "slack";
     }
     return "baseline";
 }
@@ -62,6 +64,7 @@ std::vector<FitVariable> fit_variables(ModelVariant v, bool tie_bending)
     if (v == ModelVariant::Softening) add(Param::BendSofteningRadius);
     if (v == ModelVariant::Buckling) add(Param::BucklingLength);
     if (v == ModelVariant::Peaking) add(Param::BendPeakRadius);
+    if (v == ModelVariant::Slack) add(Param::CompressionSlack);
     if (v == ModelVariant::Full) {
         add(Param::StretchWarp);
         add(Param::StretchWeft);

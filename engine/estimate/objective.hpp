@@ -22,8 +22,8 @@ namespace drape::estimate {
 ///    (bend_peak_radius_m; real fabrics' cantilever curves, Feng et al. 2022).
 /// Disc friction is not fitted: the static solver finds rest states without it
 /// (a rest state with friction depends on the path to it).
-enum class ModelVariant { Baseline, Stiffening, Softening, Full, Buckling, Peaking };
-ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "stiffening" | "softening" | "full" | "buckling" | "peaking"; ParameterError otherwise
+enum class ModelVariant { Baseline, Stiffening, Softening, Full, Buckling, Peaking, Slack };
+ModelVariant parse_model_variant(const std::string& name); ///< "baseline" | "stiffening" | "softening" | "full" | "buckling" | "peaking" | "slack"; ParameterError otherwise
 std::string to_string(ModelVariant v);
 
 /// One fitted coordinate: a parameter (or a tied group, e.g. stretch warp and

@@ -17,9 +17,10 @@ namespace {
 /// springs are stretched and compressed, stencils bent and contacts active.
 std::unique_ptr<ClothSystem> bent_disc(bool triangle_mesh, unsigned seed, double stiffening_radius = 0.0, double softening_radius = 0.0,
                                        double buckling_length = 0.0, bool bending_correction = false, bool arc_membrane = false,
-                                       double peak_radius = 0.0)
+                                       double peak_radius = 0.0, double compression_slack = 0.0)
 {
     FabricParams p;
+    p[Param::CompressionSlack] = compression_slack;
     p[Param::BendPeakRadius] = peak_radius;
     p[Param::BendStiffeningRadius] = stiffening_radius;
     p[Param::BendSofteningRadius] = softening_radius;
@@ -69,35 +70,42 @@ private slots:
         QTest::addColumn<bool>("correction");
         QTest::addColumn<bool>("arc");
         QTest::addColumn<double>("peak");
-        QTest::newRow("grid") << false << 0.0 << 0.0 << 0.0 << false << false << 0.0;
-        QTest::newRow("triangle mesh") << true << 0.0 << 0.0 << 0.0 << false << false << 0.0;
+        QTest::addColumn<double>("slack");
+        QTest::newRow("grid") << false << 0.0 << 0.0 << 0.0 << false << false << 0.0 << 0.0;
+        QTest::newRow("triangle mesh") << true << 0.0 << 0.0 << 0.0 << false << false << 0.0 << 0.0;
         // 20 mm: the nonlinear terms dominate in the sharp bends of this state.
-        QTest::newRow("grid, stiffening bending") << false << 0.02 << 0.0 << 0.0 << false << false << 0.0;
-        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02 << 0.0 << 0.0 << false << false << 0.0;
-        QTest::newRow("grid, softening bending") << false << 0.0 << 0.02 << 0.0 << false << false << 0.0;
-        QTest::newRow("triangle mesh, both") << true << 0.01 << 0.02 << 0.0 << false << false << 0.0;
+        QTest::newRow("grid, stiffening bending") << false << 0.02 << 0.0 << 0.0 << false << false << 0.0 << 0.0;
+        QTest::newRow("triangle mesh, stiffening bending") << true << 0.02 << 0.0 << 0.0 << false << false << 0.0 << 0.0;
+        QTest::newRow("grid, softening bending") << false << 0.0 << 0.02 << 0.0 << false << false << 0.0 << 0.0;
+        QTest::newRow("triangle mesh, both") << true << 0.01 << 0.02 << 0.0 << false << false << 0.0 << 0.0;
         // The hoops of the folded overhang are compressed past the buckling load
         // (a buckling length of 30 mm, the mesh spacing of these states).
-        QTest::newRow("grid, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false << false << 0.0;
-        QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << 0.03 << false << false << 0.0;
+        QTest::newRow("grid, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false << false << 0.0 << 0.0;
+        QTest::newRow("triangle mesh, sub-mesh buckling") << true << 0.0 << 0.0 << 0.03 << false << false << 0.0 << 0.0;
         // The stencils' fourth-order correction (30 mm cells: 300 mm^2 per stencil),
         // alone, with the material's softening, with its stiffening and with the
         // compression limit.
-        QTest::newRow("grid, crest-corrected bending") << false << 0.0 << 0.0 << 0.0 << true << false << 0.0;
-        QTest::newRow("grid, crest-corrected and softening") << false << 0.0 << 0.02 << 0.0 << true << false << 0.0;
-        QTest::newRow("grid, crest-corrected and stiffening") << false << 0.02 << 0.0 << 0.0 << true << false << 0.0;
-        QTest::newRow("grid, crest-corrected, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << true << false << 0.0;
+        QTest::newRow("grid, crest-corrected bending") << false << 0.0 << 0.0 << 0.0 << true << false << 0.0 << 0.0;
+        QTest::newRow("grid, crest-corrected and softening") << false << 0.0 << 0.02 << 0.0 << true << false << 0.0 << 0.0;
+        QTest::newRow("grid, crest-corrected and stiffening") << false << 0.02 << 0.0 << 0.0 << true << false << 0.0 << 0.0;
+        QTest::newRow("grid, crest-corrected, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << true << false << 0.0 << 0.0;
         // Springs that measure arcs (ModelOptions::arc_membrane), with the compression
         // limit their bent crests no longer trip, and with the crest-corrected stencils,
         // softening bending and the compression limit besides.
-        QTest::newRow("grid, arc membrane") << false << 0.0 << 0.0 << 0.0 << false << true << 0.0;
-        QTest::newRow("grid, arc membrane, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false << true << 0.0;
-        QTest::newRow("grid, arc membrane, crest-corrected, softening, buckling") << false << 0.0 << 0.02 << 0.03 << true << true << 0.0;
+        QTest::newRow("grid, arc membrane") << false << 0.0 << 0.0 << 0.0 << false << true << 0.0 << 0.0;
+        QTest::newRow("grid, arc membrane, sub-mesh buckling") << false << 0.0 << 0.0 << 0.03 << false << true << 0.0 << 0.0;
+        QTest::newRow("grid, arc membrane, crest-corrected, softening, buckling") << false << 0.0 << 0.02 << 0.03 << true << true << 0.0 << 0.0;
         // The peaking law (bend_peak_radius_m, 20 mm): this state's sharp bends are
         // past the moment's peak, where a stencil's energy is not convex.
-        QTest::newRow("grid, peaking bending") << false << 0.0 << 0.0 << 0.0 << false << false << 0.02;
-        QTest::newRow("triangle mesh, peaking bending") << true << 0.0 << 0.0 << 0.0 << false << false << 0.02;
-        QTest::newRow("grid, crest-corrected, peaking, stiffening") << false << 0.01 << 0.0 << 0.0 << true << false << 0.02;
+        QTest::newRow("grid, peaking bending") << false << 0.0 << 0.0 << 0.0 << false << false << 0.02 << 0.0;
+        QTest::newRow("triangle mesh, peaking bending") << true << 0.0 << 0.0 << 0.0 << false << false << 0.02 << 0.0;
+        QTest::newRow("grid, crest-corrected, peaking, stiffening") << false << 0.01 << 0.0 << 0.0 << true << false << 0.02 << 0.0;
+        // Slack in compression (compression_slack 5 %: this state's hoops are shortened
+        // by up to 40 %, some springs inside the slack, most past it), alone, with the
+        // compression limit and arcs, and on the triangles' fibres.
+        QTest::newRow("grid, slack") << false << 0.0 << 0.0 << 0.0 << false << false << 0.0 << 0.05;
+        QTest::newRow("grid, arc membrane, slack, buckling") << false << 0.0 << 0.0 << 0.03 << true << true << 0.0 << 0.05;
+        QTest::newRow("triangle mesh, slack, buckling") << true << 0.0 << 0.0 << 0.03 << false << false << 0.0 << 0.05;
     }
     void forces_are_minus_energy_gradient()
     {
@@ -108,7 +116,8 @@ private slots:
         QFETCH(bool, correction);
         QFETCH(bool, arc);
         QFETCH(double, peak);
-        auto s = bent_disc(triangles, 3, stiffening, softening, buckling, correction, arc, peak);
+        QFETCH(double, slack);
+        auto s = bent_disc(triangles, 3, stiffening, softening, buckling, correction, arc, peak, slack);
         Positions f;
         s->conservative_forces(s->x, f);
         const double h = 1e-7;
@@ -136,7 +145,8 @@ private slots:
         QFETCH(bool, correction);
         QFETCH(bool, arc);
         QFETCH(double, peak);
-        auto s = bent_disc(triangles, 5, stiffening, softening, buckling, correction, arc, peak);
+        QFETCH(double, slack);
+        auto s = bent_disc(triangles, 5, stiffening, softening, buckling, correction, arc, peak, slack);
         HessianAssembler H(*s);
         H.assemble(s->x, Eigen::VectorXd(), 0.0, /*project=*/false);
         const Eigen::MatrixXd Hu = Eigen::MatrixXd(H.matrix());
@@ -192,6 +202,58 @@ private slots:
         double e, de, d2e;
         slack.law(sp.rest * 0.9, e, de, d2e);
         QCOMPARE(de, 0.0);
+    }
+
+    /// Slack in compression (slack_spring_law): tension as without it; the first
+    /// `slack` of shortening at kSlackStiffnessFraction of k; beyond it the law
+    /// with the compression limit, shifted by the slack; energy and force
+    /// continuous everywhere, derivatives by differences away from the two steps.
+    void slack_spring_law_takes_up_its_slack()
+    {
+        Spring sp{0, 1, 0.01, 200.0, 0.0, SpringKind::StretchU, 0.05};
+        sp.slack = 0.02 * sp.rest;
+        const double eps = kSlackStiffnessFraction;
+        auto at = [&](const Spring& s, double x) {
+            double e, de, d2e;
+            s.law(s.rest + x, e, de, d2e);
+            return Eigen::Vector3d(e, de, d2e);
+        };
+        Spring plain = sp;
+        plain.slack = 0;
+        QCOMPARE(at(sp, 0.001), at(plain, 0.001)); // tension: unchanged
+        const double a = sp.slack, x1 = -0.5 * sp.fc / sp.k - a;
+        QCOMPARE(at(sp, -0.5 * a)(1), -eps * sp.k * 0.5 * a); // inside the slack: eps k
+        QCOMPARE(at(sp, -0.5 * a)(2), eps * sp.k);
+        // Beyond it: eps k x plus the law of x + slack.
+        const Eigen::Vector3d deep = at(sp, -3 * a), shifted = at(plain, -2 * a);
+        QVERIFY(std::abs(deep(1) - (-eps * sp.k * 3 * a + (1 - eps) * shifted(1))) < 1e-12 * sp.fc);
+        for (double x : {0.0, -a}) { // energy and force continuous across the steps
+            const double d = 1e-9 * sp.rest;
+            const Eigen::Vector3d lo = at(sp, x - d), hi = at(sp, x + d);
+            QVERIFY2(std::abs(lo(0) - hi(0)) < 4 * d * sp.fc && std::abs(lo(1) - hi(1)) < 4 * d * sp.k,
+                     qPrintable(QString("jump at x = %1: %2 J, %3 N").arg(x).arg(lo(0) - hi(0)).arg(lo(1) - hi(1))));
+        }
+        for (double x : {-0.5 * sp.rest, 4 * x1, x1, -1.5 * a, -0.5 * a, 0.5 * a}) {
+            const Eigen::Vector3d v = at(sp, x);
+            const double h = 1e-7 * sp.rest;
+            const Eigen::Vector3d p = at(sp, x + h), m = at(sp, x - h);
+            QVERIFY2(std::abs((p(0) - m(0)) / (2 * h) - v(1)) < 1e-6 * sp.fc, qPrintable(QString("de at x = %1").arg(x)));
+            QVERIFY2(std::abs((p(1) - m(1)) / (2 * h) - v(2)) < 1e-5 * sp.k, qPrintable(QString("d2e at x = %1").arg(x)));
+            QVERIFY(v(2) > 0);
+        }
+        // The model sets it on the membrane's springs and fibres, as a strain of each one's rest length.
+        FabricParams p;
+        p[Param::CompressionSlack] = 0.01;
+        const ClothMesh grid = make_disc(0.3, 11, 0.0);
+        int slack_springs = 0;
+        for (const Spring& s : make_model(grid, p).springs)
+            if (s.kind == SpringKind::StretchU || s.kind == SpringKind::StretchV || s.kind == SpringKind::Shear) {
+                QVERIFY(std::abs(s.slack - 0.01 * s.rest) < 1e-15);
+                ++slack_springs;
+            }
+        QVERIFY(slack_springs > 100);
+        const ClothMesh tri = make_triangle_mesh(grid.X, grid.F, Eigen::Vector3d(1, 0.3, 0));
+        for (const MembraneFiber& f : make_model(tri, p).fibers) QVERIFY(std::abs(f.slack - 0.01 * f.rest) < 1e-15);
     }
 
     /// The buckling rows above check something: in those states springs are

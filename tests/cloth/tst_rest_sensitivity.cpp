@@ -15,7 +15,7 @@ using namespace drape::cloth;
 
 namespace {
 
-FabricParams fabric(double buckling_length)
+FabricParams fabric(double buckling_length, double slack = 0.0)
 {
     FabricParams p;
     p[Param::AreaDensity] = 0.2;
@@ -25,6 +25,7 @@ FabricParams fabric(double buckling_length)
     p[Param::StretchWarp] = 800;
     p[Param::StretchWeft] = 600;
     p[Param::BucklingLength] = buckling_length;
+    p[Param::CompressionSlack] = slack;
     return p;
 }
 
@@ -60,18 +61,22 @@ private slots:
     void matchesFiniteDifferences_data()
     {
         QTest::addColumn<double>("buckling_length");
-        QTest::newRow("linear membrane") << 0.0;
-        QTest::newRow("compression limit active") << 0.02;
+        QTest::addColumn<double>("slack");
+        QTest::newRow("linear membrane") << 0.0 << 0.0;
+        QTest::newRow("compression limit active") << 0.02 << 0.0;
+        QTest::newRow("slack in compression") << 0.02 << 0.01;
     }
     void matchesFiniteDifferences()
     {
         QFETCH(double, buckling_length);
-        const FabricParams p = fabric(buckling_length);
+        QFETCH(double, slack);
+        const FabricParams p = fabric(buckling_length, slack);
         const DrapeSetup s = setup();
         const DrapeResult r = simulate_drape(Material(p), s, tight());
         QVERIFY2(r.status.converged(), r.status.message.c_str());
         std::vector<Param> params = {Param::BendWarp, Param::BendWeft, Param::Shear, Param::StretchWarp, Param::AreaDensity};
         if (buckling_length > 0) params.push_back(Param::BucklingLength);
+        if (slack > 0) params.push_back(Param::CompressionSlack);
         const auto sens = rest_sensitivities(Material(p), s, r.x, params);
         QCOMPARE(sens.size(), params.size());
         const auto metric = drape_metric_sensitivities(Material(p), s, r.x, params);
@@ -88,6 +93,15 @@ private slots:
                     if (sp.fc > 0 && sp.k * (l - sp.rest) < -0.5 * sp.fc) ++buckled;
                 }
                 QVERIFY2(buckled > 10, qPrintable(QString("%1 springs past the transition").arg(buckled)));
+            }
+            if (slack > 0) { // springs inside their slack and past it
+                int inside = 0, past = 0;
+                for (const Spring& sp : sys->model().springs) {
+                    const double x = (r.x.row(sp.i) - r.x.row(sp.j)).norm() - sp.rest;
+                    inside += x < 0 && x > -sp.slack;
+                    past += x < -sp.slack;
+                }
+                QVERIFY2(inside > 10 && past > 10, qPrintable(QString("%1 springs inside the slack, %2 past it").arg(inside).arg(past)));
             }
         }
         for (std::size_t k = 0; k < sens.size(); ++k) {

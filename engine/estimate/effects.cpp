@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace drape::estimate {
 
@@ -234,6 +235,44 @@ std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eig
     return out;
 }
 
+void check_channels(EffectCandidate& c, const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const Eigen::MatrixXd& S,
+                    const std::vector<int>& channel, double s2)
+{
+    c.channels.clear();
+    c.explains_reached = true;
+    if (S.rows() != r.size() || J.rows() != r.size() || static_cast<Eigen::Index>(channel.size()) != r.size()) return;
+    Eigen::MatrixXd M(J.rows(), J.cols() + S.cols());
+    M << J, S;
+    const Eigen::VectorXd after = r + M * M.colPivHouseholderQr().solve(-r);
+    const double weight = S.squaredNorm();
+    static const char* names[] = {"photos", "contours"};
+    for (int ch : {0, 1}) {
+        EffectCandidate::Channel out{names[ch], 0.0, 0.0};
+        double w = 0, before = 0, left = 0;
+        for (Eigen::Index i = 0; i < r.size(); ++i)
+            if (channel[static_cast<std::size_t>(i)] == ch) {
+                w += S.row(i).squaredNorm();
+                before += r[i] * r[i];
+                left += after[i] * after[i];
+            }
+        out.reach = weight > 0 ? w / weight : 0.0;
+        out.delta_chi2 = (before - left) / s2;
+        if (out.reach >= kChannelReach && out.delta_chi2 < -kChannelSlack) c.explains_reached = false;
+        c.channels.push_back(out);
+    }
+    if (!c.explains_reached && c.verdict == "beyond noise") {
+        std::string worse;
+        for (const auto& ch : c.channels)
+            if (ch.reach >= kChannelReach && ch.delta_chi2 < -kChannelSlack) {
+                char buf[160];
+                std::snprintf(buf, sizeof buf, "%s%s %+.1f", worse.empty() ? "" : ", ", ch.name.c_str(), ch.delta_chi2);
+                worse += buf;
+            }
+        const std::string n = "its refit makes a channel it reaches worse (delta chi2 " + worse + "): not named";
+        c.note = c.note.empty() ? n : c.note + "; " + n;
+    }
+}
+
 std::string name_effect(const std::vector<EffectCandidate>& c, double chi2, int dof)
 {
     const EffectCandidate* best = nullptr;
@@ -244,6 +283,7 @@ std::string name_effect(const std::vector<EffectCandidate>& c, double chi2, int 
         if (&e != best && e.verdict == "beyond noise" && e.delta_chi2 + 2.0 * (best->parameters - e.parameters) > best->delta_chi2 - 2.0)
             return {}; // two explain it alike: a Bayes factor below e (2 ln B < 2, Kass & Raftery's "not worth more than a bare mention")
     if (std::isfinite(best->verified_delta_chi2) && best->verified_delta_chi2 < 0.5 * best->delta_chi2) return {}; // not borne out by a drape
+    if (!best->explains_reached) return {}; // it trades one channel against another
     const double d = std::max(1, dof);
     const double bound = d + 3 * std::sqrt(2 * d);
     const double after = chi2 - best->delta_chi2;

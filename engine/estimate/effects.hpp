@@ -96,7 +96,23 @@ struct EffectCandidate {
     double verified_delta_chi2 = std::numeric_limits<double>::quiet_NaN();
     std::string verdict;     ///< "beyond noise" | "within noise" | "not testable"
     std::string note;
+    /// The refit per channel (photos: D and the hem; contours: every contour term):
+    /// the share of the signature's weight in the channel and the channel's delta
+    /// chi2 of the refit (positive: explained), on the test's scale. An effect is
+    /// named only when it explains every channel it reaches (explains_reached).
+    struct Channel {
+        std::string name;
+        double reach = 0;
+        double delta_chi2 = 0;
+    };
+    std::vector<Channel> channels;
+    bool explains_reached = true;
 };
+
+/// A channel "reached" by a signature holds at least this share of its weight.
+inline constexpr double kChannelReach = 0.1;
+/// The refit may leave a reached channel this much worse in chi2 (noise) and still explain it.
+inline constexpr double kChannelSlack = 1.0;
 
 /// The statistics of the candidates: `J` the fitted coordinates' whitened
 /// Jacobian, `r` the whitened residual (same rows; rows outside the test are
@@ -106,6 +122,12 @@ struct EffectCandidate {
 /// than its noise model (chi2 / dof > 1) scales the noise up by that factor -
 /// z and delta chi2 are divided by it (as the intervals), the amplitudes are
 /// the refit's, unscaled.
+/// Fills c.channels and c.explains_reached for a candidate with signature
+/// columns `S` (unprojected): the joint refit [J S] of the residual r, channel by
+/// channel (`channel[row]`: 0 photos, 1 contours, -1 neither), scaled by s2.
+void check_channels(EffectCandidate& c, const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const Eigen::MatrixXd& S,
+                    const std::vector<int>& channel, double s2);
+
 std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
                                              const std::vector<EffectSignature>& signatures, int terms, double chi2_scale = 1.0);
 

@@ -43,6 +43,18 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
     // up by that factor: the tests divide by it, as the intervals do.
     const double s2 = std::max(1.0, out.chi2 / std::max(1, out.dof));
     auto cands = test_candidates(J, r, sigs, rows, s2);
+    // Every channel an effect reaches must be explained by its refit, not traded
+    // against another (docs/model-discrepancy.md, "How an effect is named").
+    std::vector<int> channel(static_cast<std::size_t>(J.rows()), -1);
+    for (Eigen::Index k = 0; k < J.rows(); ++k) {
+        const auto& t = best.terms[static_cast<std::size_t>(k)];
+        if (!linearised_term(t)) continue;
+        channel[static_cast<std::size_t>(k)] = t.kind == "dc" || t.kind == "hem"                 ? 0
+                                               : t.kind.rfind("prior", 0) == 0 || t.kind == "nodes" ? -1
+                                                                                                    : 1;
+    }
+    for (std::size_t k = 0; k < cands.size() && k < sigs.size(); ++k)
+        if (cands[k].verdict != "not testable" && sigs[k].available) check_channels(cands[k], J, r, sigs[k].columns, channel, s2);
     // Verify the strongest parameter effect beyond noise with a drape: the joint
     // Gauss-Newton step (fitted coordinates and the effect), warm from the optimum.
     int top = -1;

@@ -332,6 +332,10 @@ nlohmann::json residual_to_json(const ResidualAnalysis& a)
             if (c.amplitudes.size() > 1) e["amplitudes"] = c.amplitudes;
             e["amplitude_unit"] = c.amplitude_unit;
             if (std::isfinite(c.verified_delta_chi2)) e["verified_delta_chi2"] = c.verified_delta_chi2;
+            nlohmann::json ch = nlohmann::json::object();
+            for (const auto& x : c.channels) ch[x.name] = {{"reach", x.reach}, {"delta_chi2", x.delta_chi2}};
+            if (!c.channels.empty()) e["channels"] = ch;
+            e["explains_reached_channels"] = c.explains_reached;
         }
         if (!c.note.empty()) e["note"] = c.note;
         cands.push_back(std::move(e));

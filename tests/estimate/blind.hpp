@@ -51,6 +51,7 @@ inline MeasuredDrape injected(const std::string& effect, double strength, std::u
     const double direction = 1.3 * static_cast<double>(seed); // a phase per record
     if (effect == "specimen_off_centre") s.specimen_offset = strength * Eigen::Vector2d(std::cos(direction), std::sin(direction)); // [m]
     if (effect == "specimen_weight_gradient") s.density_gradient = strength * Eigen::Vector2d(std::cos(direction), std::sin(direction));
+    if (effect == "disc_diameter") s.disc_diameter += strength; // [m] the pedestal wider than the record declares (not a candidate: docs/model-discrepancy.md)
     if (effect == "tensile_anisotropy") { // warp stiffer, weft softer by the factor (1 + strength)
         p[Param::StretchWarp] *= 1 + strength;
         p[Param::StretchWeft] /= 1 + strength;
@@ -76,6 +77,14 @@ inline MeasuredDrape injected(const std::string& effect, double strength, std::u
         rec.drape_coefficient_percent = 100 * (as * (1 + strength) * (1 + strength) - ad) / (a0 - ad);
     }
     if (effect == "declared_weight") rec.areal_density *= 1 + strength; // the lab declares a wrong weight
+    if (effect == "disc_diameter") {
+        // The lab declares the nominal disc and computes D from the shadow's area with it.
+        const double a0 = std::pow(rec.sample_diameter / 2, 2), at = std::pow(rec.disc_diameter / 2, 2);
+        const double as = at + rec.drape_coefficient_percent / 100 * (a0 - at);
+        rec.disc_diameter -= strength;
+        const double ad = std::pow(rec.disc_diameter / 2, 2);
+        rec.drape_coefficient_percent = 100 * (as - ad) / (a0 - ad);
+    }
     return rec;
 }
 

@@ -91,6 +91,36 @@ private slots:
         QCOMPARE(test_candidates(J, noise, {sig}, N)[0].verdict, std::string("not testable"));
     }
 
+    /// The naming rule's channels: a refit that explains the contours by making
+    /// the photos worse is reported, not named. Analytic: rows 0-1 photos, 2-3 contours, no
+    /// fitted columns, the signature (2, 2, -1, -1) against the residual (0, 0, 3, 3)
+    /// refits with amplitude 0.6: photos 0 -> 2.88, contours 18 -> 11.52.
+    void aRefitThatTradesChannelsIsNotNamed()
+    {
+        EffectSpec spec;
+        spec.name = "trading";
+        spec.family = "test";
+        EffectSignature sig;
+        sig.spec = &spec;
+        sig.columns = Eigen::Vector4d(2, 2, -1, -1);
+        const Eigen::Vector4d r(0, 0, 3, 3);
+        const Eigen::MatrixXd J(4, 0);
+        auto c = test_candidates(J, r, {sig}, 4);
+        c[0].verdict = "beyond noise"; // (four rows cannot reach the 3-sigma quantile; the rule under test comes after it)
+        QCOMPARE(name_effect(c, 10.0, 4), std::string("trading")); // (a chi2 the refit brings within the noise)
+        check_channels(c[0], J, r, sig.columns, {0, 0, 1, 1}, 1.0);
+        QCOMPARE(c[0].channels.size(), std::size_t(2));
+        QCOMPARE(c[0].channels[0].name, std::string("photos"));
+        QVERIFY(std::abs(c[0].channels[0].reach - 0.8) < 1e-12 && std::abs(c[0].channels[0].delta_chi2 + 2.88) < 1e-9);
+        QVERIFY(std::abs(c[0].channels[1].reach - 0.2) < 1e-12 && std::abs(c[0].channels[1].delta_chi2 - 6.48) < 1e-9);
+        QVERIFY(!c[0].explains_reached);
+        QVERIFY(name_effect(c, 10.0, 4).empty());
+        // Explaining both channels: named again.
+        check_channels(c[0], J, Eigen::Vector4d(2, 2, -1, -1), sig.columns, {0, 0, 1, 1}, 1.0);
+        QVERIFY(c[0].explains_reached);
+        QCOMPARE(name_effect(c, 10.0, 4), std::string("trading"));
+    }
+
     void libraryAndWhatTheFitCovers()
     {
         // The candidates issue 20 lists, each once in the library.

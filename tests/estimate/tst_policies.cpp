@@ -202,7 +202,9 @@ private slots:
                                 .amplitudes = {1.5},
                                 .amplitude_unit = "%",
                                 .verdict = "beyond noise",
-                                .note = ""};
+                                .note = "",
+                                .channels = {},
+                                .explains_reached = true};
         r.residual.candidates = {c};
         r.residual.named_effect = c.name;
         r.residual.exceeds_noise = true;

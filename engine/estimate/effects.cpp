@@ -154,8 +154,49 @@ std::string fitted_by(const EffectSpec& sp, const std::vector<FitVariable>& vars
     return left.norm() < 1e-9 * w.norm() ? keys : std::string();
 }
 
+namespace {
+
+/// c.channels and c.explains_reached from the joint refit's residual `after`
+/// against the fit's `r`, channel by channel (`channel[row]`: 0 photos, 1
+/// contours, -1 neither); a channel's reach is its share of the weight of the
+/// signature's columns `S` (unprojected).
+void explain_channels(EffectCandidate& c, const Eigen::VectorXd& r, const Eigen::VectorXd& after, const Eigen::MatrixXd& S,
+                      const std::vector<int>& channel, double s2)
+{
+    const double weight = S.squaredNorm();
+    static const char* names[] = {"photos", "contours"};
+    for (int ch : {0, 1}) {
+        EffectCandidate::Channel out{names[ch], 0.0, 0.0};
+        double w = 0, before = 0, left = 0;
+        for (Eigen::Index i = 0; i < r.size(); ++i)
+            if (channel[static_cast<std::size_t>(i)] == ch) {
+                w += S.row(i).squaredNorm();
+                before += r[i] * r[i];
+                left += after[i] * after[i];
+            }
+        out.reach = weight > 0 ? w / weight : 0.0;
+        out.delta_chi2 = (before - left) / s2;
+        if (out.reach >= kChannelReach && out.delta_chi2 < -kChannelSlack) c.explains_reached = false;
+        c.channels.push_back(out);
+    }
+    if (!c.explains_reached && c.verdict == "beyond noise") {
+        std::string worse;
+        for (const auto& ch : c.channels)
+            if (ch.reach >= kChannelReach && ch.delta_chi2 < -kChannelSlack) {
+                char buf[160];
+                std::snprintf(buf, sizeof buf, "%s%s %+.1f", worse.empty() ? "" : ", ", ch.name.c_str(), ch.delta_chi2);
+                worse += buf;
+            }
+        const std::string n = "its refit makes a channel it reaches worse (delta chi2 " + worse + "): not named";
+        c.note = c.note.empty() ? n : c.note + "; " + n;
+    }
+}
+
+} // namespace
+
 std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                                             const std::vector<EffectSignature>& signatures, int terms, double chi2_scale)
+                                             const std::vector<EffectSignature>& signatures, int terms, double chi2_scale,
+                                             const std::vector<int>& channel)
 {
     const double s2 = std::isfinite(chi2_scale) ? std::max(1.0, chi2_scale) : 1.0;
     std::vector<EffectCandidate> out;
@@ -230,47 +271,12 @@ std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eig
         if (left < 0.3 * full && c.note.empty())
             c.note = "mostly degenerate with the fitted parameters (" + std::to_string(static_cast<int>(std::lround(100 * left / full))) +
                      " % of its signature is new)";
+        // The joint refit's residual (the fitted columns and the effect's) is rp + S a:
+        // the fitted columns' projection, then the effect's on what they leave.
+        if (static_cast<Eigen::Index>(channel.size()) == r.size()) explain_channels(c, r, rp + S * a, sig.columns, channel, s2);
         out.push_back(std::move(c));
     }
     return out;
-}
-
-void check_channels(EffectCandidate& c, const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const Eigen::MatrixXd& S,
-                    const std::vector<int>& channel, double s2)
-{
-    c.channels.clear();
-    c.explains_reached = true;
-    if (S.rows() != r.size() || J.rows() != r.size() || static_cast<Eigen::Index>(channel.size()) != r.size()) return;
-    Eigen::MatrixXd M(J.rows(), J.cols() + S.cols());
-    M << J, S;
-    const Eigen::VectorXd after = r + M * M.colPivHouseholderQr().solve(-r);
-    const double weight = S.squaredNorm();
-    static const char* names[] = {"photos", "contours"};
-    for (int ch : {0, 1}) {
-        EffectCandidate::Channel out{names[ch], 0.0, 0.0};
-        double w = 0, before = 0, left = 0;
-        for (Eigen::Index i = 0; i < r.size(); ++i)
-            if (channel[static_cast<std::size_t>(i)] == ch) {
-                w += S.row(i).squaredNorm();
-                before += r[i] * r[i];
-                left += after[i] * after[i];
-            }
-        out.reach = weight > 0 ? w / weight : 0.0;
-        out.delta_chi2 = (before - left) / s2;
-        if (out.reach >= kChannelReach && out.delta_chi2 < -kChannelSlack) c.explains_reached = false;
-        c.channels.push_back(out);
-    }
-    if (!c.explains_reached && c.verdict == "beyond noise") {
-        std::string worse;
-        for (const auto& ch : c.channels)
-            if (ch.reach >= kChannelReach && ch.delta_chi2 < -kChannelSlack) {
-                char buf[160];
-                std::snprintf(buf, sizeof buf, "%s%s %+.1f", worse.empty() ? "" : ", ", ch.name.c_str(), ch.delta_chi2);
-                worse += buf;
-            }
-        const std::string n = "its refit makes a channel it reaches worse (delta chi2 " + worse + "): not named";
-        c.note = c.note.empty() ? n : c.note + "; " + n;
-    }
 }
 
 std::string name_effect(const std::vector<EffectCandidate>& c, double chi2, int dof)

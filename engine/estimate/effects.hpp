@@ -122,14 +122,12 @@ inline constexpr double kChannelSlack = 1.0;
 /// than its noise model (chi2 / dof > 1) scales the noise up by that factor -
 /// z and delta chi2 are divided by it (as the intervals), the amplitudes are
 /// the refit's, unscaled.
-/// Fills c.channels and c.explains_reached for a candidate with signature
-/// columns `S` (unprojected): the joint refit [J S] of the residual r, channel by
-/// channel (`channel[row]`: 0 photos, 1 contours, -1 neither), scaled by s2.
-void check_channels(EffectCandidate& c, const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const Eigen::MatrixXd& S,
-                    const std::vector<int>& channel, double s2);
-
+/// `channel` (one per row: 0 photos - D and the hem -, 1 contours, -1 neither;
+/// empty: not checked) gives each testable candidate its refit per channel
+/// (EffectCandidate::channels, explains_reached).
 std::vector<EffectCandidate> test_candidates(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                                             const std::vector<EffectSignature>& signatures, int terms, double chi2_scale = 1.0);
+                                             const std::vector<EffectSignature>& signatures, int terms, double chi2_scale = 1.0,
+                                             const std::vector<int>& channel = {});
 
 /// The named effect: the candidate beyond noise with the largest delta chi2,
 /// when its refit explains the residual - the refit's chi2 (chi2 - delta chi2)

@@ -27,14 +27,20 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
         out.residual.unexplained = std::string("candidate effects not tested: ") + e.what();
         return;
     }
-    // The test's rows: the linearised terms.
+    // The test's rows: the linearised terms, each in its channel (every channel an
+    // effect reaches must be explained by its refit, not traded against another:
+    // docs/model-discrepancy.md, "How an effect is named").
     Eigen::VectorXd r = Eigen::VectorXd::Zero(J.rows());
+    std::vector<int> channel(static_cast<std::size_t>(J.rows()), -1);
     int rows = 0;
     for (Eigen::Index k = 0; k < J.rows(); ++k) {
         const auto& t = best.terms[static_cast<std::size_t>(k)];
         if (linearised_term(t)) {
             r[k] = t.whitened();
             ++rows;
+            channel[static_cast<std::size_t>(k)] = t.kind == "dc" || t.kind == "hem"                 ? 0
+                                                   : t.kind.rfind("prior", 0) == 0 || t.kind == "nodes" ? -1
+                                                                                                        : 1;
         } else {
             J.row(k).setZero();
         }
@@ -42,19 +48,7 @@ void test_effects(Evaluator& ev, const std::vector<FitVariable>& vars, const Eig
     // A fit worse than its noise model (chi2 / dof > 1) scales every delta chi2
     // up by that factor: the tests divide by it, as the intervals do.
     const double s2 = std::max(1.0, out.chi2 / std::max(1, out.dof));
-    auto cands = test_candidates(J, r, sigs, rows, s2);
-    // Every channel an effect reaches must be explained by its refit, not traded
-    // against another (docs/model-discrepancy.md, "How an effect is named").
-    std::vector<int> channel(static_cast<std::size_t>(J.rows()), -1);
-    for (Eigen::Index k = 0; k < J.rows(); ++k) {
-        const auto& t = best.terms[static_cast<std::size_t>(k)];
-        if (!linearised_term(t)) continue;
-        channel[static_cast<std::size_t>(k)] = t.kind == "dc" || t.kind == "hem"                 ? 0
-                                               : t.kind.rfind("prior", 0) == 0 || t.kind == "nodes" ? -1
-                                                                                                    : 1;
-    }
-    for (std::size_t k = 0; k < cands.size() && k < sigs.size(); ++k)
-        if (cands[k].verdict != "not testable" && sigs[k].available) check_channels(cands[k], J, r, sigs[k].columns, channel, s2);
+    auto cands = test_candidates(J, r, sigs, rows, s2, channel);
     // Verify the strongest parameter effect beyond noise with a drape: the joint
     // Gauss-Newton step (fitted coordinates and the effect), warm from the optimum.
     int top = -1;

@@ -223,6 +223,9 @@ void print_text(const capture::Measurement& m)
     }
     if (m.hem_min_height)
         std::printf("  lowest hem         z = %.1f mm (%s)\n", *m.hem_min_height * 1e3, m.hem_min_source.c_str());
+    if (m.side.pedestal.measured)
+        std::printf("  pedestal           %.1f +- %.1f mm across in the side photo (declared %.1f mm%s)\n", m.side.pedestal.diameter * 1e3,
+                    m.side.pedestal.diameter_sigma * 1e3, m.side.pedestal.declared * 1e3, m.side.pedestal.differs ? ": DIFFERS" : "");
     if (m.free_strip_bending_bound)
         std::printf("  free-strip bound   B <= %.2g N*m (a linear bending that drapes to this D; docs/model-discrepancy.md)\n",
                     *m.free_strip_bending_bound);

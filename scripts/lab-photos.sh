@@ -13,7 +13,7 @@ lab="$here/../shared/data/drape-lab"
 [ -x "$drape" ] || { echo "no drape binary at $drape" >&2; exit 2; }
 [ -d "$lab" ] || { echo "no lab records at $lab" >&2; exit 2; }
 mkdir -p "$out"
-printf '%-14s %6s  %-22s %-8s %s\n' record lab_D hem_D "z(hem)" "disc-plane_D"
+printf '%-14s %6s  %-22s %-8s %-15s %s\n' record lab_D hem_D "z(hem)" "disc-plane_D" "disc centre: off / bound [mm] (the lab's camera)"
 for rec in "$lab"/set-*/DL-*; do
   [ -f "$rec/meta.json" ] && [ -f "$rec/top.jpg" ] || continue
   n=$(basename "$rec")
@@ -34,6 +34,17 @@ if j.get("refused"):
 pm = j["perspective_models"]
 h, d = pm["hem"], pm["disc-plane"]
 hd, hu = h["drape_coefficient_percent"], h["uncertainty_percent"]
-print(f"{name:14s} {lab:6.1f}  {hd:5.1f} +- {hu:4.1f} ({hd - lab:+5.1f})  {(hd - lab) / hu:+5.2f}   {d['drape_coefficient_percent']:5.1f} ({d['drape_coefficient_percent'] - lab:+5.1f})")
+# The disc centre against the lab's calibrated top camera (never read by the
+# measurement): the pedestal's axis projected, the offset at the disc top.
+cam = json.load(open(meta))["cameras"]["top"]
+t = cam["t_world_to_cam_mm"]
+u0, v0 = cam["fx"] * t[0] / t[2] + cam["cx"], cam["fy"] * t[1] / t[2] + cam["cy"]
+sc = j["scale"]
+cu, cv = sc["disc_centre_px"]
+off = ((cu - u0) ** 2 + (cv - v0) ** 2) ** 0.5 * t[2] / cam["fx"]
+bound = sc.get("disc_centre_bound_m")
+centre = f"rim {off:4.1f}" if not sc["disc_centre_source"].startswith("centroid") else \
+    f"centroid {off:4.1f} / " + (f"{bound * 1e3:.0f}" if bound is not None else "none")
+print(f"{name:14s} {lab:6.1f}  {hd:5.1f} +- {hu:4.1f} ({hd - lab:+5.1f})  {(hd - lab) / hu:+5.2f}   {d['drape_coefficient_percent']:5.1f} ({d['drape_coefficient_percent'] - lab:+5.1f})  {centre}")
 PY
 done

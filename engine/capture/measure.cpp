@@ -84,6 +84,7 @@ Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
     if (!out.top.measured)
         out.not_measured.push_back("drape coefficient and nodes: need a usable top view");
     if (load("side", out.side_image)) {
+        measure_pedestal(rec, out);
         if (out.top.measured)
             measure_side(rec, out);
         else

@@ -101,7 +101,9 @@ json scale_json(const ViewGeometry& g)
                {"camera_height_known", g.camera_height_known},
                {"camera_height_source", g.camera_height_source},
                {"disc_centre_px", {g.centre_px.x(), g.centre_px.y()}},
-               {"disc_centre_source", g.centre_source}};
+               {"disc_centre_source", g.centre_source},
+               {"disc_centre_bound_m", num(g.centre_bound)},
+               {"disc_centre_sigma_m", num(g.centre_sigma)}};
     if (g.disc)
         sc["disc_rim"] = {{"centre_px", {g.disc->centre_px.x(), g.disc->centre_px.y()}},
                           {"radius_px", g.disc->radius_px},
@@ -189,6 +191,13 @@ nlohmann::ordered_json to_json(const Measurement& m)
                                 {"centre_diff_m", c.centre_diff_m},
                                 {"max_shift_over_specimen_px", c.max_shift_px}};
     }
+    if (m.side.pedestal.measured)
+        j["pedestal"] = {{"diameter_m", m.side.pedestal.diameter},
+                         {"diameter_sigma_m", m.side.pedestal.diameter_sigma},
+                         {"declared_diameter_m", m.side.pedestal.declared},
+                         {"rows", m.side.pedestal.rows},
+                         {"differs_from_declared", m.side.pedestal.differs},
+                         {"source", "side photo: the silhouette's edges below the cloth"}};
     if (m.side.measured)
         j["side"] = {{"columns", m.side.columns},
                      {"hem_min_height_m", m.side.hem_min_z},

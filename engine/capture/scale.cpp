@@ -534,6 +534,61 @@ double mask_radius_percentile(const cv::Mat& mask, const Eigen::Vector2d& c, dou
 
 } // namespace
 
+std::string bound_disc_centre(const record::Record& rec, const cv::Mat& region, ViewGeometry& g)
+{
+    if (g.disc || g.centre_source.rfind("centroid", 0) != 0) return "";
+    const std::string what = "the disc centre is taken as the cloth's centroid (the rim was not found)";
+    const std::string remedy = "; --disc-px X,Y,R gives it";
+    const auto unbounded = [&] {
+        return what + ": how far off it is cannot be bounded (the counted region does not hold the disc)" + remedy;
+    };
+    const cv::Mat& rough = region;
+    if (rough.empty()) return unbounded();
+    // The disc's smallest radius in the image (an ellipse under a tilted camera),
+    // from the camera two of its height's uncertainties higher (a disc seen from
+    // further away is smaller), less 2 px for the region's edge.
+    const record::Camera cam = camera_with_height(g, g.camera_height + 2 * g.camera_height_sigma);
+    const Eigen::Vector2d c0 = cam.project({0, 0, 0});
+    double r_px = kNaN;
+    for (int k = 0; k < 16; ++k) {
+        const double th = M_PI * k / 8;
+        const double r = (cam.project({rec.R2 * std::cos(th), rec.R2 * std::sin(th), 0.0}) - c0).norm();
+        if (!(r >= r_px)) r_px = std::isfinite(r_px) ? std::min(r_px, r) : r;
+    }
+    r_px -= 2;
+    if (!(r_px > 2)) return unbounded();
+    cv::Mat filled = rough.clone();
+    cv::Mat flood = cv::Mat::zeros(rough.rows + 2, rough.cols + 2, CV_8U);
+    cv::Mat outside = rough.clone();
+    for (int x = 0; x < outside.cols; ++x)
+        for (int y : {0, outside.rows - 1})
+            if (!outside.at<uchar>(y, x)) cv::floodFill(outside, flood, {x, y}, 255, nullptr, 0, 0, 4 | cv::FLOODFILL_MASK_ONLY);
+    for (int y = 0; y < outside.rows; ++y)
+        for (int x : {0, outside.cols - 1})
+            if (!outside.at<uchar>(y, x)) cv::floodFill(outside, flood, {x, y}, 255, nullptr, 0, 0, 4 | cv::FLOODFILL_MASK_ONLY);
+    // Not reached from the border and not cloth: a hole inside the cloth.
+    filled.setTo(255, flood(cv::Rect(1, 1, rough.cols, rough.rows)) == 0);
+    cv::Mat dist;
+    cv::distanceTransform(filled, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    double far = 0, ss = 0;
+    int n = 0;
+    for (int y = 0; y < dist.rows; ++y)
+        for (int x = 0; x < dist.cols; ++x)
+            if (dist.at<float>(y, x) >= r_px) {
+                const double d = std::hypot(x - g.centre_px.x(), y - g.centre_px.y());
+                far = std::max(far, d);
+                ss += d * d;
+                ++n;
+            }
+    if (n == 0) return unbounded();
+    // In metres at the disc top under the camera as measured.
+    const double px_per_m = (g.camera.project({rec.R2, 0, 0}) - g.camera.project({0, 0, 0})).norm() / rec.R2;
+    g.centre_bound = far / px_per_m;
+    g.centre_sigma = std::sqrt(ss / n) / px_per_m;
+    return what + ": the disc, which the cloth covers, has its centre within " + fmt("%.0f", 1e3 * g.centre_bound) + " mm of it (" +
+           fmt("%.0f", 1e3 * g.centre_sigma) + " mm RMS; D's term disc_centre)" + remedy;
+}
+
 record::Camera camera_with_height(const ViewGeometry& g, double H)
 {
     if (!g.single_camera) return g.camera;
@@ -603,8 +658,6 @@ void locate_disc(const record::Record& rec, const cv::Mat& lab, const cv::Mat& r
     } else {
         g.centre_px = guess;
         g.centre_source = "centroid of the cloth (disc rim not found)";
-        g.warnings.push_back("the disc centre is taken as the cloth's centroid (the rim was not found): the hem height "
-                             "model is centred a little off where the disc is");
     }
 }
 

@@ -17,6 +17,7 @@
 #include <opencv2/core.hpp>
 
 #include <filesystem>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -62,6 +63,12 @@ struct ViewGeometry {
     // Where the disc centre is in the image.
     Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
     std::string centre_source;
+    /// When the centre is the cloth's centroid (no rim found): how far the disc's
+    /// centre can lie from it, the disc being inside the cloth's outline (the
+    /// largest distance, and the RMS distance over every such centre) [m, at the
+    /// disc top]. NaN otherwise, or when the rough mask is too small to hold the disc.
+    double centre_bound = std::nan("");
+    double centre_sigma = std::nan("");
     std::optional<DiscRim> disc;
     std::vector<MarkerSeen> markers;
     std::vector<Eigen::Vector2d> board_corners_px; ///< chessboard corners used
@@ -130,6 +137,13 @@ ViewGeometry solve_view(const record::Record& rec, const cv::Mat& bgr, const cv:
 /// The same camera with the camera height changed to `H` [m], keeping the
 /// image of the scale reference plane (what the photo measured) fixed.
 record::Camera camera_with_height(const ViewGeometry& g, double H);
+/// When the disc centre is the cloth's centroid (no rim found): how far the
+/// disc's centre can lie from it (ViewGeometry::centre_bound, centre_sigma). The
+/// cloth covers the disc, so the disc's image lies inside the counted region
+/// (holes filled) and its centre at least the disc's smallest image radius from
+/// the region's edge - the distance transform says where. Returns the warning
+/// to print ("" when the centre is not the centroid).
+std::string bound_disc_centre(const record::Record& rec, const cv::Mat& region, ViewGeometry& g);
 
 /// Finds the disc rim around `centre_guess` [px] with a radius in
 /// [r_min, r_max] [px]: the strongest circular step edge of L*, a* or b*

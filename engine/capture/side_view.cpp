@@ -110,4 +110,117 @@ void detail::measure_side(const record::Record& rec, Measurement& out)
     out.measured.push_back("side view: hem height in front of the pedestal");
 }
 
+void detail::measure_pedestal(const record::Record& rec, Measurement& out)
+{
+    PedestalWidth& pw = out.side.pedestal;
+    pw.declared = 2 * rec.R2;
+    if (!rec.has_camera("side") || out.side_image.empty() || !(rec.R2 > 0) || !(rec.pedestal_height > 0)) return;
+    const record::Camera& cam = rec.cameras.at("side");
+    const Eigen::Vector3d o = cam.centre();
+    const Eigen::Vector2d oxy(o.x(), o.y());
+    const double dist = oxy.norm();
+    if (!(dist > 2 * rec.R2)) return; // the camera stands outside the pedestal, or the edges are not a silhouette
+    // Luminance, smoothed along the columns (5 rows) against the pedestal's
+    // texture and along the rows by a Gaussian of 1 px, which keeps an edge where it is.
+    cv::Mat grey;
+    cv::cvtColor(out.side_image, grey, cv::COLOR_BGR2GRAY);
+    grey.convertTo(grey, CV_32F);
+    cv::GaussianBlur(grey, grey, {0, 0}, 1.0, 0.0);
+    cv::blur(grey, grey, {1, 5});
+    // The silhouette's generators: where the rays from the camera touch the
+    // cylinder of the declared radius (their search windows allow 25 % either way).
+    const double phi0 = std::atan2(oxy.y(), oxy.x()), beta = std::acos(rec.R2 / dist);
+    // The pedestal's own colour: its face nearest the camera near the floor, where
+    // no cloth hangs. An edge whose inner side is of another colour is the cloth's.
+    const cv::Mat lab = to_lab(out.side_image);
+    const Eigen::Vector2d front = oxy / dist * rec.R2;
+    const cv::Vec3f ped = sample(lab, cam.project({front.x(), front.y(), -0.9 * rec.pedestal_height}));
+    const double px_per_m = cam.fx / (dist - rec.R2);
+    const int half_window = std::max(6, static_cast<int>(std::lround(0.25 * rec.R2 * px_per_m)));
+    std::vector<double> diam;
+    // About one level per image row the pedestal's height spans.
+    const double rows_spanned = std::abs(cam.project({front.x(), front.y(), 0.0}).y() -
+                                         cam.project({front.x(), front.y(), -rec.pedestal_height}).y());
+    const int levels = std::clamp(static_cast<int>(std::isfinite(rows_spanned) ? rows_spanned : 0.0), 20, 600);
+    for (int k = 0; k < levels; ++k) {
+        // 5-95 % of the pedestal's height below its top: the cloth hangs over the
+        // upper part on most records, so a row's edges are kept only if they agree
+        // with the others (below).
+        const double z = -rec.pedestal_height * (0.05 + 0.90 * (k + 0.5) / levels);
+        double r_side[2] = {kNaN, kNaN};
+        for (int side = 0; side < 2; ++side) {
+            const double phi = phi0 + (side == 0 ? beta : -beta);
+            const Eigen::Vector2d p = cam.project({rec.R2 * std::cos(phi), rec.R2 * std::sin(phi), z});
+            if (!p.allFinite()) continue;
+            const int v = static_cast<int>(std::lround(p.y()));
+            const int uc = static_cast<int>(std::lround(p.x()));
+            if (v < 0 || v >= grey.rows || uc - half_window < 1 || uc + half_window >= grey.cols - 1) continue;
+            const float* row = grey.ptr<float>(v);
+            std::vector<double> g;
+            int best = -1;
+            double best_g = 0;
+            for (int u = uc - half_window; u <= uc + half_window; ++u) {
+                const double gu = std::abs(0.5 * (row[u + 1] - row[u - 1]));
+                g.push_back(gu);
+                if (gu > best_g) {
+                    best_g = gu;
+                    best = u;
+                }
+            }
+            // A step that stands out: 8 grey levels per px and 4 times the window's median.
+            if (best < 0 || best_g < 8.0 || best_g < 4.0 * median(g)) continue;
+            const double gm = std::abs(0.5 * (row[best] - row[best - 2])), gp = std::abs(0.5 * (row[best + 2] - row[best]));
+            const double den = gm - 2 * best_g + gp;
+            const double du = den < 0 ? std::clamp(0.5 * (gm - gp) / den, -0.5, 0.5) : 0.0;
+            // Inside the edge (towards the axis's column): the pedestal's chroma.
+            const double u_axis = cam.project({0.0, 0.0, z}).x();
+            const double inward = u_axis > best ? 1.0 : -1.0;
+            const cv::Vec3f in = sample(lab, {best + inward * 4.0, static_cast<double>(v)});
+            if (std::hypot(in[1] - ped[1], in[2] - ped[2]) > 10.0) continue;
+            const Eigen::Vector3d d = cam.ray({best + du, static_cast<double>(v)});
+            const Eigen::Vector2d dxy(d.x(), d.y());
+            if (!(dxy.norm() > 1e-9)) continue;
+            // The ray's distance from the axis in the horizontal plane: the radius
+            // its tangent touches, whatever the camera's tilt.
+            r_side[side] = std::abs(oxy.x() * dxy.y() - oxy.y() * dxy.x()) / dxy.norm();
+        }
+        if (std::isfinite(r_side[0]) && std::isfinite(r_side[1])) diam.push_back(r_side[0] + r_side[1]);
+    }
+    if (diam.size() < 10) {
+        out.not_measured.push_back("side view: the pedestal's silhouette edges were not found in " + cam.image);
+        return;
+    }
+    // Rows where cloth, a shadow or the floor's print hides an edge disagree with
+    // the rest: kept within 3 robust standard deviations (at least 0.5 mm) of the median.
+    const double med = median(diam);
+    std::vector<double> dev;
+    for (double x : diam) dev.push_back(std::abs(x - med));
+    const double sd = std::max(1.4826 * median(dev), 2e-4);
+    double sum = 0, sum2 = 0;
+    int n = 0;
+    for (double x : diam)
+        if (std::abs(x - med) <= std::max(3 * sd, 5e-4)) {
+            sum += x;
+            sum2 += x * x;
+            ++n;
+        }
+    if (n < 10) {
+        out.not_measured.push_back("side view: the pedestal's silhouette edges disagree from row to row in " + cam.image);
+        return;
+    }
+    const double mean = sum / n, var = std::max(sum2 / n - mean * mean, 0.0);
+    pw.measured = true;
+    pw.rows = n;
+    pw.diameter = mean;
+    // The rows' spread, and a quarter pixel of edge placement on each side
+    // (blur and anti-aliasing need not be symmetric), which no number of rows averages away.
+    pw.diameter_sigma = std::hypot(std::sqrt(var / n), std::sqrt(2.0) * 0.25 / px_per_m);
+    pw.differs = std::abs(pw.diameter - pw.declared) > std::max(3 * pw.diameter_sigma, 1.5e-3);
+    out.measured.push_back("side view: the pedestal's diameter from its silhouette");
+    if (pw.differs)
+        out.side.warnings.push_back("side view: the pedestal measures " + fmt("%.1f", pw.diameter * 1e3) + " +- " +
+                                    fmt("%.1f", pw.diameter_sigma * 1e3) + " mm across where meta.json declares support_disc_diameter_D2_mm " +
+                                    fmt("%.1f", pw.declared * 1e3) + " (a pedestal other than declared, or a side camera's pose off)");
+}
+
 } // namespace drape::capture

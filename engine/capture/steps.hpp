@@ -11,6 +11,9 @@ void measure_top(const record::Record& rec, const MeasureOptions& opt, const rec
 void set_hem_depth_error(TopView& tv, double dz);
 /// Traces the hem in the side photo (out.side_image) into out.side; needs out.top.
 void measure_side(const record::Record& rec, Measurement& out);
+/// The pedestal's diameter from its silhouette in the side photo (out.side_image)
+/// into out.side.pedestal; needs nothing of the top view.
+void measure_pedestal(const record::Record& rec, Measurement& out);
 /// Fourier series of every contour depth into out.contours.
 void measure_contours(const record::Record& rec, const record::ContourStack& st, Measurement& out);
 

@@ -667,6 +667,30 @@ PerspectiveValue perspective_value(const record::Record& rec, const MeasureOptio
                                "camera height " + fmt("%.0f", 1e3 * H) + " +-" + fmt("%.0f", 1e3 * g.camera_height_sigma) + " mm (" +
                                    (g.camera_height_known ? "known" : "assumed") + ")"});
         }
+        // The centroid fallback's centre: D traced again with the centre moved by
+        // its RMS reach per axis (centre_sigma / sqrt 2) either way, the larger
+        // change per axis (a centre off in any direction may lower D).
+        if (uses_H && std::isfinite(g.centre_sigma) && g.centre_sigma > 0) {
+            const Eigen::Vector2d c0 = g.camera.project({0, 0, 0});
+            const double px_per_m = (g.camera.project({rec.R2, 0, 0}) - c0).norm() / rec.R2;
+            const double step = g.centre_sigma / std::sqrt(2.0) * px_per_m;
+            TraceSetup ts = model == "hem" ? tr.hem_setup : tr.disc_setup;
+            double ss_c = 0;
+            for (const Eigen::Vector2d& axis : {Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1)}) {
+                double worst = 0;
+                for (double sign : {1.0, -1.0}) {
+                    ViewGeometry moved = g;
+                    moved.centre_px += sign * step * axis;
+                    const Trace tx = trace_outline(camera_with_height(moved, H), s.prob, s.gate, ts, s.lightness);
+                    if (tx.outline.size() >= static_cast<std::size_t>(rays) / 2)
+                        worst = std::max(worst, std::abs(dc_area(tx.outline, Req, rec.R2).first - v.dc_percent));
+                }
+                ss_c += worst * worst;
+            }
+            v.terms.push_back({"disc_centre", std::sqrt(ss_c),
+                               "disc centre (the cloth's centroid) within " + fmt("%.0f", 1e3 * g.centre_bound) + " mm, " +
+                                   fmt("%.0f", 1e3 * g.centre_sigma) + " mm RMS"});
+        }
     }
     if (model == "hem") {
         tv.dc_per_metre_height = 2 * A / (H - zbar) / ring * 100.0;
@@ -725,7 +749,7 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
     TopView& tv = out.top;
     const cv::Mat lab = to_lab(out.top_image);
     const double Req = rec.R1; // equal-area radius: D = (A - disc) / (specimen - disc) for any shape
-    const ViewGeometry g = top_view_geometry(rec, opt, lab, out);
+    ViewGeometry g = top_view_geometry(rec, opt, lab, out);
     for (const auto& w : g.warnings) out.warnings.push_back("top view: " + w);
     out.view = g;
     const record::Camera& cam = g.camera;
@@ -735,6 +759,10 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
     Segmented s;
     if (!segment_top(rec, opt, lab, cam, angle_known ? rec.specimen.angle : kNaN, out, s)) return;
     tv.region_image_fraction = static_cast<double>(cv::countNonZero(tv.region)) / static_cast<double>(tv.region.total());
+    if (const std::string w = bound_disc_centre(rec, tv.region, g); !w.empty()) {
+        out.warnings.push_back("top view: " + w);
+        out.view = g;
+    }
     const Traces tr = trace_models(rec, opt, g, s, stack, tv);
     const std::string& persp = tv.perspective;
     const Trace& best = persp == "hem" ? tr.hem : persp == "disc-plane" ? tr.disc : tr.ref;

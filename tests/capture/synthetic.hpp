@@ -8,6 +8,7 @@
 #include "engine/record/record.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -152,6 +153,87 @@ inline cv::Mat render_top(const Spec& s)
     cv::RNG rng(s.seed);
     rng.fill(noise, cv::RNG::NORMAL, 0, 3);
     cv::Mat img16;
+    img.convertTo(img16, CV_16SC3);
+    img16 += noise;
+    img16.convertTo(img, CV_8UC3);
+    return img;
+}
+
+/// A side camera of its own (not the lab's): `dist` from the axis at azimuth
+/// `az` (0: on -y looking along +y), `height` above the disc top, aimed at the
+/// pedestal's middle; 1152 x 872 px, f 1280 px.
+inline drape::record::Camera side_camera(double dist, double az, double height)
+{
+    drape::record::Camera c;
+    c.width = 1152;
+    c.height = 872;
+    c.fx = c.fy = 1280;
+    c.cx = 575.5;
+    c.cy = 435.5;
+    const Eigen::Vector3d C(dist * std::sin(az), -dist * std::cos(az), height), target(0, 0, -0.06);
+    const Eigen::Vector3d zc = (target - C).normalized();
+    const Eigen::Vector3d xc = zc.cross(Eigen::Vector3d::UnitZ()).normalized();
+    const Eigen::Vector3d yc = zc.cross(xc);
+    c.R.row(0) = xc.transpose();
+    c.R.row(1) = yc.transpose();
+    c.R.row(2) = zc.transpose();
+    c.t = -c.R * C;
+    return c;
+}
+
+inline nlohmann::json side_camera_json(const drape::record::Camera& c)
+{
+    nlohmann::json R = nlohmann::json::array();
+    for (int i = 0; i < 3; ++i) R.push_back({c.R(i, 0), c.R(i, 1), c.R(i, 2)});
+    return {{"image", "side.jpg"}, {"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
+            {"dist_coeffs", {0, 0, 0, 0, 0}}, {"R_world_to_cam", R}, {"t_world_to_cam_mm", {c.t.x() * 1e3, c.t.y() * 1e3, c.t.z() * 1e3}}};
+}
+
+/// The side photo by ray casting (3 x 3 samples a pixel): a lit grey pedestal of
+/// radius `pedestal_r` from the disc top down to the floor (z = -0.12 m), a white
+/// floor, a dark backdrop, and a burgundy sleeve of cloth `cloth_drop` deep,
+/// 12 mm outside the pedestal, hanging over its upper part.
+inline cv::Mat render_side(const drape::record::Camera& cam, double pedestal_r, double cloth_drop, unsigned seed)
+{
+    const double h = 0.12, rc = pedestal_r + 0.012;
+    const Eigen::Vector3d o = cam.centre(), light = Eigen::Vector3d(-0.5, -1.0, 0.6).normalized();
+    auto hit_cylinder = [&](const Eigen::Vector3d& d, double r, double zlo, double zhi, double& s_hit) {
+        const double a = d.x() * d.x() + d.y() * d.y(), b = 2 * (o.x() * d.x() + o.y() * d.y()), c = o.x() * o.x() + o.y() * o.y() - r * r;
+        const double disc = b * b - 4 * a * c;
+        if (disc < 0 || a <= 0) return false;
+        const double s = (-b - std::sqrt(disc)) / (2 * a);
+        const double z = o.z() + s * d.z();
+        if (s <= 0 || z < zlo || z > zhi) return false;
+        s_hit = s;
+        return true;
+    };
+    cv::Mat img(cam.height, cam.width, CV_8UC3);
+    for (int v = 0; v < cam.height; ++v)
+        for (int u = 0; u < cam.width; ++u) {
+            Eigen::Vector3d acc = Eigen::Vector3d::Zero(); // B, G, R
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) {
+                    const Eigen::Vector3d d = cam.ray({u + (i - 1) / 3.0, v + (j - 1) / 3.0});
+                    double s = 0;
+                    if (cloth_drop > 0 && hit_cylinder(d, rc, -cloth_drop, 0.0, s)) {
+                        acc += Eigen::Vector3d(62, 58, 150);
+                    } else if (hit_cylinder(d, pedestal_r, -h, 0.0, s)) {
+                        const Eigen::Vector3d X = o + s * d;
+                        const Eigen::Vector3d n(X.x(), X.y(), 0);
+                        const double g = 90 + 70 * std::max(0.0, n.normalized().dot(light));
+                        acc += Eigen::Vector3d(g, g, g);
+                    } else if (d.z() < 0) { // the floor, below the camera's horizon
+                        acc += Eigen::Vector3d(238, 240, 240);
+                    } else {
+                        acc += Eigen::Vector3d(70, 70, 72);
+                    }
+                }
+            acc /= 9;
+            img.at<cv::Vec3b>(v, u) = cv::Vec3b(cv::saturate_cast<uchar>(acc[0]), cv::saturate_cast<uchar>(acc[1]), cv::saturate_cast<uchar>(acc[2]));
+        }
+    cv::Mat noise(img.size(), CV_16SC3), img16;
+    cv::RNG rng(seed);
+    rng.fill(noise, cv::RNG::NORMAL, 0, 3);
     img.convertTo(img16, CV_16SC3);
     img16 += noise;
     img16.convertTo(img, CV_8UC3);

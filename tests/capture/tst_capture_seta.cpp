@@ -59,6 +59,9 @@ private slots:
         QVERIFY(m.side.measured);
         QVERIFY(m.side.hem_min_z < -0.02 && m.side.hem_min_z > -rec.pedestal_height);
         QVERIFY(m.side.model_rms_diff < 0.010);
+        // The pedestal in the side photo is the declared one (150 mm on every set-a record).
+        QVERIFY(m.side.pedestal.measured && !m.side.pedestal.differs);
+        QVERIFY(std::abs(m.side.pedestal.diameter - 2 * rec.R2) < 1e-3);
         QVERIFY(m.hem_min_height && *m.hem_min_height <= m.side.hem_min_z);
 
         // Contours: every listed depth is fitted; the series reproduces the

@@ -552,6 +552,23 @@ private slots:
         qInfo("%s: D %.1f +- %.1f %%, the lab's %.1f %%", record.toUtf8().constData(), D, u, lab_dc);
         QVERIFY2(std::abs(D - lab_dc) <= std::max(2.0, 2 * u),
                  qPrintable(QString("D %1 +- %2, the lab's %3").arg(D).arg(u).arg(lab_dc)));
+        // The rim is not found under this cloth: the centre is the cloth's centroid,
+        // and the bound it is given holds the pedestal's axis as the lab's calibrated
+        // top camera sees it (never read by the measurement), with a D term for it.
+        const json& sc = j["scale"];
+        QVERIFY(sc["disc_centre_source"].get<std::string>().rfind("centroid", 0) == 0);
+        QVERIFY(sc["disc_centre_bound_m"].is_number() && sc["disc_centre_sigma_m"].is_number());
+        const auto& cam = meta["cameras"]["top"];
+        const auto& t = cam["t_world_to_cam_mm"];
+        const double u0 = cam["fx"].get<double>() * t[0].get<double>() / t[2].get<double>() + cam["cx"].get<double>();
+        const double v0 = cam["fy"].get<double>() * t[1].get<double>() / t[2].get<double>() + cam["cy"].get<double>();
+        const double off_m = std::hypot(sc["disc_centre_px"][0].get<double>() - u0, sc["disc_centre_px"][1].get<double>() - v0) *
+                             t[2].get<double>() * 1e-3 / cam["fx"].get<double>();
+        qInfo("disc centre %.1f mm off the axis, bound %.1f mm", off_m * 1e3, sc["disc_centre_bound_m"].get<double>() * 1e3);
+        QVERIFY(off_m <= sc["disc_centre_bound_m"].get<double>());
+        bool has_term = false;
+        for (const auto& term : j["perspective_models"]["hem"]["uncertainty_terms"]) has_term |= term["name"] == "disc_centre";
+        QVERIFY(has_term);
     }
 
     /// --scale-from: the chessboard found once in a separate calibration photo of

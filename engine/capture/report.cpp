@@ -41,6 +41,8 @@ json top_json(const TopView& t)
     top["rays_beyond_reach"] = t.rays_beyond_reach;
     top["rays_at_search_limit"] = t.rays_at_limit;
     top["region_image_fraction"] = t.region_image_fraction;
+    top["outline_edge_contrast_lab"] = num(t.outline_edge_contrast);
+    top["weak_outline_fraction"] = num(t.weak_outline_fraction);
     top["specimen_angle_deg"] = t.specimen_angle * 180.0 / M_PI;
     top["height_error_m"] = t.height_error_m;
     top["drape_coefficient_edge_error_percent"] = t.dc_edge_term;

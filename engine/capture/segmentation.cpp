@@ -575,6 +575,13 @@ PhotoSegmentation segment_photo(const cv::Mat& bgr, const cv::Mat& lab, const re
     }
     const ColourModel cm = colour_model(w, seg);
     check_beyond_limit(rec, w, cm, seg);
+    {
+        cv::Mat cc(w.ss, CV_8U);
+        for (int y = 0; y < w.ss.height; ++y)
+            for (int x = 0; x < w.ss.width; ++x) cc.at<uchar>(y, x) = cloth_coloured(w.slab.at<cv::Vec3f>(y, x), cm) ? 255 : 0;
+        if (w.ws < 1.0) cv::resize(cc, cc, full, 0, 0, cv::INTER_NEAREST);
+        seg.colour_cloth = cc;
+    }
     cv::Mat up = grabcut_region(w, cm, seg.clamp_disc, full);
     up |= disc_full;
     seg.method = std::string("GrabCut seeded by the disc and the search limit, ") +

@@ -52,6 +52,10 @@ struct PhotoSegmentation {
     bool clamp_disc = false;     ///< the disc's top is not cloth-coloured (an upper disc / clamp)
     double beyond_limit_fraction = 0; ///< share of cloth-coloured pixels in a band just outside the search limit
     cv::Mat limit_band;          ///< that band (working size), kept when it refused
+    /// Pixels whose colour is nearer the cloth's colours than the background's
+    /// (CV_8U 255, full size): the colour cue alone, beside GrabCut's region.
+    /// Empty for thresholds and masks.
+    cv::Mat colour_cloth;
     std::vector<std::string> warnings;
 };
 

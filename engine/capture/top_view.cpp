@@ -393,6 +393,7 @@ std::string choose_perspective(const record::Record& rec, const MeasureOptions& 
 /// The cloth's probability per pixel and the region it may be in.
 struct Segmented {
     cv::Mat prob, gate, lightness;
+    cv::Mat colour_cloth; ///< the colour cue alone (PhotoSegmentation::colour_cloth)
     bool photo = false; ///< segmented as a photo (GrabCut, thresholds, a mask), not by the lab's fabric colour
 };
 
@@ -427,6 +428,7 @@ bool segment_top(const record::Record& rec, const MeasureOptions& opt, const cv:
         PhotoSegmentation seg = segment_photo(out.top_image, lab, rec, cam, ov, angle);
         s.prob = seg.prob;
         s.gate = seg.gate;
+        s.colour_cloth = seg.colour_cloth;
         tv.region = seg.region;
         tv.segmentation_method = seg.method;
         tv.photo_segmentation = true;
@@ -702,6 +704,119 @@ PerspectiveValue perspective_value(const record::Record& rec, const MeasureOptio
     return v;
 }
 
+/// A single photo's outline against the colours either side of it (GrabCut's
+/// region is a guess where the cloth meets a background of nearly its colour: a
+/// soft shadow it followed, or a lit face it left out - or, as often, a right
+/// outline along shaded folds as light as the floor). Where inside and outside
+/// hardly differ on more than half of the outline, the photo is refused
+/// (`weak-outline`); on fewer rays, D's uncertainty gets half the change of D when
+/// the weak rays lie out at the strong rays' largest radius or in at their smallest.
+void check_outline_edges(const record::Record& rec, const cv::Mat& lab, const cv::Mat& colour_cloth, const record::Camera& cam,
+                         const Trace& best, double wL, TopView& tv)
+{
+    const std::size_t n = best.px.size();
+    if (n < 8 || best.outline.size() != n) return;
+    const Eigen::Vector2d c0 = cam.project({0, 0, 0});
+    std::vector<double> contrast(n);
+    std::vector<char> cue_disagrees(n, 0);
+    auto cloth_cue = [&](const Eigen::Vector2d& q) {
+        const int x = std::clamp(static_cast<int>(std::lround(q.x())), 0, colour_cloth.cols - 1);
+        const int y = std::clamp(static_cast<int>(std::lround(q.y())), 0, colour_cloth.rows - 1);
+        return colour_cloth.at<uchar>(y, x) != 0;
+    };
+    for (std::size_t k = 0; k < n; ++k) {
+        const Eigen::Vector2d p = best.px[k];
+        const Eigen::Vector2d dir = (p - c0).normalized();
+        cv::Vec3f in(0, 0, 0), out(0, 0, 0);
+        int in_cloth = 0, out_cloth = 0;
+        for (int s = 2; s <= 8; ++s) {
+            in += sample(lab, p - s * dir);
+            out += sample(lab, p + s * dir);
+            if (!colour_cloth.empty()) {
+                in_cloth += cloth_cue(p - s * dir);
+                out_cloth += cloth_cue(p + s * dir);
+            }
+        }
+        // The colour cue alone says the outline is inside the cloth (cloth's colours
+        // beyond it) or around the background (the background's colours within it).
+        if (!colour_cloth.empty() && (out_cloth >= 4 || in_cloth <= 3)) cue_disagrees[k] = 1;
+        const cv::Vec3f d = (in - out) / 7.0f;
+        contrast[k] = std::sqrt(wL * wL * d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    }
+    const double med = median(contrast);
+    const double weak_below = std::max(3.0, 0.3 * med);
+    std::vector<char> weak(n, 0);
+    std::size_t n_weak = 0;
+    for (std::size_t k = 0; k < n; ++k)
+        if (contrast[k] < weak_below || cue_disagrees[k]) {
+            weak[k] = 1;
+            ++n_weak;
+        }
+    tv.outline_edge_contrast = med;
+    tv.weak_outline_fraction = static_cast<double>(n_weak) / static_cast<double>(n);
+    if (n_weak == 0) return;
+    auto angle_deg = [&](std::size_t k) {
+        double a = std::atan2(best.outline[k].y(), best.outline[k].x()) * 180 / M_PI;
+        return a < 0 ? a + 360 : a;
+    };
+    // The longest run of weak rays (around the circle), for the message.
+    std::size_t best_start = 0, best_len = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!weak[k] || weak[(k + n - 1) % n]) continue;
+        std::size_t len = 0;
+        while (len < n && weak[(k + len) % n]) ++len;
+        if (len > best_len) {
+            best_len = len;
+            best_start = k;
+        }
+    }
+    if (best_len == 0) best_len = n; // every ray weak
+    if (tv.weak_outline_fraction > 0.5)
+        refuse(tv, best, "weak-outline",
+               "on " + fmt("%.0f", 100 * tv.weak_outline_fraction) + " % of the outline (the longest stretch from " +
+                   fmt("%.0f", angle_deg(best_start)) + " to " + fmt("%.0f", angle_deg((best_start + best_len - 1) % n)) +
+                   " deg) the colours either side of it differ by less than " + fmt("%.1f", weak_below) + " L*a*b* units (" +
+                   fmt("%.1f", med) + " along the rest): there the outline follows a soft shadow or cuts through the cloth, "
+                   "not the cloth's edge",
+               "look at the overlay (--overlay); photograph without the rig's shadow, on a background unlike every face of the "
+               "cloth; or give a threshold (--threshold L<NN, ...) or a mask (--mask FILE.png)");
+    // Where the edge is weak the hem may lie anywhere the strong rays' hem lies:
+    // D with the weak rays out at the strong rays' largest radius, and in at their
+    // smallest; half the larger change is the term (a cut-away face lowers D, a
+    // shadow joined to the cloth raises it).
+    double r_lo = 1e9, r_hi = 0;
+    for (std::size_t k = 0; k < n; ++k)
+        if (!weak[k]) {
+            r_lo = std::min(r_lo, best.outline[k].norm());
+            r_hi = std::max(r_hi, best.outline[k].norm());
+        }
+    if (!(r_hi > 0)) r_lo = r_hi = rec.R2;
+    cloth::Polygon2 out_poly = best.outline, in_poly = best.outline;
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!weak[k]) continue;
+        const double r = best.outline[k].norm();
+        out_poly[k] = best.outline[k].normalized() * std::max(r, r_hi);
+        in_poly[k] = best.outline[k].normalized() * std::max(std::min(r, r_lo), rec.R2);
+    }
+    const double d_best = dc_area(best.outline, rec.R1, rec.R2).first;
+    const double term = 0.5 * std::max(dc_area(out_poly, rec.R1, rec.R2).first - d_best, d_best - dc_area(in_poly, rec.R1, rec.R2).first);
+    for (PerspectiveValue* v : {&tv.uncorrected, &tv.disc_plane, &tv.hem}) {
+        if (!v->available) continue;
+        v->terms.push_back({"weak_outline", term,
+                            fmt("%.1f", 100 * tv.weak_outline_fraction) + " % of the outline on a weak colour edge (below " +
+                                fmt("%.1f", weak_below) + " L*a*b* units): half of D's change with those rays at the others' "
+                                "largest or smallest radius"});
+        double ss = 0;
+        for (const auto& t : v->terms) ss += t.points * t.points;
+        v->uncertainty_percent = std::sqrt(ss);
+    }
+    const PerspectiveValue& chosen = tv.perspective == "hem" ? tv.hem : tv.perspective == "disc-plane" ? tv.disc_plane : tv.uncorrected;
+    tv.dc_uncertainty_percent = chosen.uncertainty_percent;
+    tv.warnings.push_back("top view: " + fmt("%.1f", 100 * tv.weak_outline_fraction) +
+                          " % of the outline lies on a weak colour edge: D's uncertainty carries it (weak_outline " + fmt("%.2f", term) +
+                          " points)");
+}
+
 /// Every perspective model's D and uncertainty; the edge term of the chosen one.
 void set_perspective_values(const record::Record& rec, const MeasureOptions& opt, const ViewGeometry& g, const Segmented& s, const Traces& tr,
                             TopView& tv)
@@ -780,6 +895,8 @@ void detail::measure_top(const record::Record& rec, const MeasureOptions& opt, c
     tv.metrics = cloth::drape_metrics(tv.outline, Req, rec.R2, opt.metrics);
     if (!drape_possible(rec, cam, best, out)) return;
     set_perspective_values(rec, opt, g, s, tr, tv);
+    if (s.photo && rec.single_camera() && tv.segmentation_method.rfind("GrabCut", 0) == 0)
+        check_outline_edges(rec, lab, s.colour_cloth, cam, best, tv.lightness_weight, tv);
     top_warnings(rec, opt, g, best, s.photo, tv);
     tv.measured = true;
     out.measured.push_back("top view: drape coefficient, nodes, r(theta)");

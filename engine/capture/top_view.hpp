@@ -54,6 +54,12 @@ struct TopView {
     std::vector<Eigen::Vector2d> at_limit_px; ///< rays whose edge was found at the search limit
     int rays_at_limit = 0;
     double region_image_fraction = 0;   ///< counted pixels / image pixels
+    /// How well a single photo's outline follows a colour edge: the median over the
+    /// outline of the L*a*b* distance between the mean colours 2-8 px inside and
+    /// outside it, and the share of rays where that distance is weak (below 3 units
+    /// or 0.3 of the median). NaN where not checked (lab records, thresholds, masks).
+    double outline_edge_contrast = std::nan("");
+    double weak_outline_fraction = std::nan("");
     FabricModel model;
     HeightModel height_model = HeightModel::Chord;
     cloth::Polygon2 outline;            ///< corrected shadow outline [m], one vertex per ray

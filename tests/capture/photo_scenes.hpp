@@ -127,6 +127,35 @@ inline std::vector<Case> cases()
         v.push_back({"rectangle", t, {"--disc", "180mm", "--specimen", "300x400mm", "--specimen-angle", "20", "--camera-height", "800mm"}, ""});
     }
     {
+        // A real failure: a camera rig's shadow nearly as dark as a grey cloth
+        // joined it (D 54.8 % where the photo's authors measured 31.4 %).
+        Scene t = s;
+        t.cloth_bgr = {118, 118, 120};
+        t.background_bgr = {214, 214, 212};
+        t.ambient = 0.7;
+        t.rig_shadow = true;
+        t.shadow_depth = 0.40; // shadowed floor 128: 4-8 L* units from the cloth's lit faces
+        v.push_back({"grey-cloth-rig-shadow", t, with({"--camera-height", "700mm"}), ""});
+        // Darker still (shadowed floor 113, the cloth's lit faces 118): refused, never
+        // measured wrong (0.42-0.47 were tried: all refused as this one).
+        t.shadow_depth = 0.47;
+        v.push_back({"refused-grey-cloth-darker-rig-shadow", t, with({"--camera-height", "700mm"}), "low-contrast"});
+    }
+    {
+        // A real failure: half of a white knit on a cream floor was missed (D 30.4 %
+        // where the authors measured 49.0 %): its lit faces are nearly the floor's colour.
+        Scene t = s;
+        t.cloth_bgr = {238, 241, 242};
+        t.background_bgr = {204, 228, 240};
+        t.ambient = 0.8;
+        v.push_back({"white-knit-on-cream", t, with({"--camera-height", "700mm"}), ""});
+        // Off-white, its lit faces the floor's colour: refused (blue 218-226 were
+        // tried between this and the white knit: all measured within 0.5 point).
+        t.cloth_bgr = {214, 234, 242};
+        t.ambient = 0.85;
+        v.push_back({"refused-off-white-knit-on-cream", t, with({"--camera-height", "700mm"}), "low-contrast"});
+    }
+    {
         Scene t = s;
         t.cloth_bgr = {40, 40, 44};
         t.background_bgr = {200, 202, 204};

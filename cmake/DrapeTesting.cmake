@@ -67,14 +67,14 @@ function(drape_add_test)
     ENVIRONMENT "${DRAPE_TEST_MALLOC_ENV};QTEST_FUNCTION_TIMEOUT=${_qt_timeout_ms}")
 endfunction()
 
-# drape_add_slow_entry(TEST exe NAME entry FUNCTIONS f ... [TIMEOUT s])
+# drape_add_slow_entry(TEST exe NAME entry FUNCTIONS f ... [GUI] [TIMEOUT s])
 # A second ctest entry of a unit test's executable, label `slow`, that runs the
 # named Qt Test functions with DRAPE_TEST_SLOW=1 in the environment. The test
 # code skips its costly cases unless that variable is set (tests/slow_cases.hpp),
 # so the unit entry keeps every function - a new one runs by default - and the
 # slow entry adds the costly cases (scripts/test.sh all runs them).
 function(drape_add_slow_entry)
-  cmake_parse_arguments(S "" "TEST;NAME;TIMEOUT" "FUNCTIONS" ${ARGN})
+  cmake_parse_arguments(S "GUI" "TEST;NAME;TIMEOUT" "FUNCTIONS" ${ARGN})
   if(DRAPE_SANITIZE OR NOT TARGET ${S_TEST})
     return()
   endif()
@@ -82,7 +82,11 @@ function(drape_add_slow_entry)
     set(S_TIMEOUT 600)
   endif()
   math(EXPR _qt_timeout_ms "${S_TIMEOUT} * 1000")
-  add_test(NAME ${S_NAME} COMMAND ${S_TEST} ${S_FUNCTIONS})
+  if(S_GUI)
+    add_test(NAME ${S_NAME} COMMAND ${PROJECT_SOURCE_DIR}/cmake/run-gui-test.sh $<TARGET_FILE:${S_TEST}> ${S_FUNCTIONS})
+  else()
+    add_test(NAME ${S_NAME} COMMAND ${S_TEST} ${S_FUNCTIONS})
+  endif()
   set_tests_properties(${S_NAME} PROPERTIES LABELS slow TIMEOUT ${S_TIMEOUT}
     ENVIRONMENT "DRAPE_TEST_SLOW=1;${DRAPE_TEST_MALLOC_ENV};QTEST_FUNCTION_TIMEOUT=${_qt_timeout_ms}")
 endfunction()

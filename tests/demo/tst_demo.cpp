@@ -219,13 +219,14 @@ void TstDemo::skirtDrapesOnBody()
 
 void TstDemo::scriptedRunWritesScreenshot()
 {
-    // The executable's scripted mode: a tablecloth (fast) on the round table.
+    // The executable's scripted mode: a tablecloth on the round table, in denim
+    // (11 s to rest; silk, the limpest starter, takes 19 s).
     const QString exe = QCoreApplication::applicationDirPath() + "/../bin/drape-demo";
     if (!QFile::exists(exe)) QSKIP("drape-demo is not built next to the tests");
     const QString png = m_tmp.filePath("table.png"), json = m_tmp.filePath("table.json");
     QProcess p;
     p.setProcessChannelMode(QProcess::ForwardedErrorChannel);
-    p.start(exe, {"--script", "tablecloth", "--fabric", "silk", "--screenshot", png, "--json", json, "--size", "700x560"});
+    p.start(exe, {"--script", "tablecloth", "--fabric", "denim", "--screenshot", png, "--json", json, "--size", "700x560"});
     QVERIFY(p.waitForFinished(20 * 60 * 1000));
     QCOMPARE(p.exitCode(), 0);
     QImage img(png);
@@ -234,7 +235,7 @@ void TstDemo::scriptedRunWritesScreenshot()
     QVERIFY(f.open(QIODevice::ReadOnly));
     const QJsonObject o = QJsonDocument::fromJson(f.readAll()).object()["views"].toArray().at(0).toObject();
     QCOMPARE(o["garment"].toString(), QStringLiteral("tablecloth"));
-    QVERIFY(o["fabric"].toString().contains("Silk", Qt::CaseInsensitive));
+    QVERIFY(o["fabric"].toString().contains("Denim", Qt::CaseInsensitive));
     // The cloth covers the table top (0.75 m) and hangs below it, above the floor.
     QVERIFY(o["cloth_max_z_m"].toDouble() > 0.75);
     QVERIFY(o["cloth_min_z_m"].toDouble() < 0.6);

@@ -13,6 +13,20 @@ namespace drape::capture {
 
 using namespace detail;
 
+PedestalWidth measure_pedestal_width(const record::Record& rec)
+{
+    Measurement out;
+    out.side.pedestal.declared = 2 * rec.R2;
+    if (!rec.has_camera("side") || !std::filesystem::exists(rec.file(rec.cameras.at("side").image))) return out.side.pedestal;
+    try {
+        out.side_image = load_image(rec, "side");
+    } catch (const Error&) {
+        return out.side.pedestal;
+    }
+    measure_pedestal(rec, out);
+    return out.side.pedestal;
+}
+
 Measurement measure_record(const record::Record& rec, const MeasureOptions& opt)
 {
     Measurement out;

@@ -82,4 +82,9 @@ struct MeasureOptions {
 /// bad_files too); a broken meta.json throws.
 Measurement measure_record(const record::Record& rec, const MeasureOptions& opt = {});
 
+/// The pedestal's diameter from the record's side photo alone (what
+/// measure_record reports as side.pedestal), without the top view's work; not
+/// measured when there is no side camera or photo, or it cannot be read.
+PedestalWidth measure_pedestal_width(const record::Record& rec);
+
 } // namespace drape::capture

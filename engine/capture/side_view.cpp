@@ -154,7 +154,8 @@ void detail::measure_pedestal(const record::Record& rec, Measurement& out)
             if (!p.allFinite()) continue;
             const int v = static_cast<int>(std::lround(p.y()));
             const int uc = static_cast<int>(std::lround(p.x()));
-            if (v < 0 || v >= grey.rows || uc - half_window < 1 || uc + half_window >= grey.cols - 1) continue;
+            // The window and the parabola's neighbours (best +- 2) inside the image.
+            if (v < 0 || v >= grey.rows || uc - half_window < 2 || uc + half_window >= grey.cols - 2) continue;
             const float* row = grey.ptr<float>(v);
             std::vector<double> g;
             int best = -1;

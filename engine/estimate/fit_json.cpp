@@ -212,6 +212,8 @@ json records_json(const FitResult& r)
         per.push_back({{"id", rf.measured.id},
                        {"sample_diameter_m", rf.measured.sample_diameter},
                        {"disc_diameter_m", rf.measured.disc_diameter},
+                       {"pedestal_side_photo_diameter_m", std::isfinite(rf.measured.pedestal_measured_diameter)
+                                                              ? json(rf.measured.pedestal_measured_diameter) : json(nullptr)},
                        {"measured_drape_coefficient_percent", rf.measured_features.drape_coefficient_percent},
                        {"fitted_drape_coefficient_percent", rf.simulated_features.drape_coefficient_percent},
                        {"dc_error_percent", rf.dc_error_percent},

@@ -94,6 +94,17 @@ MeasuredDrape load_record(const std::string& dir, bool use_photos)
         if (const auto photo = rec.file(it->second.image); fs::is_regular_file(photo, ec)) m.top_photo = photo.string();
     }
 
+    // The pedestal the record declares, checked in its side photo: the fit
+    // simulates the declared one, so a pedestal that differs is said.
+    if (const capture::PedestalWidth pw = capture::measure_pedestal_width(rec); pw.measured) {
+        m.pedestal_measured_diameter = pw.diameter;
+        m.pedestal_measured_sigma = pw.diameter_sigma;
+        if (pw.differs)
+            m.notes.push_back("capture: the side photo shows a pedestal " + format_value(pw.diameter * 1e3) + " +- " +
+                              format_value(pw.diameter_sigma * 1e3) + " mm across where meta.json declares support_disc_diameter_D2_mm " +
+                              format_value(pw.declared * 1e3) + ": the fit simulates the declared one");
+    }
+
     const std::string cpath = rec.file(rec.contours_file).string();
     // Most labs have a camera, not a laser profiler: a record without contours
     // (no file, an empty one, or its header only) is fitted from its photos.

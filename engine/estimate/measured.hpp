@@ -37,6 +37,10 @@ struct MeasuredDrape {
     double drape_coefficient_percent = std::numeric_limits<double>::quiet_NaN(); ///< drapemeter reading [%]
     double laser_sigma_m = 0.3e-3;   ///< [m] profiler repeatability (1 sigma per coordinate)
     double hem_min_z = std::numeric_limits<double>::quiet_NaN(); ///< [m] lowest hem point (side view), if known
+    /// The pedestal's diameter in the side photo and its uncertainty [m] (NaN: no
+    /// side photo); the fit simulates disc_diameter, as declared.
+    double pedestal_measured_diameter = std::numeric_limits<double>::quiet_NaN();
+    double pedestal_measured_sigma = std::numeric_limits<double>::quiet_NaN();
     int node_count = -1;             ///< folds, if the record states them (photo); else taken from the contours
     std::string node_source;         ///< where node_count came from
     /// Node detector settings of the photo's count; simulations are counted with the same settings.

@@ -60,6 +60,33 @@ private slots:
         QVERIFY(std::abs(c.x() - m.top_camera->cx) < 2 && std::abs(c.y() - m.top_camera->cy) < 2);
     }
 
+    /// The pedestal in the record's side photo: the declared 150 mm on DL-A02; with
+    /// meta.json declaring 156 mm instead, the record says so in a note (the fit
+    /// simulates what is declared).
+    void pedestalIsCheckedInTheSidePhoto()
+    {
+        namespace fs = std::filesystem;
+        const MeasuredDrape m = load_record(kSetA + "DL-A02");
+        QVERIFY(std::abs(m.pedestal_measured_diameter - 0.150) < 1e-3 && m.pedestal_measured_sigma < 1e-3);
+        for (const auto& n : m.notes) QVERIFY2(n.find("pedestal") == std::string::npos, n.c_str());
+        const fs::path dir = fs::temp_directory_path() / "drape_est_pedestal";
+        fs::remove_all(dir);
+        fs::copy(kSetA + "DL-A02", dir, fs::copy_options::recursive);
+        std::string meta = read_file((dir / "meta.json").string());
+        const std::string key = "\"support_disc_diameter_D2_mm\": 150.0";
+        const auto at = meta.find(key);
+        QVERIFY(at != std::string::npos);
+        meta.replace(at, key.size(), "\"support_disc_diameter_D2_mm\": 156.0");
+        std::ofstream(dir / "meta.json", std::ios::trunc) << meta;
+        const MeasuredDrape w = load_record(dir.string());
+        QCOMPARE(w.disc_diameter, 0.156);
+        QVERIFY(std::abs(w.pedestal_measured_diameter - 0.150) < 1e-3);
+        bool noted = false;
+        for (const auto& n : w.notes) noted |= n.find("side photo shows a pedestal") != std::string::npos && n.find("156") != std::string::npos;
+        QVERIFY(noted);
+        fs::remove_all(dir);
+    }
+
     /// Most labs have a camera, not a laser profiler: a record whose contours.csv
     /// is emptied (its header only), empty or missing is read from its photos (the
     /// top view's nodes, the side view's lowest hem point) and the meta's D; with

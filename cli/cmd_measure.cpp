@@ -402,7 +402,7 @@ int run_batch(const cli::Args& a, capture::MeasureOptions opt)
     std::ostringstream csv;
     csv << "photo,status,check,drape_coefficient_percent,uncertainty_percent,perspective,uncorrected_percent,disc_plane_percent,"
            "hem_percent,hem_uncertainty_percent,nodes,area_mm2,scale,px_per_mm,camera_height_mm,camera_height_known,centre_x_px,centre_y_px,"
-           "centre_source,disc_mm,specimen_mm,manifest_line,message\n";
+           "centre_source,centre_bound_mm,disc_mm,specimen_mm,manifest_line,message\n";
     int failed = 0;
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < photos.size(); ++i) {
@@ -466,7 +466,7 @@ int run_batch(const cli::Args& a, capture::MeasureOptions opt)
             << num_cell(m.view ? m.view->camera_height * 1e3 : std::nan(""), 0) << ","
             << (m.view ? (m.view->camera_height_known ? "yes" : "no") : "") << "," << num_cell(m.view ? m.view->centre_px.x() : std::nan(""), 1)
             << "," << num_cell(m.view ? m.view->centre_px.y() : std::nan(""), 1) << "," << csv_cell(m.view ? m.view->centre_source : "") << ","
-            << (rec ? format_value(disc_mm) : "") << "," << csv_cell(specimen) << "," << (row ? std::to_string(row->line) : "") << ","
+            << num_cell(m.view ? m.view->centre_bound * 1e3 : std::nan(""), 0) << "," << (rec ? format_value(disc_mm) : "") << "," << csv_cell(specimen) << "," << (row ? std::to_string(row->line) : "") << ","
             << csv_cell(message) << "\n";
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         // The table so far, rewritten atomically after every photo: a later

@@ -728,6 +728,8 @@ private slots:
             QCOMPARE(row.at("disc_mm"), std::string(disc[i]));
             QCOMPARE(row.at("specimen_mm"), std::string(spec[i]));
             QCOMPARE(row.at("manifest_line"), std::string(line[i]));
+            // The rim found (the synthetic photos show it): no centroid, no bound.
+            QVERIFY(row.at("centre_source").rfind("centroid", 0) != 0 && row.at("centre_bound_mm").empty());
             const double D = std::stod(row.at("drape_coefficient_percent")), u = std::stod(row.at("uncertainty_percent"));
             const double t = synth_photo::true_dc(*truth[i].second);
             qInfo("%s: D %.2f +- %.2f %% (true %.2f), disc %s mm, specimen %s", truth[i].first, D, u, t, disc[i], spec[i]);

@@ -466,8 +466,8 @@ int run_batch(const cli::Args& a, capture::MeasureOptions opt)
             << num_cell(m.view ? m.view->camera_height * 1e3 : std::nan(""), 0) << ","
             << (m.view ? (m.view->camera_height_known ? "yes" : "no") : "") << "," << num_cell(m.view ? m.view->centre_px.x() : std::nan(""), 1)
             << "," << num_cell(m.view ? m.view->centre_px.y() : std::nan(""), 1) << "," << csv_cell(m.view ? m.view->centre_source : "") << ","
-            << num_cell(m.view ? m.view->centre_bound * 1e3 : std::nan(""), 0) << "," << (rec ? format_value(disc_mm) : "") << "," << csv_cell(specimen) << "," << (row ? std::to_string(row->line) : "") << ","
-            << csv_cell(message) << "\n";
+            << num_cell(m.view ? m.view->centre_bound * 1e3 : std::nan(""), 0) << "," << (rec ? format_value(disc_mm) : "") << ","
+            << csv_cell(specimen) << "," << (row ? std::to_string(row->line) : "") << "," << csv_cell(message) << "\n";
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         // The table so far, rewritten atomically after every photo: a later
         // failure or an interrupted run keeps every row measured before it.

@@ -76,4 +76,13 @@ cv::Mat grabcut_input(const cv::Mat& img)
     return out;
 }
 
+cv::Mat fill_holes(const cv::Mat& mask)
+{
+    std::vector<std::vector<cv::Point>> cs;
+    cv::findContours(mask.clone(), cs, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+    cv::Mat filled = cv::Mat::zeros(mask.size(), CV_8U);
+    cv::drawContours(filled, cs, -1, cv::Scalar(255), cv::FILLED);
+    return filled;
+}
+
 } // namespace drape::capture::detail

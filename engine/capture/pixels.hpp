@@ -39,5 +39,8 @@ inline constexpr double kMinColourSpread = 1.0;
 /// segmentation's smoothed Lab image, whose quantised levels are mostly equal
 /// neighbours on any photo.
 cv::Mat grabcut_input(const cv::Mat& img);
+/// A binary mask (CV_8U) with the holes inside its regions filled: only the
+/// regions' outer outlines count.
+cv::Mat fill_holes(const cv::Mat& mask);
 
 } // namespace drape::capture::detail

@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -542,34 +543,21 @@ std::string bound_disc_centre(const record::Record& rec, const cv::Mat& region, 
     const auto unbounded = [&] {
         return what + ": how far off it is cannot be bounded (the counted region does not hold the disc)" + remedy;
     };
-    const cv::Mat& rough = region;
-    if (rough.empty()) return unbounded();
+    if (region.empty()) return unbounded();
     // The disc's smallest radius in the image (an ellipse under a tilted camera),
     // from the camera two of its height's uncertainties higher (a disc seen from
     // further away is smaller), less 2 px for the region's edge.
     const record::Camera cam = camera_with_height(g, g.camera_height + 2 * g.camera_height_sigma);
     const Eigen::Vector2d c0 = cam.project({0, 0, 0});
-    double r_px = kNaN;
+    double r_px = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 16; ++k) {
         const double th = M_PI * k / 8;
-        const double r = (cam.project({rec.R2 * std::cos(th), rec.R2 * std::sin(th), 0.0}) - c0).norm();
-        if (!(r >= r_px)) r_px = std::isfinite(r_px) ? std::min(r_px, r) : r;
+        r_px = std::min(r_px, (cam.project({rec.R2 * std::cos(th), rec.R2 * std::sin(th), 0.0}) - c0).norm());
     }
     r_px -= 2;
-    if (!(r_px > 2)) return unbounded();
-    cv::Mat filled = rough.clone();
-    cv::Mat flood = cv::Mat::zeros(rough.rows + 2, rough.cols + 2, CV_8U);
-    cv::Mat outside = rough.clone();
-    for (int x = 0; x < outside.cols; ++x)
-        for (int y : {0, outside.rows - 1})
-            if (!outside.at<uchar>(y, x)) cv::floodFill(outside, flood, {x, y}, 255, nullptr, 0, 0, 4 | cv::FLOODFILL_MASK_ONLY);
-    for (int y = 0; y < outside.rows; ++y)
-        for (int x : {0, outside.cols - 1})
-            if (!outside.at<uchar>(y, x)) cv::floodFill(outside, flood, {x, y}, 255, nullptr, 0, 0, 4 | cv::FLOODFILL_MASK_ONLY);
-    // Not reached from the border and not cloth: a hole inside the cloth.
-    filled.setTo(255, flood(cv::Rect(1, 1, rough.cols, rough.rows)) == 0);
+    if (!(r_px > 2 && std::isfinite(r_px))) return unbounded();
     cv::Mat dist;
-    cv::distanceTransform(filled, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    cv::distanceTransform(fill_holes(region), dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
     double far = 0, ss = 0;
     int n = 0;
     for (int y = 0; y < dist.rows; ++y)

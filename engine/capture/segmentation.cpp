@@ -530,12 +530,7 @@ cv::Mat grabcut_region(const Working& w, const ColourModel& cm, bool clamp_disc,
     bin = component_through(bin, w.disc);
     // Holes inside the cloth (a sparkle, a print's background-coloured spot)
     // are cloth: only the outline counts.
-    {
-        std::vector<std::vector<cv::Point>> cs;
-        cv::findContours(bin.clone(), cs, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
-        bin = cv::Mat::zeros(ss, CV_8U);
-        cv::drawContours(bin, cs, -1, cv::Scalar(255), cv::FILLED);
-    }
+    bin = fill_holes(bin);
     if (w.ws >= 1.0) return bin;
     cv::Mat f;
     bin.convertTo(f, CV_32F, 1.0 / 255);

@@ -148,6 +148,7 @@ void detail::measure_pedestal(const record::Record& rec, Measurement& out)
         // with the others (below).
         const double z = -rec.pedestal_height * (0.05 + 0.90 * (k + 0.5) / levels);
         double r_side[2] = {kNaN, kNaN};
+        const double u_axis = cam.project({0.0, 0.0, z}).x(); // inside the edges lies the axis's column
         for (int side = 0; side < 2; ++side) {
             const double phi = phi0 + (side == 0 ? beta : -beta);
             const Eigen::Vector2d p = cam.project({rec.R2 * std::cos(phi), rec.R2 * std::sin(phi), z});
@@ -174,7 +175,6 @@ void detail::measure_pedestal(const record::Record& rec, Measurement& out)
             const double den = gm - 2 * best_g + gp;
             const double du = den < 0 ? std::clamp(0.5 * (gm - gp) / den, -0.5, 0.5) : 0.0;
             // Inside the edge (towards the axis's column): the pedestal's chroma.
-            const double u_axis = cam.project({0.0, 0.0, z}).x();
             const double inward = u_axis > best ? 1.0 : -1.0;
             const cv::Vec3f in = sample(lab, {best + inward * 4.0, static_cast<double>(v)});
             if (std::hypot(in[1] - ped[1], in[2] - ped[2]) > 10.0) continue;
@@ -192,15 +192,15 @@ void detail::measure_pedestal(const record::Record& rec, Measurement& out)
         return;
     }
     // Rows where cloth, a shadow or the floor's print hides an edge disagree with
-    // the rest: kept within 3 robust standard deviations (at least 0.5 mm) of the median.
+    // the rest: kept within 3 robust standard deviations (at least 0.6 mm) of the median.
     const double med = median(diam);
     std::vector<double> dev;
     for (double x : diam) dev.push_back(std::abs(x - med));
-    const double sd = std::max(1.4826 * median(dev), 2e-4);
+    const double keep_within = std::max(3 * 1.4826 * median(dev), 6e-4);
     double sum = 0, sum2 = 0;
     int n = 0;
     for (double x : diam)
-        if (std::abs(x - med) <= std::max(3 * sd, 5e-4)) {
+        if (std::abs(x - med) <= keep_within) {
             sum += x;
             sum2 += x * x;
             ++n;

@@ -277,21 +277,35 @@ const char* to_string(HeightModel m)
     return "?";
 }
 
+namespace {
+
+/// A model's uncertainty from its terms (independent: root sum of squares).
+void sum_terms(PerspectiveValue& v)
+{
+    double ss = 0;
+    for (const auto& t : v.terms) ss += t.points * t.points;
+    v.uncertainty_percent = std::sqrt(ss);
+}
+
+/// The headline uncertainty: the chosen model's.
+void set_reported_uncertainty(TopView& tv)
+{
+    const PerspectiveValue& chosen = tv.perspective == "hem" ? tv.hem : tv.perspective == "disc-plane" ? tv.disc_plane : tv.uncorrected;
+    tv.dc_uncertainty_percent = chosen.uncertainty_percent;
+}
+
+} // namespace
+
 void detail::set_hem_depth_error(TopView& tv, double dz)
 {
     tv.height_error_m = dz;
-    auto& hv = tv.hem;
-    double ss = 0;
-    for (auto& t : hv.terms) {
+    for (auto& t : tv.hem.terms)
         if (t.name == "hem_depth") {
             t.points = tv.dc_per_metre_height * dz;
             t.note = "the hem's height model +-" + fmt("%.1f", dz * 1e3) + " mm";
         }
-        ss += t.points * t.points;
-    }
-    hv.uncertainty_percent = std::sqrt(ss);
-    const PerspectiveValue& chosen = tv.perspective == "hem" ? tv.hem : tv.perspective == "disc-plane" ? tv.disc_plane : tv.uncorrected;
-    tv.dc_uncertainty_percent = chosen.uncertainty_percent;
+    sum_terms(tv.hem);
+    set_reported_uncertainty(tv);
 }
 
 namespace {
@@ -698,9 +712,7 @@ PerspectiveValue perspective_value(const record::Record& rec, const MeasureOptio
         tv.dc_per_metre_height = 2 * A / (H - zbar) / ring * 100.0;
         v.terms.push_back({"hem_depth", tv.dc_per_metre_height * 0.010, "the hem's height model +-10 mm"});
     }
-    double ss = 0;
-    for (const auto& term : v.terms) ss += term.points * term.points;
-    v.uncertainty_percent = std::sqrt(ss);
+    sum_terms(v);
     return v;
 }
 
@@ -806,12 +818,9 @@ void check_outline_edges(const record::Record& rec, const cv::Mat& lab, const cv
                             fmt("%.1f", 100 * tv.weak_outline_fraction) + " % of the outline on a weak colour edge (below " +
                                 fmt("%.1f", weak_below) + " L*a*b* units): half of D's change with those rays at the others' "
                                 "largest or smallest radius"});
-        double ss = 0;
-        for (const auto& t : v->terms) ss += t.points * t.points;
-        v->uncertainty_percent = std::sqrt(ss);
+        sum_terms(*v);
     }
-    const PerspectiveValue& chosen = tv.perspective == "hem" ? tv.hem : tv.perspective == "disc-plane" ? tv.disc_plane : tv.uncorrected;
-    tv.dc_uncertainty_percent = chosen.uncertainty_percent;
+    set_reported_uncertainty(tv);
     tv.warnings.push_back("top view: " + fmt("%.1f", 100 * tv.weak_outline_fraction) +
                           " % of the outline lies on a weak colour edge: D's uncertainty carries it (weak_outline " + fmt("%.2f", term) +
                           " points)");

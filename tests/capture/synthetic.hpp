@@ -75,8 +75,8 @@ inline nlohmann::json meta_json(const Spec& s)
             {"calibration_boards", boards}};
 }
 
-/// The true top camera (declared pose without the offset).
-inline drape::record::Camera true_camera()
+/// The lab's image size and intrinsics (1152 x 872 px, f 1280 px), no pose.
+inline drape::record::Camera lab_intrinsics()
 {
     drape::record::Camera c;
     c.width = 1152;
@@ -84,6 +84,13 @@ inline drape::record::Camera true_camera()
     c.fx = c.fy = 1280;
     c.cx = 575.5;
     c.cy = 435.5;
+    return c;
+}
+
+/// The true top camera (declared pose without the offset).
+inline drape::record::Camera true_camera()
+{
+    drape::record::Camera c = lab_intrinsics();
     c.R << 1, 0, 0, 0, -1, 0, 0, 0, -1;
     c.t = Eigen::Vector3d(0, 0, 0.88);
     return c;
@@ -164,12 +171,7 @@ inline cv::Mat render_top(const Spec& s)
 /// pedestal's middle; 1152 x 872 px, f 1280 px.
 inline drape::record::Camera side_camera(double dist, double az, double height)
 {
-    drape::record::Camera c;
-    c.width = 1152;
-    c.height = 872;
-    c.fx = c.fy = 1280;
-    c.cx = 575.5;
-    c.cy = 435.5;
+    drape::record::Camera c = lab_intrinsics();
     const Eigen::Vector3d C(dist * std::sin(az), -dist * std::cos(az), height), target(0, 0, -0.06);
     const Eigen::Vector3d zc = (target - C).normalized();
     const Eigen::Vector3d xc = zc.cross(Eigen::Vector3d::UnitZ()).normalized();
